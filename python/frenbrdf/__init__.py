@@ -1,0 +1,43 @@
+"""frenbrdf: frequency-rectified neural BRDFs (FreNBRDF), with a Rust core.
+
+The public API is re-exported here; ``frenbrdf._native`` is private.
+"""
+
+from ._native import __version__
+from .coords import (
+    directions_to_rusinkiewicz,
+    half_diff_vectors,
+    rusinkiewicz_to_directions,
+    rusinkiewicz_to_half_diff,
+)
+from .exceptions import MerlFormatError
+from .knn import KnnInterpolator, knn_interpolate
+from .merl import (
+    merl_angles_to_bin,
+    merl_bin_angles,
+    merl_bin_to_angles,
+    merl_lookup,
+    merl_lookup_directions,
+    read_merl,
+    valid_mask,
+    write_merl,
+)
+
+__all__ = [
+    "__version__",
+    "KnnInterpolator",
+    "MerlFormatError",
+    "directions_to_rusinkiewicz",
+    "half_diff_vectors",
+    "knn_interpolate",
+    "merl_angles_to_bin",
+    "merl_bin_angles",
+    "merl_bin_to_angles",
+    "merl_lookup",
+    "merl_lookup_directions",
+    "read_merl",
+    "rusinkiewicz_to_directions",
+    "rusinkiewicz_to_half_diff",
+    "valid_mask",
+    "write_merl",
+]

@@ -1,0 +1,10 @@
+//! Native core of frenbrdf. The modules below are pure Rust; `py` holds the thin PyO3
+//! wrappers that make them `frenbrdf._native`.
+
+pub mod coords;
+pub mod error;
+pub mod knn;
+pub mod merl;
+
+#[cfg(feature = "python")]
+mod py;
