@@ -213,21 +213,21 @@ pub fn phi_d_of_bin(k: f64) -> f64 {
 }
 
 /// Continuous bin coordinates of (θ_h, θ_d, φ_d): θ's clamped to [0, π/2], φ_d folded
-/// into [0, π) by reciprocity. Integer parts give MERL's bins.
+/// into [0, π) by reciprocity. Integer parts give MERL's bins. Coordinates within 1e-9
+/// of an integer snap to it, so the angle of bin i maps back to exactly i.
 pub fn continuous_bin(theta_h: f64, theta_d: f64, phi_d: f64) -> [f64; 3] {
-    let h = (theta_h.clamp(0.0, FRAC_PI_2) / FRAC_PI_2).sqrt() * N_THETA_H as f64;
-    let d = theta_d.clamp(0.0, FRAC_PI_2) / FRAC_PI_2 * N_THETA_D as f64;
-    let p = phi_d.rem_euclid(PI) / PI * N_PHI_D as f64;
-    // rem_euclid can round up to exactly π for tiny negative φ_d.
+    let snap = |x: f64| if (x - x.round()).abs() < 1e-9 { x.round() } else { x };
+    let h = snap((theta_h.clamp(0.0, FRAC_PI_2) / FRAC_PI_2).sqrt() * N_THETA_H as f64);
+    let d = snap(theta_d.clamp(0.0, FRAC_PI_2) / FRAC_PI_2 * N_THETA_D as f64);
+    let p = snap(phi_d.rem_euclid(PI) / PI * N_PHI_D as f64);
     [h, d, if p >= N_PHI_D as f64 { 0.0 } else { p }]
 }
 
-/// MERL's bin for (θ_h, θ_d, φ_d): floor of the continuous index, clamped. A tolerance
-/// of 1e-9 bins keeps `bin_of_angles(angle_of_bin(i)) == i` despite rounding.
+/// MERL's bin for (θ_h, θ_d, φ_d): floor of the continuous index, clamped.
 pub fn bin_of_angles(theta_h: f64, theta_d: f64, phi_d: f64) -> [usize; 3] {
     let [h, d, p] = continuous_bin(theta_h, theta_d, phi_d);
-    let floor = |x: f64, n: usize| ((x + 1e-9).floor().max(0.0) as usize).min(n - 1);
-    [floor(h, N_THETA_H), floor(d, N_THETA_D), floor(p, N_PHI_D) % N_PHI_D]
+    let floor = |x: f64, n: usize| (x.floor() as usize).min(n - 1);
+    [floor(h, N_THETA_H), floor(d, N_THETA_D), floor(p, N_PHI_D)]
 }
 
 // ---------------------------------------------------------------------------------------
@@ -243,7 +243,7 @@ pub enum Lookup {
 }
 
 /// Looks up `table` (`N_VALUES`, physical or stored units) at `(θ_h, θ_d, φ_d)` triples.
-/// Returns RGB per query, [`MISSING`] where no measurement covers the query.
+/// Returns RGB per query; negative (the table's own marker) where no measurement covers it.
 pub fn lookup(table: &[f64], angles: &[[f64; 3]], method: Lookup) -> Result<Vec<[f64; 3]>> {
     if table.len() != N_VALUES {
         return invalid_argument!("table has {} values, expected 3 × 90 × 90 × 180", table.len());
@@ -271,14 +271,7 @@ pub fn lookup_directions(table: &[f64], wi: &[Vec3], wo: &[Vec3], method: Lookup
 pub(crate) fn lookup_one(table: &[f64], theta_h: f64, theta_d: f64, phi_d: f64, method: Lookup) -> [f64; 3] {
     let [h, d, p] = continuous_bin(theta_h, theta_d, phi_d);
     match method {
-        Lookup::Nearest => {
-            let bin = flat_index(
-                (h.round() as usize).min(N_THETA_H - 1),
-                (d.round() as usize).min(N_THETA_D - 1),
-                p.round() as usize % N_PHI_D,
-            );
-            std::array::from_fn(|c| table[c * N_BINS + bin])
-        }
+        Lookup::Nearest => nearest_bin_values(table, [h, d, p]),
         Lookup::Trilinear => {
             // (lower bin, upper bin, weight of upper) along each axis.
             let clamped = |x: f64, n: usize| {
@@ -308,9 +301,20 @@ pub(crate) fn lookup_one(table: &[f64], theta_h: f64, theta_d: f64, phi_d: f64, 
                     }
                 }
             }
-            std::array::from_fn(|c| if weight_sum[c] > 0.0 { sum[c] / weight_sum[c] } else { MISSING })
+            // Where no corner was measured, report the nearest bin's own (negative) marker.
+            let nearest = nearest_bin_values(table, [h, d, p]);
+            std::array::from_fn(|c| if weight_sum[c] > 0.0 { sum[c] / weight_sum[c] } else { nearest[c] })
         }
     }
+}
+
+fn nearest_bin_values(table: &[f64], [h, d, p]: [f64; 3]) -> [f64; 3] {
+    let bin = flat_index(
+        (h.round() as usize).min(N_THETA_H - 1),
+        (d.round() as usize).min(N_THETA_D - 1),
+        p.round() as usize % N_PHI_D,
+    );
+    std::array::from_fn(|c| table[c * N_BINS + bin])
 }
 
 #[cfg(test)]
