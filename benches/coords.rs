@@ -3,8 +3,12 @@
 
 use std::f64::consts::TAU;
 use std::hint::black_box;
+use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::measurement::WallTime;
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, Criterion, SamplingMode, Throughput,
+};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -22,13 +26,24 @@ fn upper_hemisphere(rng: &mut StdRng) -> Vec3 {
 
 fn inputs() -> (Vec<Vec3>, Vec<Vec3>) {
     let mut rng = StdRng::seed_from_u64(0x5275_7369);
-    (0..N_PAIRS).map(|_| (upper_hemisphere(&mut rng), upper_hemisphere(&mut rng))).unzip()
+    (0..N_PAIRS)
+        .map(|_| (upper_hemisphere(&mut rng), upper_hemisphere(&mut rng)))
+        .unzip()
+}
+
+/// One kernel call takes ~0.1–0.2 s on two cores, so flat sampling with a few
+/// iterations per sample; criterion's default of 100 linear samples would take minutes.
+fn configure(group: &mut BenchmarkGroup<'_, WallTime>) {
+    group.throughput(Throughput::Elements(N_PAIRS as u64));
+    group.sampling_mode(SamplingMode::Flat);
+    group.sample_size(20);
+    group.measurement_time(Duration::from_secs(10));
 }
 
 fn to_rusinkiewicz(c: &mut Criterion) {
     let (wi, wo) = inputs();
     let mut group = c.benchmark_group("batch_to_rusinkiewicz");
-    group.throughput(Throughput::Elements(N_PAIRS as u64));
+    configure(&mut group);
     group.bench_function("1M_pairs", |b| {
         b.iter(|| batch_to_rusinkiewicz(black_box(&wi), black_box(&wo)).expect("valid directions"))
     });
@@ -40,7 +55,7 @@ fn from_rusinkiewicz(c: &mut Criterion) {
     let angles = batch_to_rusinkiewicz(&wi, &wo).expect("valid directions");
     drop((wi, wo));
     let mut group = c.benchmark_group("batch_from_rusinkiewicz");
-    group.throughput(Throughput::Elements(N_PAIRS as u64));
+    configure(&mut group);
     group.bench_function("1M_pairs", |b| {
         b.iter(|| batch_from_rusinkiewicz(black_box(&angles)).expect("finite angles"))
     });

@@ -38,12 +38,15 @@ fn knn(c: &mut Criterion) {
     let mut rng = StdRng::seed_from_u64(0x6b6e_6e21);
     let sources = unit_vectors(&mut rng, N_SOURCES);
     let targets = unit_vectors(&mut rng, N_TARGETS);
-    let values: Vec<f64> = (0..N_SOURCES * CHANNELS).map(|_| rng.random_range(0.0..1.0)).collect();
+    let values: Vec<f64> = (0..N_SOURCES * CHANNELS)
+        .map(|_| rng.random_range(0.0..1.0))
+        .collect();
 
     {
         let mut group = c.benchmark_group("knn_build");
         group.throughput(Throughput::Elements(N_TARGETS as u64));
-        // Seconds per iteration: one iteration per sample, the minimum of 10 samples.
+        // ~2 s per iteration on two cores: flat sampling, criterion's minimum of 10
+        // samples, and enough time for two iterations per sample.
         group.sampling_mode(SamplingMode::Flat);
         group.sample_size(10);
         group.warm_up_time(Duration::from_secs(3));
@@ -61,9 +64,15 @@ fn knn(c: &mut Criterion) {
     {
         let mut group = c.benchmark_group("knn_apply");
         group.throughput(Throughput::Elements(N_TARGETS as u64));
+        group.sampling_mode(SamplingMode::Flat);
         group.sample_size(20);
+        group.measurement_time(Duration::from_secs(12));
         group.bench_function("apply_3ch_1Mdst", |b| {
-            b.iter(|| interpolator.apply(black_box(&values), CHANNELS).expect("valid values"))
+            b.iter(|| {
+                interpolator
+                    .apply(black_box(&values), CHANNELS)
+                    .expect("valid values")
+            })
         });
         group.finish();
     }

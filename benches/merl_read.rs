@@ -7,7 +7,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{criterion_group, criterion_main, Criterion, SamplingMode, Throughput};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -17,7 +17,13 @@ fn merl_read(c: &mut Criterion) {
     let mut rng = StdRng::seed_from_u64(0x4d45_524c);
     // Stored units, like real MERL tables, with about 1 % missing (negative) values.
     let values: Vec<f64> = (0..N_VALUES)
-        .map(|_| if rng.random_bool(0.01) { -1.0 } else { rng.random_range(0.0..1500.0) })
+        .map(|_| {
+            if rng.random_bool(0.01) {
+                -1.0
+            } else {
+                rng.random_range(0.0..1500.0)
+            }
+        })
         .collect();
     let folder = tempfile::tempdir().expect("cannot create a temporary folder");
     let path = folder.path().join("bench.binary");
@@ -26,6 +32,7 @@ fn merl_read(c: &mut Criterion) {
 
     let mut group = c.benchmark_group("merl_read");
     group.throughput(Throughput::Elements(N_VALUES as u64));
+    group.sampling_mode(SamplingMode::Flat);
     group.sample_size(20);
     group.warm_up_time(Duration::from_secs(2));
     group.measurement_time(Duration::from_secs(5));

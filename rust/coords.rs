@@ -7,6 +7,7 @@
 
 use rayon::prelude::*;
 
+use crate::parallel;
 use crate::error::{invalid_argument, Result};
 
 pub type Vec3 = [f64; 3];
@@ -17,6 +18,16 @@ pub type Rusinkiewicz = [f64; 4];
 #[inline]
 fn norm(v: Vec3) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// `v / |v|`, scaled first by its largest component so that tiny or huge vectors
+/// neither underflow nor overflow.
+#[inline]
+fn normalize(v: Vec3) -> Vec3 {
+    let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
+    let u = [v[0] / largest, v[1] / largest, v[2] / largest];
+    let length = norm(u);
+    [u[0] / length, u[1] / length, u[2] / length]
 }
 
 #[inline]
@@ -63,11 +74,9 @@ fn to_local([cos_t, sin_t, cos_p, sin_p]: [f64; 4], v: Vec3) -> Vec3 {
 /// directions approaching opposite grazing angles.
 #[inline]
 pub fn half_diff(wi: Vec3, wo: Vec3) -> (Vec3, Vec3) {
-    let (ni, no) = (norm(wi), norm(wo));
-    let wi = [wi[0] / ni, wi[1] / ni, wi[2] / ni];
-    let sum = [wi[0] + wo[0] / no, wi[1] + wo[1] / no, wi[2] + wo[2] / no];
-    let length = norm(sum);
-    let h = if length > 1e-12 { [sum[0] / length, sum[1] / length, sum[2] / length] } else { [0.0, 0.0, 1.0] };
+    let (wi, wo) = (normalize(wi), normalize(wo));
+    let sum = [wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]];
+    let h = if norm(sum) > 1e-12 { normalize(sum) } else { [0.0, 0.0, 1.0] };
     (h, to_local(frame_of(h), wi))
 }
 
@@ -100,14 +109,18 @@ pub fn half_diff_of_angles([theta_h, phi_h, theta_d, phi_d]: Rusinkiewicz) -> (V
 
 /// Checks that every direction is finite and non-zero; names the first bad row.
 pub fn validate_directions(name: &str, directions: &[Vec3]) -> Result<()> {
-    match directions.par_iter().position_first(|v| !(norm(*v) > 0.0 && norm(*v).is_finite())) {
+    let bad = |v: &Vec3| {
+        let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
+        !(largest > 0.0 && v.iter().all(|x| x.is_finite()))
+    };
+    match parallel::position_first(directions, bad) {
         Some(row) => invalid_argument!("{name} row {row} is not a finite non-zero vector: {:?}", directions[row]),
         None => Ok(()),
     }
 }
 
 pub fn validate_angles(name: &str, angles: &[Rusinkiewicz]) -> Result<()> {
-    match angles.par_iter().position_first(|a| a.iter().any(|x| !x.is_finite())) {
+    match parallel::position_first(angles, |a| a.iter().any(|x| !x.is_finite())) {
         Some(row) => invalid_argument!("{name} row {row} is not finite: {:?}", angles[row]),
         None => Ok(()),
     }

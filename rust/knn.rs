@@ -11,6 +11,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use crate::coords::Vec3;
+use crate::parallel;
 use crate::error::{invalid_argument, Result};
 
 /// How far from 1 a "unit" vector's norm may be.
@@ -101,7 +102,7 @@ impl KnnInterpolator {
                 self.n_sources
             );
         }
-        if let Some(position) = values.par_iter().position_first(|v| !v.is_finite()) {
+        if let Some(position) = parallel::position_first(values, |v| !v.is_finite()) {
             return invalid_argument!("values row {} is not finite", position / channels);
         }
         let mut out = vec![0f64; self.n_targets() * channels];
@@ -119,9 +120,9 @@ impl KnnInterpolator {
 }
 
 fn check_unit_vectors(name: &str, points: &[Vec3]) -> Result<()> {
-    let bad = points.par_iter().position_first(|p| {
+    let bad = parallel::position_first(points, |p| {
         let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-        !((norm - 1.0).abs() <= UNIT_TOLERANCE)
+        norm.is_nan() || (norm - 1.0).abs() > UNIT_TOLERANCE
     });
     match bad {
         Some(row) => invalid_argument!(

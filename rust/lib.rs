@@ -5,6 +5,7 @@ pub mod coords;
 pub mod error;
 pub mod knn;
 pub mod merl;
+pub mod parallel;
 
 #[cfg(feature = "python")]
 mod py;

@@ -8,11 +8,13 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::fs::File;
 use std::io::{ErrorKind, Read, Write};
+use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 use rayon::prelude::*;
 
 use crate::coords::{self, Vec3};
+use crate::parallel;
 use crate::error::{invalid_argument, Error, Result};
 
 pub const N_THETA_H: usize = 90;
@@ -79,17 +81,13 @@ pub fn read_merl(path: &Path, physical_units: bool) -> Result<Vec<f64>> {
         ));
     }
 
-    // Read straight into the output buffer: no intermediate byte copy.
     let mut values = vec![0f64; N_VALUES];
-    file.read_exact(bytemuck::cast_slice_mut(&mut values)).map_err(|e| match e.kind() {
+    let all_finite = read_values(&file, &mut values, physical_units).map_err(|e| match e.kind() {
         ErrorKind::UnexpectedEof => Error::merl_format(path, "file shrank while being read"),
         _ => Error::io(path, e),
     })?;
-    if cfg!(target_endian = "big") {
-        values.iter_mut().for_each(|v| *v = f64::from_bits(v.to_bits().swap_bytes()));
-    }
-
-    if let Some(position) = values.par_iter().position_first(|v| !v.is_finite()) {
+    if !all_finite {
+        let position = parallel::position_first(&values, |v| !v.is_finite()).expect("a non-finite value was seen");
         return Err(Error::merl_format(
             path,
             format!(
@@ -100,10 +98,32 @@ pub fn read_merl(path: &Path, physical_units: bool) -> Result<Vec<f64>> {
             ),
         ));
     }
-    if physical_units {
-        for_each_channel(&mut values, |scale, v| *v *= scale);
-    }
     Ok(values)
+}
+
+/// Values per parallel read: big enough for efficient I/O, small enough to stay in cache
+/// while they are checked and scaled.
+const READ_CHUNK: usize = 1 << 17;
+
+/// Reads the values straight into `values` (no intermediate byte buffer) in parallel
+/// chunks, checking and scaling each chunk while it is in cache. Returns whether every
+/// value was finite.
+fn read_values(file: &File, values: &mut [f64], physical_units: bool) -> std::io::Result<bool> {
+    let finite_chunks = values.par_chunks_mut(N_BINS).zip(CHANNEL_SCALES).enumerate().map(|(channel, (values, scale))| {
+        values.par_chunks_mut(READ_CHUNK).enumerate().map(move |(index, chunk)| {
+            let offset = HEADER_BYTES + 8 * (channel * N_BINS + index * READ_CHUNK);
+            file.read_exact_at(bytemuck::cast_slice_mut(chunk), offset as u64)?;
+            if cfg!(target_endian = "big") {
+                chunk.iter_mut().for_each(|v| *v = f64::from_bits(v.to_bits().swap_bytes()));
+            }
+            let finite = chunk.iter().all(|v| v.is_finite());
+            if physical_units {
+                chunk.iter_mut().for_each(|v| *v *= scale);
+            }
+            Ok(finite)
+        })
+    });
+    finite_chunks.flatten().try_reduce(|| true, |a, b| Ok(a && b))
 }
 
 /// Writes a MERL file atomically (a temporary file in the same folder, then a rename),
@@ -120,7 +140,7 @@ pub fn write_merl(path: &Path, values: &[f64], physical_units: bool) -> Result<(
             format!("cannot write {} values; a MERL table holds 3 × 90 × 90 × 180 = {N_VALUES}", values.len()),
         ));
     }
-    if let Some(position) = values.par_iter().position_first(|v| !v.is_finite()) {
+    if let Some(position) = parallel::position_first(values, |v| !v.is_finite()) {
         return Err(Error::merl_format(
             path,
             format!("cannot write non-finite value {} at {}", values[position], describe_position(position)),
@@ -248,7 +268,7 @@ pub fn lookup(table: &[f64], angles: &[[f64; 3]], method: Lookup) -> Result<Vec<
     if table.len() != N_VALUES {
         return invalid_argument!("table has {} values, expected 3 × 90 × 90 × 180", table.len());
     }
-    if let Some(row) = angles.par_iter().position_first(|a| a.iter().any(|x| !x.is_finite())) {
+    if let Some(row) = parallel::position_first(angles, |a| a.iter().any(|x| !x.is_finite())) {
         return invalid_argument!("angles row {row} is not finite: {:?}", angles[row]);
     }
     Ok(angles.par_iter().with_min_len(4096).map(|&[h, d, p]| lookup_one(table, h, d, p, method)).collect())
