@@ -4,8 +4,10 @@
 pub mod coords;
 pub mod error;
 pub mod knn;
+pub mod linalg;
 pub mod merl;
 pub mod parallel;
+pub mod sht;
 
 #[cfg(feature = "python")]
 mod py;

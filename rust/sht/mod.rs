@@ -1,0 +1,576 @@
+//! Spherical harmonic transform: analysis (grid → coefficients), synthesis (coefficients
+//! → grid) and the exact adjoint of analysis, batched over maps.
+//!
+//! # Basis and layout
+//! Real orthonormal harmonics without the Condon–Shortley phase:
+//! Y_l0 = λ_l0(θ), and for m > 0 a cosine part √2 λ_lm(θ) cos mφ and a sine part
+//! √2 λ_lm(θ) sin mφ (see [`legendre`]). Coefficients are stored in blocks by m: the m = 0
+//! block holds l = 0..=lmax; each m > 0 is followed by its cosine block (l = m..=lmax) and
+//! its sine block (same l). [`Sht::degrees_orders`] lists (l, m) per position, the sine
+//! part labelled −m. There are (lmax + 1)² coefficients.
+//!
+//! # Grids
+//! Rings at colatitudes θ_j, each with `nlon` equally spaced longitudes φ_k = 2πk/nlon.
+//! Gauss–Legendre rings integrate exactly with nlat ≥ lmax + 1. Equiangular rings
+//! (θ_j = πj/(nlat−1), poles included) are analysed by resampling each Fourier order
+//! exactly onto Gauss–Legendre rings ([`grid::equiangular_to_gauss`]), exact for
+//! nlat ≥ lmax + 2.
+//!
+//! # How it runs
+//! A real FFT per ring (realfft), then per order m a Legendre step that is a matrix
+//! product (the `gemm` crate) over the whole batch. North and south rings are folded
+//! into symmetric and antisymmetric parts first, since λ_lm(−x) = (−1)^(l+m) λ_lm(x): each
+//! half of the degrees meets only one of them, which halves the work. Orders run in
+//! parallel with rayon. Legendre tables are built once per plan and kept while they fit
+//! in [`LEGENDRE_CACHE_BYTES`]; larger plans recompute them per call.
+
+pub mod grid;
+pub mod legendre;
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use realfft::num_complex::Complex;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+
+use crate::error::{invalid_argument, Result};
+use crate::linalg::{matmul, MatMut, MatRef};
+use legendre::{Recurrence, Scaled};
+
+/// Floating-point types the transform runs in.
+pub trait Real: realfft::FftNum + realfft::num_traits::Float {
+    fn of(value: f64) -> Self;
+}
+impl Real for f32 {
+    fn of(value: f64) -> Self {
+        value as f32
+    }
+}
+impl Real for f64 {
+    fn of(value: f64) -> Self {
+        value
+    }
+}
+
+/// Largest Legendre table a plan keeps (per node set); larger ones are recomputed.
+pub const LEGENDRE_CACHE_BYTES: usize = 256 << 20;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Grid {
+    GaussLegendre,
+    Equiangular,
+}
+
+/// λ_lm at one set of rings, folded to the northern half (equator included).
+struct LegendreTable<T> {
+    lmax: usize,
+    cos_theta: Vec<f64>,
+    recurrence: Arc<Recurrence>,
+    /// λ_mm per half ring: `sectoral[p * (lmax + 1) + m]`.
+    sectoral: Vec<Scaled>,
+    /// Per m, row-major (lmax + 1 − m) × half_rings, when within the cache budget.
+    cached: Option<Vec<Vec<T>>>,
+}
+
+impl<T: Real> LegendreTable<T> {
+    fn new(recurrence: Arc<Recurrence>, theta: &[f64]) -> Self {
+        let lmax = recurrence.lmax();
+        let half = &theta[..theta.len().div_ceil(2)];
+        let mut sectoral = vec![Scaled { mantissa: 0.0, scale: 0 }; half.len() * (lmax + 1)];
+        sectoral.par_chunks_mut(lmax + 1).zip(half).for_each(|(row, t)| recurrence.sectoral(t.sin(), row));
+        let mut table = LegendreTable {
+            lmax,
+            cos_theta: half.iter().map(|t| t.cos()).collect(),
+            recurrence,
+            sectoral,
+            cached: None,
+        };
+        let bytes = (lmax + 1) * (lmax + 2) / 2 * half.len() * std::mem::size_of::<T>();
+        if bytes <= LEGENDRE_CACHE_BYTES {
+            let matrices = (0..=lmax).into_par_iter().map(|m| table.compute(m)).collect();
+            table.cached = Some(matrices);
+        }
+        table
+    }
+
+    fn half_rings(&self) -> usize {
+        self.cos_theta.len()
+    }
+
+    fn compute(&self, m: usize) -> Vec<T> {
+        let (rows, columns) = (self.lmax + 1 - m, self.half_rings());
+        let mut values = vec![0f64; rows * columns];
+        for (p, &cos_theta) in self.cos_theta.iter().enumerate() {
+            let start = self.sectoral[p * (self.lmax + 1) + m];
+            self.recurrence.column(m, cos_theta, start, &mut values[p..], columns);
+        }
+        values.into_iter().map(T::of).collect()
+    }
+
+    /// λ_lm for l = m..=lmax (rows) at the half rings (columns).
+    fn matrix<'a>(&'a self, m: usize, scratch: &'a mut Vec<T>) -> &'a [T] {
+        match &self.cached {
+            Some(matrices) => &matrices[m],
+            None => {
+                *scratch = self.compute(m);
+                scratch
+            }
+        }
+    }
+}
+
+/// A transform plan: grid, FFTs and Legendre tables, built once and reused.
+pub struct Sht<T: Real> {
+    nlat: usize,
+    nlon: usize,
+    lmax: usize,
+    grid: Grid,
+    theta: Vec<f64>,
+    weights: Vec<f64>,
+    forward: Arc<dyn RealToComplex<T>>,
+    inverse: Arc<dyn ComplexToReal<T>>,
+    /// λ at the grid's own rings: synthesis, and analysis on Gauss–Legendre grids.
+    at_grid: LegendreTable<T>,
+    /// Equiangular grids only: λ and weights at lmax + 1 Gauss–Legendre rings, and the
+    /// resampling onto them, `[m parity][symmetric, antisymmetric]`, row-major
+    /// (Gauss half rings × grid half rings), Gauss weights folded in.
+    gauss: Option<(LegendreTable<T>, [[Vec<T>; 2]; 2])>,
+    /// Position of each order's first coefficient.
+    offsets: Vec<usize>,
+}
+
+/// Where the (ring, order) blocks of a folded spectrum sit in its buffer.
+#[derive(Clone, Copy)]
+struct Layout {
+    ring_stride: usize,
+    order_stride: usize,
+}
+
+impl<T: Real> Sht<T> {
+    pub fn new(nlat: usize, nlon: usize, lmax: usize, grid: Grid) -> Result<Self> {
+        let min_rings = match grid {
+            Grid::GaussLegendre => lmax + 1,
+            Grid::Equiangular => (lmax + 2).max(2),
+        };
+        if nlat < min_rings {
+            return invalid_argument!(
+                "nlat = {nlat} rings are too few for exact quadrature at lmax = {lmax} on the {} grid: need nlat ≥ {min_rings}",
+                grid.name()
+            );
+        }
+        if nlon < 2 * lmax + 1 {
+            return invalid_argument!("nlon = {nlon} is too small for lmax = {lmax}: need nlon ≥ 2·lmax + 1 = {}", 2 * lmax + 1);
+        }
+        let recurrence = Arc::new(Recurrence::new(lmax));
+        let (theta, weights) = match grid {
+            Grid::GaussLegendre => grid::gauss_legendre(nlat),
+            Grid::Equiangular => (grid::equiangular(nlat), grid::clenshaw_curtis_weights(nlat)),
+        };
+        let gauss = (grid == Grid::Equiangular).then(|| {
+            let (gauss_theta, gauss_weights) = grid::gauss_legendre(lmax + 1);
+            let resampling = fold_resampling(&grid::equiangular_to_gauss(&theta, &gauss_theta), nlat, &gauss_weights);
+            (LegendreTable::new(recurrence.clone(), &gauss_theta), resampling)
+        });
+        let mut planner = RealFftPlanner::<T>::new();
+        let mut offsets = Vec::with_capacity(lmax + 1);
+        let mut next = 0;
+        for m in 0..=lmax {
+            offsets.push(next);
+            next += if m == 0 { lmax + 1 } else { 2 * (lmax + 1 - m) };
+        }
+        Ok(Sht {
+            nlat,
+            nlon,
+            lmax,
+            grid,
+            at_grid: LegendreTable::new(recurrence, &theta),
+            theta,
+            weights,
+            forward: planner.plan_fft_forward(nlon),
+            inverse: planner.plan_fft_inverse(nlon),
+            gauss,
+            offsets,
+        })
+    }
+
+    pub fn nlat(&self) -> usize {
+        self.nlat
+    }
+    pub fn nlon(&self) -> usize {
+        self.nlon
+    }
+    pub fn lmax(&self) -> usize {
+        self.lmax
+    }
+    pub fn grid(&self) -> Grid {
+        self.grid
+    }
+    pub fn n_coefficients(&self) -> usize {
+        (self.lmax + 1) * (self.lmax + 1)
+    }
+    /// Ring colatitudes θ_j.
+    pub fn theta(&self) -> &[f64] {
+        &self.theta
+    }
+    /// Ring quadrature weights (Gauss–Legendre, or Clenshaw–Curtis on equiangular rings),
+    /// summing to 2; multiply by 2π/nlon for the weight of one grid point.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// (l, m) of every coefficient position, sine parts labelled −m.
+    pub fn degrees_orders(&self) -> Vec<[i64; 2]> {
+        let mut out = Vec::with_capacity(self.n_coefficients());
+        for m in 0..=self.lmax as i64 {
+            let degrees = m..=self.lmax as i64;
+            out.extend(degrees.clone().map(|l| [l, m]));
+            if m > 0 {
+                out.extend(degrees.map(|l| [l, -m]));
+            }
+        }
+        out
+    }
+
+    /// Maps `(batch, nlat, nlon)` → coefficients `(batch, (lmax+1)²)`.
+    pub fn analysis(&self, maps: &[T], batch: usize) -> Result<Vec<T>> {
+        self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
+        let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
+        let orders = match &self.gauss {
+            None => {
+                let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
+                let (sym, anti) = self.fold_rings(maps, batch, &ring_factors);
+                let layout = Layout { ring_stride: (self.lmax + 1) * 2 * batch, order_stride: 2 * batch };
+                self.legendre_analysis(&self.at_grid, &sym, &anti, layout, batch)
+            }
+            Some((table, resampling)) => {
+                let (sym, anti) = self.fold_rings(maps, batch, &vec![point; self.nlat]);
+                let (sym, anti) = self.resample(&sym, &anti, resampling, table.half_rings(), batch);
+                let layout = Layout { ring_stride: 2 * batch, order_stride: table.half_rings() * 2 * batch };
+                self.legendre_analysis(table, &sym, &anti, layout, batch)
+            }
+        };
+        Ok(self.scatter(&orders, batch))
+    }
+
+    /// Coefficients `(batch, (lmax+1)²)` → maps `(batch, nlat, nlon)`.
+    pub fn synthesis(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
+        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
+        let orders = self.gather(coefficients, batch);
+        let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
+        Ok(self.unfold_rings(&sym, &anti, batch, &vec![1.0; self.nlat]))
+    }
+
+    /// The adjoint (transpose) of [`Sht::analysis`]: coefficients → maps, so that
+    /// ⟨analysis(x), c⟩ = ⟨x, analysis_adjoint(c)⟩. This is the backward pass of analysis.
+    pub fn analysis_adjoint(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
+        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
+        let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
+        let orders = self.gather(coefficients, batch);
+        Ok(match &self.gauss {
+            None => {
+                let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
+                let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
+                self.unfold_rings(&sym, &anti, batch, &ring_factors)
+            }
+            Some((table, resampling)) => {
+                let (sym, anti) = self.legendre_synthesis(table, &orders, batch);
+                let (sym, anti) = self.resample_adjoint(&sym, &anti, resampling, table.half_rings(), batch);
+                self.unfold_rings(&sym, &anti, batch, &vec![point; self.nlat])
+            }
+        })
+    }
+
+    fn check_len(&self, name: &str, len: usize, batch: usize, per_item: usize) -> Result<()> {
+        if len != batch * per_item {
+            return invalid_argument!("{name} has {len} values; expected batch {batch} × {per_item}");
+        }
+        Ok(())
+    }
+
+    fn half_rings(&self) -> usize {
+        self.nlat.div_ceil(2)
+    }
+
+    fn degrees(&self, m: usize) -> usize {
+        self.lmax + 1 - m
+    }
+
+    /// Splits a buffer laid out `[m][l − m][batch][2]` into its per-order blocks.
+    fn split_orders<'a>(&self, buffer: &'a mut [T], batch: usize) -> Vec<&'a mut [T]> {
+        let mut rest = buffer;
+        let mut blocks = Vec::with_capacity(self.lmax + 1);
+        for m in 0..=self.lmax {
+            let (block, tail) = rest.split_at_mut(self.degrees(m) * 2 * batch);
+            blocks.push(block);
+            rest = tail;
+        }
+        blocks
+    }
+
+    /// FFT of every ring, then north and south rings folded into symmetric and
+    /// antisymmetric parts scaled by `ring_factors`; layout `[half ring][m][batch][2]`
+    /// holding the (cos, sin) sums Σ_k x_k (cos mφ_k, sin mφ_k).
+    fn fold_rings(&self, maps: &[T], batch: usize, ring_factors: &[f64]) -> (Vec<T>, Vec<T>) {
+        let (nlat, orders) = (self.nlat, self.lmax + 1);
+        let mut spectra = vec![T::zero(); batch * nlat * orders * 2];
+        spectra.par_chunks_mut(orders * 2).zip(maps.par_chunks(self.nlon)).with_min_len(8).for_each_init(
+            || (self.forward.make_input_vec(), self.forward.make_output_vec(), self.forward.make_scratch_vec()),
+            |(input, output, scratch), (spectrum, ring)| {
+                input.copy_from_slice(ring);
+                self.forward.process_with_scratch(input, output, scratch).expect("buffers sized by the plan");
+                for (pair, value) in spectrum.chunks_exact_mut(2).zip(output.iter()) {
+                    pair[0] = value.re;
+                    pair[1] = -value.im;
+                }
+            },
+        );
+
+        let width = 2 * batch;
+        let slab = orders * width;
+        let mut sym = vec![T::zero(); self.half_rings() * slab];
+        let mut anti = vec![T::zero(); self.half_rings() * slab];
+        sym.par_chunks_mut(slab).zip(anti.par_chunks_mut(slab)).enumerate().for_each(|(p, (sym_p, anti_p))| {
+            let south = nlat - 1 - p;
+            let factor = T::of(ring_factors[p]);
+            for b in 0..batch {
+                let north_spectrum = &spectra[(b * nlat + p) * orders * 2..][..orders * 2];
+                let south_spectrum = &spectra[(b * nlat + south) * orders * 2..][..orders * 2];
+                for m in 0..orders {
+                    for part in 0..2 {
+                        let (n, s) = (north_spectrum[2 * m + part], south_spectrum[2 * m + part]);
+                        let at = m * width + 2 * b + part;
+                        if south == p {
+                            sym_p[at] = factor * n; // the equator ring: symmetric only
+                        } else {
+                            sym_p[at] = factor * (n + s);
+                            anti_p[at] = factor * (n - s);
+                        }
+                    }
+                }
+            }
+        });
+        (sym, anti)
+    }
+
+    /// Inverse of the folding: per ring, (cos, sin) sums = symmetric ± antisymmetric
+    /// part, scaled by `ring_factors`, then an inverse real FFT. Input `[m][half ring][batch][2]`.
+    fn unfold_rings(&self, sym: &[T], anti: &[T], batch: usize, ring_factors: &[f64]) -> Vec<T> {
+        let (nlat, half, width) = (self.nlat, self.half_rings(), 2 * batch);
+        let half_t = T::of(0.5);
+        let mut maps = vec![T::zero(); batch * nlat * self.nlon];
+        maps.par_chunks_mut(self.nlon).enumerate().with_min_len(8).for_each_init(
+            || (self.inverse.make_input_vec(), self.inverse.make_scratch_vec()),
+            |(spectrum, scratch), (row, ring)| {
+                let (b, j) = (row / nlat, row % nlat);
+                let (p, south) = if j < half { (j, false) } else { (nlat - 1 - j, true) };
+                let factor = T::of(ring_factors[j]);
+                spectrum.iter_mut().for_each(|v| *v = Complex::new(T::zero(), T::zero()));
+                for m in 0..=self.lmax {
+                    let at = (m * half + p) * width + 2 * b;
+                    let (cos_sum, sin_sum) = if south {
+                        (sym[at] - anti[at], sym[at + 1] - anti[at + 1])
+                    } else {
+                        (sym[at] + anti[at], sym[at + 1] + anti[at + 1])
+                    };
+                    // c2r computes Y_0 + 2 Re Σ_m Y_m e^{imφ}.
+                    spectrum[m] = if m == 0 {
+                        Complex::new(factor * cos_sum, T::zero())
+                    } else {
+                        Complex::new(factor * half_t * cos_sum, -(factor * half_t * sin_sum))
+                    };
+                }
+                self.inverse.process_with_scratch(spectrum, ring, scratch).expect("buffers sized by the plan");
+            },
+        );
+        maps
+    }
+
+    /// Per order m: coefficients `[m][l − m][batch][2]` = λ_m · folded spectrum, the
+    /// even-(l − m) degrees from the symmetric part and the odd ones from the antisymmetric.
+    fn legendre_analysis(&self, table: &LegendreTable<T>, sym: &[T], anti: &[T], layout: Layout, batch: usize) -> Vec<T> {
+        let (width, half) = (2 * batch, table.half_rings());
+        let mut orders = vec![T::zero(); (self.lmax + 1) * (self.lmax + 2) / 2 * width];
+        self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each_init(Vec::new, |scratch, (m, block)| {
+            let lambda = table.matrix(m, scratch);
+            for parity in 0..2 {
+                let rows = (self.degrees(m) + 1 - parity) / 2;
+                matmul(
+                    MatMut { data: &mut *block, offset: parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
+                    MatRef { data: lambda, offset: parity * half, rows, cols: half, row_stride: 2 * half, col_stride: 1 },
+                    MatRef {
+                        data: if parity == 0 { sym } else { anti },
+                        offset: m * layout.order_stride,
+                        rows: half,
+                        cols: width,
+                        row_stride: layout.ring_stride,
+                        col_stride: 1,
+                    },
+                    false,
+                );
+            }
+        });
+        orders
+    }
+
+    /// Per order m: folded spectrum `[m][half ring][batch][2]` = λ_mᵀ · coefficients.
+    fn legendre_synthesis(&self, table: &LegendreTable<T>, orders: &[T], batch: usize) -> (Vec<T>, Vec<T>) {
+        let (width, half) = (2 * batch, table.half_rings());
+        let mut sym = vec![T::zero(); (self.lmax + 1) * half * width];
+        let mut anti = vec![T::zero(); (self.lmax + 1) * half * width];
+        let starts: Vec<usize> = (0..=self.lmax).scan(0, |next, m| {
+            let start = *next;
+            *next += self.degrees(m) * width;
+            Some(start)
+        }).collect();
+        sym.par_chunks_mut(half * width).zip(anti.par_chunks_mut(half * width)).enumerate().for_each_init(
+            Vec::new,
+            |scratch, (m, (sym_m, anti_m))| {
+                let lambda = table.matrix(m, scratch);
+                for (parity, destination) in [(0, sym_m), (1, anti_m)] {
+                    let rows = (self.degrees(m) + 1 - parity) / 2;
+                    matmul(
+                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width, col_stride: 1 },
+                        MatRef { data: lambda, offset: parity * half, rows: half, cols: rows, row_stride: 1, col_stride: 2 * half },
+                        MatRef { data: orders, offset: starts[m] + parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
+                        false,
+                    );
+                }
+            },
+        );
+        (sym, anti)
+    }
+
+    /// Equiangular → Gauss–Legendre rings per order: `[half ring][m]` → `[m][Gauss half ring]`.
+    fn resample(&self, sym: &[T], anti: &[T], resampling: &[[Vec<T>; 2]; 2], gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
+        let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
+        let mut out = [vec![T::zero(); orders * gauss_half * width], vec![T::zero(); orders * gauss_half * width]];
+        let [out_sym, out_anti] = &mut out;
+        out_sym.par_chunks_mut(gauss_half * width).zip(out_anti.par_chunks_mut(gauss_half * width)).enumerate().for_each(
+            |(m, (sym_m, anti_m))| {
+                for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
+                    matmul(
+                        MatMut { data: destination, offset: 0, rows: gauss_half, cols: width, row_stride: width, col_stride: 1 },
+                        MatRef { data: &resampling[m % 2][part], offset: 0, rows: gauss_half, cols: half, row_stride: half, col_stride: 1 },
+                        MatRef { data: source, offset: m * width, rows: half, cols: width, row_stride: orders * width, col_stride: 1 },
+                        false,
+                    );
+                }
+            },
+        );
+        let [sym, anti] = out;
+        (sym, anti)
+    }
+
+    /// Adjoint of [`Sht::resample`]: `[m][Gauss half ring]` → `[m][half ring]`.
+    fn resample_adjoint(&self, sym: &[T], anti: &[T], resampling: &[[Vec<T>; 2]; 2], gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
+        let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
+        let mut out = [vec![T::zero(); orders * half * width], vec![T::zero(); orders * half * width]];
+        let [out_sym, out_anti] = &mut out;
+        out_sym.par_chunks_mut(half * width).zip(out_anti.par_chunks_mut(half * width)).enumerate().for_each(
+            |(m, (sym_m, anti_m))| {
+                for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
+                    matmul(
+                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width, col_stride: 1 },
+                        MatRef { data: &resampling[m % 2][part], offset: 0, rows: half, cols: gauss_half, row_stride: 1, col_stride: half },
+                        MatRef { data: source, offset: m * gauss_half * width, rows: gauss_half, cols: width, row_stride: width, col_stride: 1 },
+                        false,
+                    );
+                }
+            },
+        );
+        let [sym, anti] = out;
+        (sym, anti)
+    }
+
+    /// `[m][l − m][batch][2]` → `(batch, (lmax+1)²)`, applying the √2 of m > 0.
+    fn scatter(&self, orders: &[T], batch: usize) -> Vec<T> {
+        let (width, n) = (2 * batch, self.n_coefficients());
+        let mut coefficients = vec![T::zero(); batch * n];
+        coefficients.par_chunks_mut(n).enumerate().for_each(|(b, out)| {
+            let mut start = 0;
+            for m in 0..=self.lmax {
+                let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
+                for i in 0..degrees {
+                    let at = start + i * width + 2 * b;
+                    out[self.offsets[m] + i] = scale * orders[at];
+                    if m > 0 {
+                        out[self.offsets[m] + degrees + i] = scale * orders[at + 1];
+                    }
+                }
+                start += degrees * width;
+            }
+        });
+        coefficients
+    }
+
+    /// Inverse of [`Sht::scatter`]'s layout change (with the same √2 factors).
+    fn gather(&self, coefficients: &[T], batch: usize) -> Vec<T> {
+        let (width, n) = (2 * batch, self.n_coefficients());
+        let mut orders = vec![T::zero(); (self.lmax + 1) * (self.lmax + 2) / 2 * width];
+        self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each(|(m, block)| {
+            let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
+            for i in 0..degrees {
+                for b in 0..batch {
+                    let item = &coefficients[b * n..][..n];
+                    block[i * width + 2 * b] = scale * item[self.offsets[m] + i];
+                    if m > 0 {
+                        block[i * width + 2 * b + 1] = scale * item[self.offsets[m] + degrees + i];
+                    }
+                }
+            }
+        });
+        orders
+    }
+}
+
+impl Grid {
+    pub fn name(self) -> &'static str {
+        match self {
+            Grid::GaussLegendre => "Gauss–Legendre",
+            Grid::Equiangular => "equiangular",
+        }
+    }
+}
+
+/// 1 for m = 0, √2 otherwise: the real basis' normalisation.
+fn order_scale<T: Real>(m: usize) -> T {
+    T::of(if m == 0 { 1.0 } else { std::f64::consts::SQRT_2 })
+}
+
+/// Restricts the full resampling matrices (Gauss rings × equiangular rings) to folded
+/// symmetric/antisymmetric parts on half rings, with the Gauss weights folded in.
+///
+/// A folded symmetric part holds g_j + g_j' on paired rings and g_j on an equator ring
+/// (antisymmetric: g_j − g_j', and 0 on the equator); the rows are built so that the
+/// output holds the same quantities at the Gauss rings, times their weights.
+fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights: &[f64]) -> [[Vec<T>; 2]; 2] {
+    let n_target = gauss_weights.len();
+    let (source_half, target_half) = (n_source.div_ceil(2), n_target.div_ceil(2));
+    full.each_ref().map(|matrix| {
+        [1.0, -1.0].map(|sign: f64| {
+            let mut folded = vec![T::zero(); target_half * source_half];
+            for k in 0..target_half {
+                let target_is_equator = n_target - 1 - k == k;
+                let rows_per_part = match (target_is_equator, sign > 0.0) {
+                    (true, true) => 1.0,
+                    (true, false) => 0.0,
+                    (false, _) => 2.0,
+                };
+                for j in 0..source_half {
+                    let mirror = n_source - 1 - j;
+                    let entry = &matrix[k * n_source..];
+                    let value = if mirror == j {
+                        if sign > 0.0 { entry[j] } else { 0.0 }
+                    } else {
+                        0.5 * (entry[j] + sign * entry[mirror])
+                    };
+                    folded[k * source_half + j] = T::of(rows_per_part * gauss_weights[k] * value);
+                }
+            }
+            folded
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests;

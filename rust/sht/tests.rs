@@ -1,0 +1,63 @@
+use super::*;
+
+fn random(n: usize, seed: u64) -> Vec<f64> {
+    let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    (0..n)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect()
+}
+
+fn max_relative_error(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+}
+
+#[test]
+fn round_trip_on_both_grids() {
+    for (grid, nlat, nlon, lmax) in [
+        (Grid::GaussLegendre, 12, 23, 11),
+        (Grid::GaussLegendre, 17, 40, 9),
+        (Grid::Equiangular, 13, 23, 11),
+        (Grid::Equiangular, 20, 30, 12),
+    ] {
+        let sht = Sht::<f64>::new(nlat, nlon, lmax, grid).unwrap();
+        let coefficients = random(3 * sht.n_coefficients(), 7);
+        let maps = sht.synthesis(&coefficients, 3).unwrap();
+        let back = sht.analysis(&maps, 3).unwrap();
+        let error = max_relative_error(&back, &coefficients);
+        assert!(error < 1e-13, "{grid:?} {nlat}×{nlon} lmax {lmax}: {error}");
+    }
+}
+
+#[test]
+fn adjoint_satisfies_the_dot_product_identity() {
+    for grid in [Grid::GaussLegendre, Grid::Equiangular] {
+        let sht = Sht::<f64>::new(15, 29, 13, grid).unwrap();
+        let maps = random(2 * 15 * 29, 3);
+        let coefficients = random(2 * sht.n_coefficients(), 5);
+        let lhs: f64 = sht.analysis(&maps, 2).unwrap().iter().zip(&coefficients).map(|(a, b)| a * b).sum();
+        let rhs: f64 = maps.iter().zip(&sht.analysis_adjoint(&coefficients, 2).unwrap()).map(|(a, b)| a * b).sum();
+        assert!((lhs - rhs).abs() < 1e-13 * lhs.abs().max(1.0), "{grid:?}: {lhs} vs {rhs}");
+    }
+}
+
+#[test]
+fn constant_map_has_only_y00() {
+    let sht = Sht::<f64>::new(8, 16, 7, Grid::GaussLegendre).unwrap();
+    let coefficients = sht.analysis(&vec![1.0; 8 * 16], 1).unwrap();
+    let expected = (4.0 * std::f64::consts::PI).sqrt();
+    assert!((coefficients[0] - expected).abs() < 1e-14);
+    assert!(coefficients[1..].iter().all(|c| c.abs() < 1e-14));
+}
+
+#[test]
+fn rejects_grids_too_small_for_lmax() {
+    assert!(Sht::<f64>::new(10, 21, 10, Grid::GaussLegendre).is_err());
+    assert!(Sht::<f64>::new(11, 21, 10, Grid::Equiangular).is_err());
+    assert!(Sht::<f64>::new(11, 20, 10, Grid::GaussLegendre).is_err());
+}
