@@ -3,6 +3,7 @@
 The public API is re-exported here; ``frenbrdf._native`` is private.
 """
 
+from . import sht
 from ._native import __version__
 from .coords import (
     directions_to_rusinkiewicz,

@@ -5,6 +5,7 @@ mod coords;
 mod errors;
 mod knn;
 mod merl;
+mod sht;
 
 use numpy::PyUntypedArrayMethods;
 use numpy::ndarray::{Array, Dimension, ShapeBuilder};
@@ -21,6 +22,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     merl::register(m)?;
     coords::register(m)?;
     knn::register(m)?;
+    sht::register(m)?;
     Ok(())
 }
 

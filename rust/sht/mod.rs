@@ -27,7 +27,7 @@
 pub mod grid;
 pub mod legendre;
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
@@ -137,6 +137,30 @@ pub struct Sht<T: Real> {
     gauss: Option<(LegendreTable<T>, [[Vec<T>; 2]; 2])>,
     /// Position of each order's first coefficient.
     offsets: Vec<usize>,
+    /// Scratch buffers kept between calls, so repeated transforms do not pay for fresh
+    /// pages every time.
+    pool: BufferPool<T>,
+}
+
+/// Reusable zero-filled scratch buffers.
+struct BufferPool<T> {
+    free: Mutex<Vec<Vec<T>>>,
+}
+
+impl<T: Real> BufferPool<T> {
+    fn take(&self, len: usize) -> Vec<T> {
+        let mut buffer = self.free.lock().map(|mut free| free.pop()).ok().flatten().unwrap_or_default();
+        buffer.clear();
+        buffer.resize(len, T::zero());
+        buffer
+    }
+
+    fn give(&self, buffers: impl IntoIterator<Item = Vec<T>>) {
+        if let Ok(mut free) = self.free.lock() {
+            free.extend(buffers);
+            free.truncate(8);
+        }
+    }
 }
 
 /// Where the (ring, order) blocks of a folded spectrum sit in its buffer.
@@ -190,6 +214,7 @@ impl<T: Real> Sht<T> {
             inverse: planner.plan_fft_inverse(nlon),
             gauss,
             offsets,
+            pool: BufferPool { free: Mutex::new(Vec::new()) },
         })
     }
 
@@ -240,16 +265,22 @@ impl<T: Real> Sht<T> {
                 let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
                 let (sym, anti) = self.fold_rings(maps, batch, &ring_factors);
                 let layout = Layout { ring_stride: (self.lmax + 1) * 2 * batch, order_stride: 2 * batch };
-                self.legendre_analysis(&self.at_grid, &sym, &anti, layout, batch)
+                let orders = self.legendre_analysis(&self.at_grid, &sym, &anti, layout, batch);
+                self.pool.give([sym, anti]);
+                orders
             }
             Some((table, resampling)) => {
                 let (sym, anti) = self.fold_rings(maps, batch, &vec![point; self.nlat]);
-                let (sym, anti) = self.resample(&sym, &anti, resampling, table.half_rings(), batch);
+                let (gauss_sym, gauss_anti) = self.resample(&sym, &anti, resampling, table.half_rings(), batch);
                 let layout = Layout { ring_stride: 2 * batch, order_stride: table.half_rings() * 2 * batch };
-                self.legendre_analysis(table, &sym, &anti, layout, batch)
+                let orders = self.legendre_analysis(table, &gauss_sym, &gauss_anti, layout, batch);
+                self.pool.give([sym, anti, gauss_sym, gauss_anti]);
+                orders
             }
         };
-        Ok(self.scatter(&orders, batch))
+        let coefficients = self.scatter(&orders, batch);
+        self.pool.give([orders]);
+        Ok(coefficients)
     }
 
     /// Coefficients `(batch, (lmax+1)²)` → maps `(batch, nlat, nlon)`.
@@ -257,7 +288,9 @@ impl<T: Real> Sht<T> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         let orders = self.gather(coefficients, batch);
         let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
-        Ok(self.unfold_rings(&sym, &anti, batch, &vec![1.0; self.nlat]))
+        let maps = self.unfold_rings(&sym, &anti, batch, &vec![1.0; self.nlat]);
+        self.pool.give([orders, sym, anti]);
+        Ok(maps)
     }
 
     /// The adjoint (transpose) of [`Sht::analysis`]: coefficients → maps, so that
@@ -266,18 +299,24 @@ impl<T: Real> Sht<T> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
         let orders = self.gather(coefficients, batch);
-        Ok(match &self.gauss {
+        let maps = match &self.gauss {
             None => {
                 let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
                 let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
-                self.unfold_rings(&sym, &anti, batch, &ring_factors)
+                let maps = self.unfold_rings(&sym, &anti, batch, &ring_factors);
+                self.pool.give([sym, anti]);
+                maps
             }
             Some((table, resampling)) => {
-                let (sym, anti) = self.legendre_synthesis(table, &orders, batch);
-                let (sym, anti) = self.resample_adjoint(&sym, &anti, resampling, table.half_rings(), batch);
-                self.unfold_rings(&sym, &anti, batch, &vec![point; self.nlat])
+                let (gauss_sym, gauss_anti) = self.legendre_synthesis(table, &orders, batch);
+                let (sym, anti) = self.resample_adjoint(&gauss_sym, &gauss_anti, resampling, table.half_rings(), batch);
+                let maps = self.unfold_rings(&sym, &anti, batch, &vec![point; self.nlat]);
+                self.pool.give([gauss_sym, gauss_anti, sym, anti]);
+                maps
             }
-        })
+        };
+        self.pool.give([orders]);
+        Ok(maps)
     }
 
     fn check_len(&self, name: &str, len: usize, batch: usize, per_item: usize) -> Result<()> {
@@ -295,7 +334,7 @@ impl<T: Real> Sht<T> {
         self.lmax + 1 - m
     }
 
-    /// Splits a buffer laid out `[m][l − m][batch][2]` into its per-order blocks.
+    /// Splits a buffer of per-order blocks (`[m][part][batch][l − m]`) into the blocks.
     fn split_orders<'a>(&self, buffer: &'a mut [T], batch: usize) -> Vec<&'a mut [T]> {
         let mut rest = buffer;
         let mut blocks = Vec::with_capacity(self.lmax + 1);
@@ -307,53 +346,50 @@ impl<T: Real> Sht<T> {
         blocks
     }
 
-    /// FFT of every ring, then north and south rings folded into symmetric and
-    /// antisymmetric parts scaled by `ring_factors`; layout `[half ring][m][batch][2]`
-    /// holding the (cos, sin) sums Σ_k x_k (cos mφ_k, sin mφ_k).
+    /// FFT of every ring, north and south rings folded into symmetric and antisymmetric
+    /// parts scaled by `ring_factors`. Layout `[half ring][m][part][batch]`, part 0 the
+    /// cosine sums Σ_k x_k cos mφ_k and part 1 the sine sums Σ_k x_k sin mφ_k.
     fn fold_rings(&self, maps: &[T], batch: usize, ring_factors: &[f64]) -> (Vec<T>, Vec<T>) {
-        let (nlat, orders) = (self.nlat, self.lmax + 1);
-        let mut spectra = vec![T::zero(); batch * nlat * orders * 2];
-        spectra.par_chunks_mut(orders * 2).zip(maps.par_chunks(self.nlon)).with_min_len(8).for_each_init(
-            || (self.forward.make_input_vec(), self.forward.make_output_vec(), self.forward.make_scratch_vec()),
-            |(input, output, scratch), (spectrum, ring)| {
-                input.copy_from_slice(ring);
-                self.forward.process_with_scratch(input, output, scratch).expect("buffers sized by the plan");
-                for (pair, value) in spectrum.chunks_exact_mut(2).zip(output.iter()) {
-                    pair[0] = value.re;
-                    pair[1] = -value.im;
+        let (nlat, orders, width) = (self.nlat, self.lmax + 1, 2 * batch);
+        let ring = |b: usize, j: usize| &maps[(b * nlat + j) * self.nlon..][..self.nlon];
+        let slab = orders * width;
+        let mut sym = self.pool.take(self.half_rings() * slab);
+        let mut anti = self.pool.take(self.half_rings() * slab);
+        sym.par_chunks_mut(slab).zip(anti.par_chunks_mut(slab)).enumerate().for_each_init(
+            || {
+                let f = &self.forward;
+                (f.make_input_vec(), f.make_output_vec(), f.make_output_vec(), f.make_scratch_vec())
+            },
+            |(input, north, south, scratch), (p, (sym_p, anti_p))| {
+                let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
+                for b in 0..batch {
+                    input.copy_from_slice(ring(b, p));
+                    self.forward.process_with_scratch(input, north, scratch).expect("buffers sized by the plan");
+                    if mirror == p {
+                        // The equator ring: symmetric only.
+                        for (m, value) in north.iter().take(orders).enumerate() {
+                            sym_p[m * width + b] = factor * value.re;
+                            sym_p[m * width + batch + b] = -(factor * value.im);
+                        }
+                        continue;
+                    }
+                    input.copy_from_slice(ring(b, mirror));
+                    self.forward.process_with_scratch(input, south, scratch).expect("buffers sized by the plan");
+                    for (m, (n, s)) in north.iter().zip(south.iter()).take(orders).enumerate() {
+                        let (cosine, sine) = (m * width + b, m * width + batch + b);
+                        sym_p[cosine] = factor * (n.re + s.re);
+                        anti_p[cosine] = factor * (n.re - s.re);
+                        sym_p[sine] = -(factor * (n.im + s.im));
+                        anti_p[sine] = -(factor * (n.im - s.im));
+                    }
                 }
             },
         );
-
-        let width = 2 * batch;
-        let slab = orders * width;
-        let mut sym = vec![T::zero(); self.half_rings() * slab];
-        let mut anti = vec![T::zero(); self.half_rings() * slab];
-        sym.par_chunks_mut(slab).zip(anti.par_chunks_mut(slab)).enumerate().for_each(|(p, (sym_p, anti_p))| {
-            let south = nlat - 1 - p;
-            let factor = T::of(ring_factors[p]);
-            for b in 0..batch {
-                let north_spectrum = &spectra[(b * nlat + p) * orders * 2..][..orders * 2];
-                let south_spectrum = &spectra[(b * nlat + south) * orders * 2..][..orders * 2];
-                for m in 0..orders {
-                    for part in 0..2 {
-                        let (n, s) = (north_spectrum[2 * m + part], south_spectrum[2 * m + part]);
-                        let at = m * width + 2 * b + part;
-                        if south == p {
-                            sym_p[at] = factor * n; // the equator ring: symmetric only
-                        } else {
-                            sym_p[at] = factor * (n + s);
-                            anti_p[at] = factor * (n - s);
-                        }
-                    }
-                }
-            }
-        });
         (sym, anti)
     }
 
     /// Inverse of the folding: per ring, (cos, sin) sums = symmetric ± antisymmetric
-    /// part, scaled by `ring_factors`, then an inverse real FFT. Input `[m][half ring][batch][2]`.
+    /// part, scaled by `ring_factors`, then an inverse real FFT. Input `[m][half ring][part][batch]`.
     fn unfold_rings(&self, sym: &[T], anti: &[T], batch: usize, ring_factors: &[f64]) -> Vec<T> {
         let (nlat, half, width) = (self.nlat, self.half_rings(), 2 * batch);
         let half_t = T::of(0.5);
@@ -366,11 +402,11 @@ impl<T: Real> Sht<T> {
                 let factor = T::of(ring_factors[j]);
                 spectrum.iter_mut().for_each(|v| *v = Complex::new(T::zero(), T::zero()));
                 for m in 0..=self.lmax {
-                    let at = (m * half + p) * width + 2 * b;
+                    let (cosine, sine) = ((m * half + p) * width + b, (m * half + p) * width + batch + b);
                     let (cos_sum, sin_sum) = if south {
-                        (sym[at] - anti[at], sym[at + 1] - anti[at + 1])
+                        (sym[cosine] - anti[cosine], sym[sine] - anti[sine])
                     } else {
-                        (sym[at] + anti[at], sym[at + 1] + anti[at + 1])
+                        (sym[cosine] + anti[cosine], sym[sine] + anti[sine])
                     };
                     // c2r computes Y_0 + 2 Re Σ_m Y_m e^{imφ}.
                     spectrum[m] = if m == 0 {
@@ -385,17 +421,18 @@ impl<T: Real> Sht<T> {
         maps
     }
 
-    /// Per order m: coefficients `[m][l − m][batch][2]` = λ_m · folded spectrum, the
+    /// Per order m: coefficients `[m][part][batch][l − m]` = λ_m · folded spectrum, the
     /// even-(l − m) degrees from the symmetric part and the odd ones from the antisymmetric.
     fn legendre_analysis(&self, table: &LegendreTable<T>, sym: &[T], anti: &[T], layout: Layout, batch: usize) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
-        let mut orders = vec![T::zero(); (self.lmax + 1) * (self.lmax + 2) / 2 * width];
+        let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
         self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each_init(Vec::new, |scratch, (m, block)| {
             let lambda = table.matrix(m, scratch);
+            let degrees = self.degrees(m);
             for parity in 0..2 {
-                let rows = (self.degrees(m) + 1 - parity) / 2;
+                let rows = (degrees + 1 - parity) / 2;
                 matmul(
-                    MatMut { data: &mut *block, offset: parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
+                    MatMut { data: &mut *block, offset: parity, rows, cols: width, row_stride: 2, col_stride: degrees },
                     MatRef { data: lambda, offset: parity * half, rows, cols: half, row_stride: 2 * half, col_stride: 1 },
                     MatRef {
                         data: if parity == 0 { sym } else { anti },
@@ -412,26 +449,24 @@ impl<T: Real> Sht<T> {
         orders
     }
 
-    /// Per order m: folded spectrum `[m][half ring][batch][2]` = λ_mᵀ · coefficients.
+    /// Per order m: folded spectrum `[m][half ring][part][batch]` = λ_mᵀ · coefficients
+    /// `[m][part][batch][l − m]`.
     fn legendre_synthesis(&self, table: &LegendreTable<T>, orders: &[T], batch: usize) -> (Vec<T>, Vec<T>) {
         let (width, half) = (2 * batch, table.half_rings());
-        let mut sym = vec![T::zero(); (self.lmax + 1) * half * width];
-        let mut anti = vec![T::zero(); (self.lmax + 1) * half * width];
-        let starts: Vec<usize> = (0..=self.lmax).scan(0, |next, m| {
-            let start = *next;
-            *next += self.degrees(m) * width;
-            Some(start)
-        }).collect();
+        let mut sym = self.pool.take((self.lmax + 1) * half * width);
+        let mut anti = self.pool.take((self.lmax + 1) * half * width);
+        let starts = self.order_starts(batch);
         sym.par_chunks_mut(half * width).zip(anti.par_chunks_mut(half * width)).enumerate().for_each_init(
             Vec::new,
             |scratch, (m, (sym_m, anti_m))| {
                 let lambda = table.matrix(m, scratch);
+                let degrees = self.degrees(m);
                 for (parity, destination) in [(0, sym_m), (1, anti_m)] {
-                    let rows = (self.degrees(m) + 1 - parity) / 2;
+                    let rows = (degrees + 1 - parity) / 2;
                     matmul(
                         MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width, col_stride: 1 },
                         MatRef { data: lambda, offset: parity * half, rows: half, cols: rows, row_stride: 1, col_stride: 2 * half },
-                        MatRef { data: orders, offset: starts[m] + parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
+                        MatRef { data: orders, offset: starts[m] + parity, rows, cols: width, row_stride: 2, col_stride: degrees },
                         false,
                     );
                 }
@@ -443,7 +478,7 @@ impl<T: Real> Sht<T> {
     /// Equiangular → Gauss–Legendre rings per order: `[half ring][m]` → `[m][Gauss half ring]`.
     fn resample(&self, sym: &[T], anti: &[T], resampling: &[[Vec<T>; 2]; 2], gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
         let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
-        let mut out = [vec![T::zero(); orders * gauss_half * width], vec![T::zero(); orders * gauss_half * width]];
+        let mut out = [self.pool.take(orders * gauss_half * width), self.pool.take(orders * gauss_half * width)];
         let [out_sym, out_anti] = &mut out;
         out_sym.par_chunks_mut(gauss_half * width).zip(out_anti.par_chunks_mut(gauss_half * width)).enumerate().for_each(
             |(m, (sym_m, anti_m))| {
@@ -464,7 +499,7 @@ impl<T: Real> Sht<T> {
     /// Adjoint of [`Sht::resample`]: `[m][Gauss half ring]` → `[m][half ring]`.
     fn resample_adjoint(&self, sym: &[T], anti: &[T], resampling: &[[Vec<T>; 2]; 2], gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
         let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
-        let mut out = [vec![T::zero(); orders * half * width], vec![T::zero(); orders * half * width]];
+        let mut out = [self.pool.take(orders * half * width), self.pool.take(orders * half * width)];
         let [out_sym, out_anti] = &mut out;
         out_sym.par_chunks_mut(half * width).zip(out_anti.par_chunks_mut(half * width)).enumerate().for_each(
             |(m, (sym_m, anti_m))| {
@@ -482,22 +517,20 @@ impl<T: Real> Sht<T> {
         (sym, anti)
     }
 
-    /// `[m][l − m][batch][2]` → `(batch, (lmax+1)²)`, applying the √2 of m > 0.
+    /// Per-order blocks `[m][part][batch][l − m]` → `(batch, (lmax+1)²)`, applying the √2
+    /// of m > 0.
     fn scatter(&self, orders: &[T], batch: usize) -> Vec<T> {
-        let (width, n) = (2 * batch, self.n_coefficients());
+        let n = self.n_coefficients();
+        let starts = self.order_starts(batch);
         let mut coefficients = vec![T::zero(); batch * n];
         coefficients.par_chunks_mut(n).enumerate().for_each(|(b, out)| {
-            let mut start = 0;
             for m in 0..=self.lmax {
                 let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-                for i in 0..degrees {
-                    let at = start + i * width + 2 * b;
-                    out[self.offsets[m] + i] = scale * orders[at];
-                    if m > 0 {
-                        out[self.offsets[m] + degrees + i] = scale * orders[at + 1];
-                    }
+                for part in 0..if m == 0 { 1 } else { 2 } {
+                    let source = &orders[starts[m] + (part * batch + b) * degrees..][..degrees];
+                    let destination = &mut out[self.offsets[m] + part * degrees..][..degrees];
+                    destination.iter_mut().zip(source).for_each(|(d, s)| *d = scale * *s);
                 }
-                start += degrees * width;
             }
         });
         coefficients
@@ -505,21 +538,30 @@ impl<T: Real> Sht<T> {
 
     /// Inverse of [`Sht::scatter`]'s layout change (with the same √2 factors).
     fn gather(&self, coefficients: &[T], batch: usize) -> Vec<T> {
-        let (width, n) = (2 * batch, self.n_coefficients());
-        let mut orders = vec![T::zero(); (self.lmax + 1) * (self.lmax + 2) / 2 * width];
+        let n = self.n_coefficients();
+        let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * 2 * batch);
         self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each(|(m, block)| {
             let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-            for i in 0..degrees {
+            for part in 0..if m == 0 { 1 } else { 2 } {
                 for b in 0..batch {
-                    let item = &coefficients[b * n..][..n];
-                    block[i * width + 2 * b] = scale * item[self.offsets[m] + i];
-                    if m > 0 {
-                        block[i * width + 2 * b + 1] = scale * item[self.offsets[m] + degrees + i];
-                    }
+                    let source = &coefficients[b * n + self.offsets[m] + part * degrees..][..degrees];
+                    let destination = &mut block[(part * batch + b) * degrees..][..degrees];
+                    destination.iter_mut().zip(source).for_each(|(d, s)| *d = scale * *s);
                 }
             }
         });
         orders
+    }
+
+    /// Where each order's block starts in a `[m][part][batch][l − m]` buffer.
+    fn order_starts(&self, batch: usize) -> Vec<usize> {
+        (0..=self.lmax)
+            .scan(0, |next, m| {
+                let start = *next;
+                *next += self.degrees(m) * 2 * batch;
+                Some(start)
+            })
+            .collect()
     }
 }
 
