@@ -148,9 +148,15 @@ struct BufferPool<T> {
 }
 
 impl<T: Real> BufferPool<T> {
+    /// A buffer of `len` values whose contents are unspecified (left from earlier
+    /// calls): callers write every element before reading it.
     fn take(&self, len: usize) -> Vec<T> {
-        let mut buffer = self.free.lock().map(|mut free| free.pop()).ok().flatten().unwrap_or_default();
-        buffer.clear();
+        let reused = self.free.lock().ok().and_then(|mut free| {
+            // The smallest buffer that is large enough: no reallocation, no fresh pages.
+            let best = (0..free.len()).filter(|&i| free[i].capacity() >= len).min_by_key(|&i| free[i].capacity())?;
+            Some(free.swap_remove(best))
+        });
+        let mut buffer = reused.unwrap_or_default();
         buffer.resize(len, T::zero());
         buffer
     }
@@ -158,10 +164,17 @@ impl<T: Real> BufferPool<T> {
     fn give(&self, buffers: impl IntoIterator<Item = Vec<T>>) {
         if let Ok(mut free) = self.free.lock() {
             free.extend(buffers);
-            free.truncate(8);
+            free.truncate(4 * rayon::current_num_threads() + 8);
         }
     }
 }
+
+/// Maps transposed together between per-ring and per-order layouts: one cache line of f64.
+const MAP_BLOCK: usize = 8;
+
+/// Bytes of folded spectra a chunk of maps may occupy: small enough to stay in cache
+/// while a chunk goes through every stage of a transform.
+const CHUNK_BYTES: usize = 2 << 20;
 
 /// Where the (ring, order) blocks of a folded spectrum sit in its buffer.
 #[derive(Clone, Copy)]
@@ -259,6 +272,54 @@ impl<T: Real> Sht<T> {
     /// Maps `(batch, nlat, nlon)` → coefficients `(batch, (lmax+1)²)`.
     pub fn analysis(&self, maps: &[T], batch: usize) -> Result<Vec<T>> {
         self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
+        let mut coefficients = vec![T::zero(); batch * self.n_coefficients()];
+        self.for_each_chunk(maps, self.nlat * self.nlon, &mut coefficients, self.n_coefficients(), |maps, out| {
+            self.analysis_chunk(maps, out)
+        });
+        Ok(coefficients)
+    }
+
+    /// Coefficients `(batch, (lmax+1)²)` → maps `(batch, nlat, nlon)`.
+    pub fn synthesis(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
+        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
+        let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
+        self.for_each_chunk(coefficients, self.n_coefficients(), &mut maps, self.nlat * self.nlon, |coefficients, out| {
+            self.synthesis_chunk(coefficients, out, false)
+        });
+        Ok(maps)
+    }
+
+    /// The adjoint (transpose) of [`Sht::analysis`]: coefficients → maps, so that
+    /// ⟨analysis(x), c⟩ = ⟨x, analysis_adjoint(c)⟩. This is the backward pass of analysis.
+    pub fn analysis_adjoint(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
+        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
+        let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
+        self.for_each_chunk(coefficients, self.n_coefficients(), &mut maps, self.nlat * self.nlon, |coefficients, out| {
+            self.synthesis_chunk(coefficients, out, true)
+        });
+        Ok(maps)
+    }
+
+    /// Runs `transform` on chunks of items in parallel. Chunks are sized so that their
+    /// intermediates stay in cache; a single large item is one chunk, parallel inside.
+    fn for_each_chunk(
+        &self,
+        input: &[T],
+        input_width: usize,
+        output: &mut [T],
+        output_width: usize,
+        transform: impl Fn(&[T], &mut [T]) + Sync,
+    ) {
+        let bytes_per_item = 4 * self.half_rings().max(self.lmax + 1) * (self.lmax + 1) * std::mem::size_of::<T>();
+        let chunk = (CHUNK_BYTES / bytes_per_item).max(1);
+        output
+            .par_chunks_mut(chunk * output_width)
+            .zip(input.par_chunks(chunk * input_width))
+            .for_each(|(out, items)| transform(items, out));
+    }
+
+    fn analysis_chunk(&self, maps: &[T], coefficients: &mut [T]) {
+        let batch = maps.len() / (self.nlat * self.nlon);
         let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
         let orders = match &self.gauss {
             None => {
@@ -278,45 +339,31 @@ impl<T: Real> Sht<T> {
                 orders
             }
         };
-        let coefficients = self.scatter(&orders, batch);
+        self.scatter(&orders, batch, coefficients);
         self.pool.give([orders]);
-        Ok(coefficients)
     }
 
-    /// Coefficients `(batch, (lmax+1)²)` → maps `(batch, nlat, nlon)`.
-    pub fn synthesis(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
-        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
-        let orders = self.gather(coefficients, batch);
-        let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
-        let maps = self.unfold_rings(&sym, &anti, batch, &vec![1.0; self.nlat]);
-        self.pool.give([orders, sym, anti]);
-        Ok(maps)
-    }
-
-    /// The adjoint (transpose) of [`Sht::analysis`]: coefficients → maps, so that
-    /// ⟨analysis(x), c⟩ = ⟨x, analysis_adjoint(c)⟩. This is the backward pass of analysis.
-    pub fn analysis_adjoint(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
-        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
+    /// Synthesis, or with `adjoint` the adjoint of analysis, of one chunk.
+    fn synthesis_chunk(&self, coefficients: &[T], maps: &mut [T], adjoint: bool) {
+        let batch = coefficients.len() / self.n_coefficients();
         let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
         let orders = self.gather(coefficients, batch);
-        let maps = match &self.gauss {
-            None => {
+        match (&self.gauss, adjoint) {
+            (_, false) | (None, true) => {
                 let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
-                let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
-                let maps = self.unfold_rings(&sym, &anti, batch, &ring_factors);
+                let ring_factors: Vec<f64> =
+                    if adjoint { self.weights.iter().map(|w| w * point).collect() } else { vec![1.0; self.nlat] };
+                self.unfold_rings(&sym, &anti, batch, &ring_factors, maps);
                 self.pool.give([sym, anti]);
-                maps
             }
-            Some((table, resampling)) => {
+            (Some((table, resampling)), true) => {
                 let (gauss_sym, gauss_anti) = self.legendre_synthesis(table, &orders, batch);
                 let (sym, anti) = self.resample_adjoint(&gauss_sym, &gauss_anti, resampling, table.half_rings(), batch);
-                let maps = self.unfold_rings(&sym, &anti, batch, &vec![point; self.nlat]);
+                self.unfold_rings(&sym, &anti, batch, &vec![point; self.nlat], maps);
                 self.pool.give([gauss_sym, gauss_anti, sym, anti]);
-                maps
             }
-        };
+        }
         self.pool.give([orders]);
-        Ok(maps)
     }
 
     fn check_len(&self, name: &str, len: usize, batch: usize, per_item: usize) -> Result<()> {
@@ -334,7 +381,7 @@ impl<T: Real> Sht<T> {
         self.lmax + 1 - m
     }
 
-    /// Splits a buffer of per-order blocks (`[m][part][batch][l − m]`) into the blocks.
+    /// Splits a buffer of per-order blocks (`[m][l − m][part][batch]`) into the blocks.
     fn split_orders<'a>(&self, buffer: &'a mut [T], batch: usize) -> Vec<&'a mut [T]> {
         let mut rest = buffer;
         let mut blocks = Vec::with_capacity(self.lmax + 1);
@@ -358,29 +405,35 @@ impl<T: Real> Sht<T> {
         sym.par_chunks_mut(slab).zip(anti.par_chunks_mut(slab)).enumerate().for_each_init(
             || {
                 let f = &self.forward;
-                (f.make_input_vec(), f.make_output_vec(), f.make_output_vec(), f.make_scratch_vec())
+                let spectra = || vec![f.make_output_vec(); MAP_BLOCK];
+                (f.make_input_vec(), spectra(), spectra(), f.make_scratch_vec())
             },
             |(input, north, south, scratch), (p, (sym_p, anti_p))| {
                 let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
-                for b in 0..batch {
-                    input.copy_from_slice(ring(b, p));
-                    self.forward.process_with_scratch(input, north, scratch).expect("buffers sized by the plan");
-                    if mirror == p {
-                        // The equator ring: symmetric only.
-                        for (m, value) in north.iter().take(orders).enumerate() {
-                            sym_p[m * width + b] = factor * value.re;
-                            sym_p[m * width + batch + b] = -(factor * value.im);
+                // Maps in blocks, so that each (m, part) run written below is a whole line.
+                for b0 in (0..batch).step_by(MAP_BLOCK) {
+                    let block = MAP_BLOCK.min(batch - b0);
+                    for i in 0..block {
+                        input.copy_from_slice(ring(b0 + i, p));
+                        self.forward.process_with_scratch(input, &mut north[i], scratch).expect("buffers sized by the plan");
+                        if mirror == p {
+                            south[i].iter_mut().for_each(|v| *v = Complex::new(T::zero(), T::zero()));
+                        } else {
+                            input.copy_from_slice(ring(b0 + i, mirror));
+                            self.forward.process_with_scratch(input, &mut south[i], scratch).expect("buffers sized by the plan");
                         }
-                        continue;
                     }
-                    input.copy_from_slice(ring(b, mirror));
-                    self.forward.process_with_scratch(input, south, scratch).expect("buffers sized by the plan");
-                    for (m, (n, s)) in north.iter().zip(south.iter()).take(orders).enumerate() {
-                        let (cosine, sine) = (m * width + b, m * width + batch + b);
-                        sym_p[cosine] = factor * (n.re + s.re);
-                        anti_p[cosine] = factor * (n.re - s.re);
-                        sym_p[sine] = -(factor * (n.im + s.im));
-                        anti_p[sine] = -(factor * (n.im - s.im));
+                    // The equator ring has no mirror: symmetric part only.
+                    let anti_factor = if mirror == p { T::zero() } else { factor };
+                    for m in 0..orders {
+                        let (cosine, sine) = (m * width + b0, m * width + batch + b0);
+                        for i in 0..block {
+                            let (n, s) = (north[i][m], south[i][m]);
+                            sym_p[cosine + i] = factor * (n.re + s.re);
+                            anti_p[cosine + i] = anti_factor * (n.re - s.re);
+                            sym_p[sine + i] = -(factor * (n.im + s.im));
+                            anti_p[sine + i] = -(anti_factor * (n.im - s.im));
+                        }
                     }
                 }
             },
@@ -390,10 +443,9 @@ impl<T: Real> Sht<T> {
 
     /// Inverse of the folding: per ring, (cos, sin) sums = symmetric ± antisymmetric
     /// part, scaled by `ring_factors`, then an inverse real FFT. Input `[m][half ring][part][batch]`.
-    fn unfold_rings(&self, sym: &[T], anti: &[T], batch: usize, ring_factors: &[f64]) -> Vec<T> {
+    fn unfold_rings(&self, sym: &[T], anti: &[T], batch: usize, ring_factors: &[f64], maps: &mut [T]) {
         let (nlat, half, width) = (self.nlat, self.half_rings(), 2 * batch);
         let half_t = T::of(0.5);
-        let mut maps = vec![T::zero(); batch * nlat * self.nlon];
         maps.par_chunks_mut(self.nlon).enumerate().with_min_len(8).for_each_init(
             || (self.inverse.make_input_vec(), self.inverse.make_scratch_vec()),
             |(spectrum, scratch), (row, ring)| {
@@ -418,10 +470,9 @@ impl<T: Real> Sht<T> {
                 self.inverse.process_with_scratch(spectrum, ring, scratch).expect("buffers sized by the plan");
             },
         );
-        maps
     }
 
-    /// Per order m: coefficients `[m][part][batch][l − m]` = λ_m · folded spectrum, the
+    /// Per order m: coefficients `[m][l − m][part][batch]` = λ_m · folded spectrum, the
     /// even-(l − m) degrees from the symmetric part and the odd ones from the antisymmetric.
     fn legendre_analysis(&self, table: &LegendreTable<T>, sym: &[T], anti: &[T], layout: Layout, batch: usize) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
@@ -432,7 +483,7 @@ impl<T: Real> Sht<T> {
             for parity in 0..2 {
                 let rows = (degrees + 1 - parity) / 2;
                 matmul(
-                    MatMut { data: &mut *block, offset: parity, rows, cols: width, row_stride: 2, col_stride: degrees },
+                    MatMut { data: &mut *block, offset: parity * width, rows, cols: width, row_stride: 2 * width },
                     MatRef { data: lambda, offset: parity * half, rows, cols: half, row_stride: 2 * half, col_stride: 1 },
                     MatRef {
                         data: if parity == 0 { sym } else { anti },
@@ -442,7 +493,6 @@ impl<T: Real> Sht<T> {
                         row_stride: layout.ring_stride,
                         col_stride: 1,
                     },
-                    false,
                 );
             }
         });
@@ -450,7 +500,7 @@ impl<T: Real> Sht<T> {
     }
 
     /// Per order m: folded spectrum `[m][half ring][part][batch]` = λ_mᵀ · coefficients
-    /// `[m][part][batch][l − m]`.
+    /// `[m][l − m][part][batch]`.
     fn legendre_synthesis(&self, table: &LegendreTable<T>, orders: &[T], batch: usize) -> (Vec<T>, Vec<T>) {
         let (width, half) = (2 * batch, table.half_rings());
         let mut sym = self.pool.take((self.lmax + 1) * half * width);
@@ -464,11 +514,10 @@ impl<T: Real> Sht<T> {
                 for (parity, destination) in [(0, sym_m), (1, anti_m)] {
                     let rows = (degrees + 1 - parity) / 2;
                     matmul(
-                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width, col_stride: 1 },
+                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width },
                         MatRef { data: lambda, offset: parity * half, rows: half, cols: rows, row_stride: 1, col_stride: 2 * half },
-                        MatRef { data: orders, offset: starts[m] + parity, rows, cols: width, row_stride: 2, col_stride: degrees },
-                        false,
-                    );
+                        MatRef { data: orders, offset: starts[m] + parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
+                        );
                 }
             },
         );
@@ -484,11 +533,10 @@ impl<T: Real> Sht<T> {
             |(m, (sym_m, anti_m))| {
                 for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
                     matmul(
-                        MatMut { data: destination, offset: 0, rows: gauss_half, cols: width, row_stride: width, col_stride: 1 },
+                        MatMut { data: destination, offset: 0, rows: gauss_half, cols: width, row_stride: width },
                         MatRef { data: &resampling[m % 2][part], offset: 0, rows: gauss_half, cols: half, row_stride: half, col_stride: 1 },
                         MatRef { data: source, offset: m * width, rows: half, cols: width, row_stride: orders * width, col_stride: 1 },
-                        false,
-                    );
+                        );
                 }
             },
         );
@@ -505,11 +553,10 @@ impl<T: Real> Sht<T> {
             |(m, (sym_m, anti_m))| {
                 for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
                     matmul(
-                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width, col_stride: 1 },
+                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width },
                         MatRef { data: &resampling[m % 2][part], offset: 0, rows: half, cols: gauss_half, row_stride: 1, col_stride: half },
                         MatRef { data: source, offset: m * gauss_half * width, rows: gauss_half, cols: width, row_stride: width, col_stride: 1 },
-                        false,
-                    );
+                        );
                 }
             },
         );
@@ -517,23 +564,21 @@ impl<T: Real> Sht<T> {
         (sym, anti)
     }
 
-    /// Per-order blocks `[m][part][batch][l − m]` → `(batch, (lmax+1)²)`, applying the √2
+    /// Per-order blocks `[m][l − m][part][batch]` → `(batch, (lmax+1)²)`, applying the √2
     /// of m > 0.
-    fn scatter(&self, orders: &[T], batch: usize) -> Vec<T> {
+    fn scatter(&self, orders: &[T], batch: usize, coefficients: &mut [T]) {
         let n = self.n_coefficients();
         let starts = self.order_starts(batch);
-        let mut coefficients = vec![T::zero(); batch * n];
         coefficients.par_chunks_mut(n).enumerate().for_each(|(b, out)| {
             for m in 0..=self.lmax {
                 let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
                 for part in 0..if m == 0 { 1 } else { 2 } {
-                    let source = &orders[starts[m] + (part * batch + b) * degrees..][..degrees];
+                    let source = orders[starts[m] + part * batch + b..].iter().step_by(2 * batch);
                     let destination = &mut out[self.offsets[m] + part * degrees..][..degrees];
                     destination.iter_mut().zip(source).for_each(|(d, s)| *d = scale * *s);
                 }
             }
         });
-        coefficients
     }
 
     /// Inverse of [`Sht::scatter`]'s layout change (with the same √2 factors).
@@ -542,18 +587,17 @@ impl<T: Real> Sht<T> {
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * 2 * batch);
         self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each(|(m, block)| {
             let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-            for part in 0..if m == 0 { 1 } else { 2 } {
-                for b in 0..batch {
-                    let source = &coefficients[b * n + self.offsets[m] + part * degrees..][..degrees];
-                    let destination = &mut block[(part * batch + b) * degrees..][..degrees];
-                    destination.iter_mut().zip(source).for_each(|(d, s)| *d = scale * *s);
+            for (i, row) in block.chunks_exact_mut(2 * batch).enumerate() {
+                for (b, item) in coefficients.chunks_exact(n).enumerate() {
+                    row[b] = scale * item[self.offsets[m] + i];
+                    row[batch + b] = if m == 0 { T::zero() } else { scale * item[self.offsets[m] + degrees + i] };
                 }
             }
         });
         orders
     }
 
-    /// Where each order's block starts in a `[m][part][batch][l − m]` buffer.
+    /// Where each order's block starts in a `[m][l − m][part][batch]` buffer.
     fn order_starts(&self, batch: usize) -> Vec<usize> {
         (0..=self.lmax)
             .scan(0, |next, m| {

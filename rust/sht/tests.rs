@@ -61,3 +61,22 @@ fn rejects_grids_too_small_for_lmax() {
     assert!(Sht::<f64>::new(11, 21, 10, Grid::Equiangular).is_err());
     assert!(Sht::<f64>::new(11, 20, 10, Grid::GaussLegendre).is_err());
 }
+
+#[test]
+fn reused_plans_give_the_same_results() {
+    // Scratch buffers are pooled without clearing: every stage must overwrite them fully.
+    for grid in [Grid::GaussLegendre, Grid::Equiangular] {
+        let sht = Sht::<f64>::new(17, 33, 14, grid).unwrap();
+        let first = random(4 * 17 * 33, 1);
+        let second = random(2 * 17 * 33, 2);
+        let expected = sht.analysis(&second, 2).unwrap();
+        sht.analysis(&first, 4).unwrap();
+        assert_eq!(sht.analysis(&second, 2).unwrap(), expected);
+        let coefficients = random(3 * sht.n_coefficients(), 3);
+        let expected = (sht.synthesis(&coefficients, 3).unwrap(), sht.analysis_adjoint(&coefficients, 3).unwrap());
+        sht.synthesis(&random(5 * sht.n_coefficients(), 4), 5).unwrap();
+        sht.analysis(&first, 4).unwrap();
+        assert_eq!(sht.synthesis(&coefficients, 3).unwrap(), expected.0);
+        assert_eq!(sht.analysis_adjoint(&coefficients, 3).unwrap(), expected.1);
+    }
+}
