@@ -672,7 +672,7 @@ def build_markdown(data: dict) -> str:
             lines += ["", "Failed checks (not timed):", ""]
             for c in failures:
                 detail = c.get("error") or f"analysis {c['analysis_err']:.2e}, synthesis {c['synthesis_err']:.2e}" + (f"; {c['hint']}" if "hint" in c else "")
-                lines.append(f"- {key_of(c)} {c['grid']} {c['nlat']}x{c['nlon']} lmax {c['lmax']} ({c['threads']} threads): {detail}")
+                lines.append(f"- {key_of(c)} {c['grid']} {c['nlat']}x{c['nlon']} lmax {c['lmax']} ({c['threads']} thread{'s' if c['threads'] > 1 else ''}): {detail}")
     return "\n".join(lines) + "\n"
 
 

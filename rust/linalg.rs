@@ -34,19 +34,68 @@ pub struct MatMut<'a, T> {
 const TILE_ROWS: usize = 4;
 const TILE_COLS: usize = 16;
 
+/// A left factor packed for the kernel: rows in tiles of [`TILE_ROWS`], each tile stored
+/// k-major (`[tile][k][row in tile]`, zero-padded), so the kernel reads it without strides.
+/// Fixed matrices (Legendre tables) are packed once per plan.
+#[derive(Clone, Debug, Default)]
+pub struct Packed<T> {
+    rows: usize,
+    depth: usize,
+    data: Vec<T>,
+}
+
+impl<T: Real> Packed<T> {
+    pub fn new(lhs: MatRef<'_, T>) -> Self {
+        let mut packed = Packed::default();
+        packed.pack(lhs);
+        packed
+    }
+
+    /// Packs `lhs` into this buffer, reusing its allocation.
+    pub fn pack(&mut self, lhs: MatRef<'_, T>) {
+        assert!(reaches(lhs.data.len(), lhs.offset, lhs.rows, lhs.cols, lhs.row_stride, lhs.col_stride), "lhs out of bounds");
+        let tiles = lhs.rows.div_ceil(TILE_ROWS);
+        self.rows = lhs.rows;
+        self.depth = lhs.cols;
+        self.data.clear();
+        self.data.resize(tiles * lhs.cols * TILE_ROWS, T::zero());
+        if lhs.cols == 0 {
+            return;
+        }
+        for (tile, panel) in self.data.chunks_exact_mut(lhs.cols * TILE_ROWS).enumerate() {
+            for (k, values) in panel.chunks_exact_mut(TILE_ROWS).enumerate() {
+                for (r, value) in values.iter_mut().enumerate() {
+                    let row = tile * TILE_ROWS + r;
+                    if row < lhs.rows {
+                        *value = lhs.data[lhs.offset + row * lhs.row_stride + k * lhs.col_stride];
+                    }
+                }
+            }
+        }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+}
+
 fn reaches(len: usize, offset: usize, rows: usize, cols: usize, row_stride: usize, col_stride: usize) -> bool {
     rows == 0 || cols == 0 || offset + (rows - 1) * row_stride + (cols - 1) * col_stride < len
+}
+
+/// `dst = lhs · rhs` for a strided `lhs` (packed on the fly).
+pub fn matmul<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
+    matmul_packed(dst, &Packed::new(lhs), rhs)
 }
 
 /// `dst = lhs · rhs`. `rhs` must have contiguous columns (`col_stride == 1`).
 ///
 /// # Panics
 /// If the shapes disagree or a view reaches past its slice.
-pub fn matmul<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
-    assert!(dst.rows == lhs.rows && dst.cols == rhs.cols && lhs.cols == rhs.rows, "matmul shapes disagree");
+pub fn matmul_packed<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
+    assert!(dst.rows == lhs.rows && dst.cols == rhs.cols && lhs.depth == rhs.rows, "matmul shapes disagree");
     assert!(rhs.col_stride == 1 || rhs.cols <= 1, "matmul needs contiguous columns on the right");
     assert!(reaches(dst.data.len(), dst.offset, dst.rows, dst.cols, dst.row_stride, 1), "dst out of bounds");
-    assert!(reaches(lhs.data.len(), lhs.offset, lhs.rows, lhs.cols, lhs.row_stride, lhs.col_stride), "lhs out of bounds");
     assert!(reaches(rhs.data.len(), rhs.offset, rhs.rows, rhs.cols, rhs.row_stride, 1), "rhs out of bounds");
 
     #[cfg(target_arch = "x86_64")]
@@ -65,65 +114,64 @@ pub fn matmul<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,fma")]
-fn kernel_avx512<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
+fn kernel_avx512<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
     kernel(dst, lhs, rhs)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn kernel_avx2<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
+fn kernel_avx2<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
     kernel(dst, lhs, rhs)
 }
 
 #[inline(always)]
-fn kernel<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
+fn kernel<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
     let MatMut { data: out, offset: out_offset, rows, cols, row_stride: out_stride } = dst;
-    let mut panel = vec![[T::zero(); TILE_ROWS]; lhs.cols];
-    for r0 in (0..rows).step_by(TILE_ROWS) {
-        let tile_rows = TILE_ROWS.min(rows - r0);
-        // Pack the rows' values of lhs k-major, so the tile loop reads them without strides.
-        for (k, values) in panel.iter_mut().enumerate() {
-            for (r, value) in values.iter_mut().enumerate() {
-                *value = if r < tile_rows { lhs.data[lhs.offset + (r0 + r) * lhs.row_stride + k * lhs.col_stride] } else { T::zero() };
-            }
+    if lhs.depth == 0 {
+        for r in 0..rows {
+            out[out_offset + r * out_stride..][..cols].iter_mut().for_each(|v| *v = T::zero());
         }
+        return;
+    }
+    for (tile, panel) in lhs.data.chunks_exact(lhs.depth * TILE_ROWS).enumerate() {
+        let r0 = tile * TILE_ROWS;
+        let tile_rows = TILE_ROWS.min(rows - r0);
         for c0 in (0..cols).step_by(TILE_COLS) {
             let tile_cols = TILE_COLS.min(cols - c0);
-            let mut acc = [[T::zero(); TILE_COLS]; TILE_ROWS];
-            if tile_cols == TILE_COLS {
-                full_tile(&mut acc, &panel, rhs, c0);
-            } else {
-                edge_tile(&mut acc, &panel, rhs, c0, tile_cols);
-            }
+            let acc = if tile_cols == TILE_COLS { full_tile(panel, rhs, c0) } else { edge_tile(panel, rhs, c0, tile_cols) };
             for (r, row) in acc.iter().enumerate().take(tile_rows) {
                 let start = out_offset + (r0 + r) * out_stride + c0;
-                out[start..start + tile_cols].copy_from_slice(&row[..tile_cols]);
+                for (o, v) in out[start..start + tile_cols].iter_mut().zip(row) {
+                    *o = *v;
+                }
             }
         }
     }
 }
 
 #[inline(always)]
-fn full_tile<T: Real>(acc: &mut [[T; TILE_COLS]; TILE_ROWS], panel: &[[T; TILE_ROWS]], rhs: MatRef<'_, T>, c0: usize) {
-    for (k, a) in panel.iter().enumerate() {
-        let b: &[T; TILE_COLS] = rhs.data[rhs.offset + k * rhs.row_stride + c0..][..TILE_COLS].try_into().unwrap();
-        for r in 0..TILE_ROWS {
-            for c in 0..TILE_COLS {
-                acc[r][c] = a[r].mul_add(b[c], acc[r][c]);
-            }
+fn full_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>, c0: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
+    // Separate accumulators per row keep the whole tile in registers.
+    let (mut acc0, mut acc1, mut acc2, mut acc3) = ([T::zero(); TILE_COLS], [T::zero(); TILE_COLS], [T::zero(); TILE_COLS], [T::zero(); TILE_COLS]);
+    let stride = rhs.row_stride;
+    let b_rows = &rhs.data[rhs.offset + c0..];
+    for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
+        let b: &[T; TILE_COLS] = b_rows[k * stride..][..TILE_COLS].try_into().unwrap();
+        let (a0, a1, a2, a3) = (a[0], a[1], a[2], a[3]);
+        for c in 0..TILE_COLS {
+            acc0[c] = a0.mul_add(b[c], acc0[c]);
+            acc1[c] = a1.mul_add(b[c], acc1[c]);
+            acc2[c] = a2.mul_add(b[c], acc2[c]);
+            acc3[c] = a3.mul_add(b[c], acc3[c]);
         }
     }
+    [acc0, acc1, acc2, acc3]
 }
 
 #[inline(always)]
-fn edge_tile<T: Real>(
-    acc: &mut [[T; TILE_COLS]; TILE_ROWS],
-    panel: &[[T; TILE_ROWS]],
-    rhs: MatRef<'_, T>,
-    c0: usize,
-    tile_cols: usize,
-) {
-    for (k, a) in panel.iter().enumerate() {
+fn edge_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>, c0: usize, tile_cols: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
+    let mut acc = [[T::zero(); TILE_COLS]; TILE_ROWS];
+    for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
         let b = &rhs.data[rhs.offset + k * rhs.row_stride + c0..][..tile_cols];
         for r in 0..TILE_ROWS {
             for (acc_value, &b_value) in acc[r].iter_mut().zip(b) {
@@ -131,6 +179,7 @@ fn edge_tile<T: Real>(
             }
         }
     }
+    acc
 }
 
 #[cfg(test)]

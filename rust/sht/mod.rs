@@ -34,11 +34,11 @@ use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
 use crate::error::{invalid_argument, Result};
-use crate::linalg::{matmul, MatMut, MatRef};
+use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
 use legendre::{Recurrence, Scaled};
 
 /// Floating-point types the transform runs in.
-pub trait Real: realfft::FftNum + realfft::num_traits::Float {
+pub trait Real: realfft::FftNum + realfft::num_traits::Float + Default {
     fn of(value: f64) -> Self;
 }
 impl Real for f32 {
@@ -68,8 +68,16 @@ struct LegendreTable<T> {
     recurrence: Arc<Recurrence>,
     /// λ_mm per half ring: `sectoral[p * (lmax + 1) + m]`.
     sectoral: Vec<Scaled>,
-    /// Per m, row-major (lmax + 1 − m) × half_rings, when within the cache budget.
-    cached: Option<Vec<Vec<T>>>,
+    /// Per m, when within the cache budget.
+    cached: Option<Vec<OrderPanels<T>>>,
+}
+
+/// One order's λ_lm, split by the parity of l − m and packed for the kernel both ways:
+/// degrees × half rings (analysis) and half rings × degrees (synthesis).
+#[derive(Default)]
+struct OrderPanels<T> {
+    analysis: [Packed<T>; 2],
+    synthesis: [Packed<T>; 2],
 }
 
 impl<T: Real> LegendreTable<T> {
@@ -85,10 +93,18 @@ impl<T: Real> LegendreTable<T> {
             sectoral,
             cached: None,
         };
-        let bytes = (lmax + 1) * (lmax + 2) / 2 * half.len() * std::mem::size_of::<T>();
+        // Two packed copies of every value.
+        let bytes = 2 * (lmax + 1) * (lmax + 2) / 2 * half.len() * std::mem::size_of::<T>();
         if bytes <= LEGENDRE_CACHE_BYTES {
-            let matrices = (0..=lmax).into_par_iter().map(|m| table.compute(m)).collect();
-            table.cached = Some(matrices);
+            let panels = (0..=lmax)
+                .into_par_iter()
+                .map(|m| {
+                    let mut panels = OrderPanels::default();
+                    table.compute(m, &mut panels);
+                    panels
+                })
+                .collect();
+            table.cached = Some(panels);
         }
         table
     }
@@ -97,26 +113,52 @@ impl<T: Real> LegendreTable<T> {
         self.cos_theta.len()
     }
 
-    fn compute(&self, m: usize) -> Vec<T> {
-        let (rows, columns) = (self.lmax + 1 - m, self.half_rings());
-        let mut values = vec![0f64; rows * columns];
+    fn compute(&self, m: usize, panels: &mut OrderPanels<T>) {
+        let (degrees, half) = (self.lmax + 1 - m, self.half_rings());
+        let mut values = vec![0f64; degrees * half];
         for (p, &cos_theta) in self.cos_theta.iter().enumerate() {
             let start = self.sectoral[p * (self.lmax + 1) + m];
-            self.recurrence.column(m, cos_theta, start, &mut values[p..], columns);
+            self.recurrence.column(m, cos_theta, start, &mut values[p..], half);
         }
-        values.into_iter().map(T::of).collect()
+        let lambda: Vec<T> = values.into_iter().map(T::of).collect();
+        for parity in 0..2 {
+            let rows = (degrees + 1 - parity) / 2;
+            panels.analysis[parity].pack(MatRef {
+                data: &lambda,
+                offset: parity * half,
+                rows,
+                cols: half,
+                row_stride: 2 * half,
+                col_stride: 1,
+            });
+            panels.synthesis[parity].pack(MatRef {
+                data: &lambda,
+                offset: parity * half,
+                rows: half,
+                cols: rows,
+                row_stride: 1,
+                col_stride: 2 * half,
+            });
+        }
     }
 
-    /// λ_lm for l = m..=lmax (rows) at the half rings (columns).
-    fn matrix<'a>(&'a self, m: usize, scratch: &'a mut Vec<T>) -> &'a [T] {
+    /// Order m's panels: from the cache, or computed into `scratch`.
+    fn panels<'a>(&'a self, m: usize, scratch: &'a mut OrderPanels<T>) -> &'a OrderPanels<T> {
         match &self.cached {
-            Some(matrices) => &matrices[m],
+            Some(panels) => &panels[m],
             None => {
-                *scratch = self.compute(m);
+                self.compute(m, scratch);
                 scratch
             }
         }
     }
+}
+
+/// The equiangular → Gauss–Legendre resampling, `[m parity][symmetric, antisymmetric]`,
+/// packed for both directions.
+struct Resampling<T> {
+    forward: [[Packed<T>; 2]; 2],
+    adjoint: [[Packed<T>; 2]; 2],
 }
 
 /// A transform plan: grid, FFTs and Legendre tables, built once and reused.
@@ -134,7 +176,7 @@ pub struct Sht<T: Real> {
     /// Equiangular grids only: λ and weights at lmax + 1 Gauss–Legendre rings, and the
     /// resampling onto them, `[m parity][symmetric, antisymmetric]`, row-major
     /// (Gauss half rings × grid half rings), Gauss weights folded in.
-    gauss: Option<(LegendreTable<T>, [[Vec<T>; 2]; 2])>,
+    gauss: Option<(LegendreTable<T>, Resampling<T>)>,
     /// Position of each order's first coefficient.
     offsets: Vec<usize>,
     /// Scratch buffers kept between calls, so repeated transforms do not pay for fresh
@@ -477,14 +519,14 @@ impl<T: Real> Sht<T> {
     fn legendre_analysis(&self, table: &LegendreTable<T>, sym: &[T], anti: &[T], layout: Layout, batch: usize) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
-        self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each_init(Vec::new, |scratch, (m, block)| {
-            let lambda = table.matrix(m, scratch);
+        self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each_init(OrderPanels::default, |scratch, (m, block)| {
+            let panels = table.panels(m, scratch);
             let degrees = self.degrees(m);
             for parity in 0..2 {
                 let rows = (degrees + 1 - parity) / 2;
-                matmul(
+                matmul_packed(
                     MatMut { data: &mut *block, offset: parity * width, rows, cols: width, row_stride: 2 * width },
-                    MatRef { data: lambda, offset: parity * half, rows, cols: half, row_stride: 2 * half, col_stride: 1 },
+                    &panels.analysis[parity],
                     MatRef {
                         data: if parity == 0 { sym } else { anti },
                         offset: m * layout.order_stride,
@@ -507,15 +549,15 @@ impl<T: Real> Sht<T> {
         let mut anti = self.pool.take((self.lmax + 1) * half * width);
         let starts = self.order_starts(batch);
         sym.par_chunks_mut(half * width).zip(anti.par_chunks_mut(half * width)).enumerate().for_each_init(
-            Vec::new,
+            OrderPanels::default,
             |scratch, (m, (sym_m, anti_m))| {
-                let lambda = table.matrix(m, scratch);
+                let panels = table.panels(m, scratch);
                 let degrees = self.degrees(m);
                 for (parity, destination) in [(0, sym_m), (1, anti_m)] {
                     let rows = (degrees + 1 - parity) / 2;
-                    matmul(
+                    matmul_packed(
                         MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width },
-                        MatRef { data: lambda, offset: parity * half, rows: half, cols: rows, row_stride: 1, col_stride: 2 * half },
+                        &panels.synthesis[parity],
                         MatRef { data: orders, offset: starts[m] + parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
                         );
                 }
@@ -525,16 +567,16 @@ impl<T: Real> Sht<T> {
     }
 
     /// Equiangular → Gauss–Legendre rings per order: `[half ring][m]` → `[m][Gauss half ring]`.
-    fn resample(&self, sym: &[T], anti: &[T], resampling: &[[Vec<T>; 2]; 2], gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
+    fn resample(&self, sym: &[T], anti: &[T], resampling: &Resampling<T>, gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
         let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
         let mut out = [self.pool.take(orders * gauss_half * width), self.pool.take(orders * gauss_half * width)];
         let [out_sym, out_anti] = &mut out;
         out_sym.par_chunks_mut(gauss_half * width).zip(out_anti.par_chunks_mut(gauss_half * width)).enumerate().for_each(
             |(m, (sym_m, anti_m))| {
                 for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
-                    matmul(
+                    matmul_packed(
                         MatMut { data: destination, offset: 0, rows: gauss_half, cols: width, row_stride: width },
-                        MatRef { data: &resampling[m % 2][part], offset: 0, rows: gauss_half, cols: half, row_stride: half, col_stride: 1 },
+                        &resampling.forward[m % 2][part],
                         MatRef { data: source, offset: m * width, rows: half, cols: width, row_stride: orders * width, col_stride: 1 },
                         );
                 }
@@ -545,16 +587,16 @@ impl<T: Real> Sht<T> {
     }
 
     /// Adjoint of [`Sht::resample`]: `[m][Gauss half ring]` → `[m][half ring]`.
-    fn resample_adjoint(&self, sym: &[T], anti: &[T], resampling: &[[Vec<T>; 2]; 2], gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
+    fn resample_adjoint(&self, sym: &[T], anti: &[T], resampling: &Resampling<T>, gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
         let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
         let mut out = [self.pool.take(orders * half * width), self.pool.take(orders * half * width)];
         let [out_sym, out_anti] = &mut out;
         out_sym.par_chunks_mut(half * width).zip(out_anti.par_chunks_mut(half * width)).enumerate().for_each(
             |(m, (sym_m, anti_m))| {
                 for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
-                    matmul(
+                    matmul_packed(
                         MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width },
-                        MatRef { data: &resampling[m % 2][part], offset: 0, rows: half, cols: gauss_half, row_stride: 1, col_stride: half },
+                        &resampling.adjoint[m % 2][part],
                         MatRef { data: source, offset: m * gauss_half * width, rows: gauss_half, cols: width, row_stride: width, col_stride: 1 },
                         );
                 }
@@ -629,10 +671,10 @@ fn order_scale<T: Real>(m: usize) -> T {
 /// A folded symmetric part holds g_j + g_j' on paired rings and g_j on an equator ring
 /// (antisymmetric: g_j − g_j', and 0 on the equator); the rows are built so that the
 /// output holds the same quantities at the Gauss rings, times their weights.
-fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights: &[f64]) -> [[Vec<T>; 2]; 2] {
+fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights: &[f64]) -> Resampling<T> {
     let n_target = gauss_weights.len();
     let (source_half, target_half) = (n_source.div_ceil(2), n_target.div_ceil(2));
-    full.each_ref().map(|matrix| {
+    let folded: [[Vec<T>; 2]; 2] = full.each_ref().map(|matrix| {
         [1.0, -1.0].map(|sign: f64| {
             let mut folded = vec![T::zero(); target_half * source_half];
             for k in 0..target_half {
@@ -655,7 +697,20 @@ fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights
             }
             folded
         })
-    })
+    });
+    let pack = |transpose: bool| {
+        folded.each_ref().map(|parts| {
+            parts.each_ref().map(|matrix| {
+                let (rows, cols, row_stride, col_stride) = if transpose {
+                    (source_half, target_half, 1, source_half)
+                } else {
+                    (target_half, source_half, source_half, 1)
+                };
+                Packed::new(MatRef { data: matrix, offset: 0, rows, cols, row_stride, col_stride })
+            })
+        })
+    };
+    Resampling { forward: pack(false), adjoint: pack(true) }
 }
 
 #[cfg(test)]
