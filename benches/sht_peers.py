@@ -601,12 +601,7 @@ def build_markdown(data: dict) -> str:
                 lines.append(f"| {library} | {dtype} | " + " | ".join(fmt(r, ",.0f") for r in rates) + " |")
     has_ours = any(workload_rate("frenbrdf", d, t) for d in ("float64", "float32") for t in threads_list)
     lines += ["", "Throughput ratio ours/peer (same thread count and dtype; > 1 means frenbrdf is faster):", ""]
-    if not has_ours:
-        lines.append("(frenbrdf was not measured: no ratios.)")
-    if has_ours:
-        lines.append("| peer | dtype | " + " | ".join(f"{t} thread{'s' if t > 1 else ''}" for t in threads_list) + " |")
-        lines.append("|---|---|" + "---|" * len(threads_list))
-    ratios = {}
+    ratios, ratio_rows = {}, []
     for peer in PEERS:
         for dtype in ("float64", "float32"):
             values = []
@@ -615,8 +610,14 @@ def build_markdown(data: dict) -> str:
                 value = ours / theirs if ours and theirs else None
                 values.append(value)
                 ratios[f"ours/{peer} {dtype} {t} threads"] = value
-            if has_ours and any(workload_rate(peer, dtype, t) is not None for t in threads_list):
-                lines.append(f"| {peer} | {dtype} | " + " | ".join(fmt(v, ".2f") + ("×" if v else "") for v in values) + " |")
+            if any(v is not None for v in values):
+                ratio_rows.append(f"| {peer} | {dtype} | " + " | ".join(fmt(v, ".2f") + ("×" if v else "") for v in values) + " |")
+    if ratio_rows:
+        lines.append("| peer | dtype | " + " | ".join(f"{t} thread{'s' if t > 1 else ''}" for t in threads_list) + " |")
+        lines.append("|---|---|" + "---|" * len(threads_list))
+        lines += ratio_rows
+    else:
+        lines.append("(no ratios: " + ("no peer was measured" if has_ours else "frenbrdf was not measured") + ".)")
     data["workload_ratios"] = ratios
 
     for size_threads in meta["size_threads"]:

@@ -3,7 +3,7 @@
 //! Every product in the transform is small (tens to hundreds of rows and inner length)
 //! with contiguous columns in the right factor and the result, so one register-tiled
 //! kernel serves them all: a 4 × 16 tile of the result stays in registers while the
-//! inner index runs, each value of the right factor loaded once per 4 rows. General
+//! inner index runs (4 × 32 in f32), each value of the right factor loaded once per 4 rows. General
 //! GEMM libraries spend more on packing than on arithmetic at these sizes (measured:
 //! the `gemm` crate took 45 % of a 90 × 180 transform). The kernel is compiled for
 //! AVX-512 and AVX2+FMA and chosen at run time.
@@ -32,7 +32,8 @@ pub struct MatMut<'a, T> {
 }
 
 const TILE_ROWS: usize = 4;
-const TILE_COLS: usize = 16;
+/// Columns per tile: two 512-bit registers per row, 16 f64 or 32 f32.
+const TILE_BYTES: usize = 128;
 
 /// A left factor packed for the kernel: rows in tiles of [`TILE_ROWS`], each tile stored
 /// k-major (`[tile][k][row in tile]`, zero-padded), so the kernel reads it without strides.
@@ -98,34 +99,42 @@ pub fn matmul_packed<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'
     assert!(reaches(dst.data.len(), dst.offset, dst.rows, dst.cols, dst.row_stride, 1), "dst out of bounds");
     assert!(reaches(rhs.data.len(), rhs.offset, rhs.rows, rhs.cols, rhs.row_stride, 1), "rhs out of bounds");
 
+    match std::mem::size_of::<T>() {
+        4 => dispatch::<T, { TILE_BYTES / 4 }>(dst, lhs, rhs),
+        _ => dispatch::<T, { TILE_BYTES / 8 }>(dst, lhs, rhs),
+    }
+}
+
+/// Runs the kernel compiled for the widest vector unit the CPU has.
+fn dispatch<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
     #[cfg(target_arch = "x86_64")]
     {
         if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { kernel_avx512(dst, lhs, rhs) };
+            return unsafe { kernel_avx512::<T, TILE_COLS>(dst, lhs, rhs) };
         }
         if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
             // SAFETY: as above.
-            return unsafe { kernel_avx2(dst, lhs, rhs) };
+            return unsafe { kernel_avx2::<T, TILE_COLS>(dst, lhs, rhs) };
         }
     }
-    kernel(dst, lhs, rhs)
+    kernel::<T, TILE_COLS>(dst, lhs, rhs)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,fma")]
-fn kernel_avx512<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
-    kernel(dst, lhs, rhs)
+fn kernel_avx512<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
+    kernel::<T, TILE_COLS>(dst, lhs, rhs)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn kernel_avx2<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
-    kernel(dst, lhs, rhs)
+fn kernel_avx2<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
+    kernel::<T, TILE_COLS>(dst, lhs, rhs)
 }
 
 #[inline(always)]
-fn kernel<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
+fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
     let MatMut { data: out, offset: out_offset, rows, cols, row_stride: out_stride } = dst;
     if lhs.depth == 0 {
         for r in 0..rows {
@@ -138,7 +147,11 @@ fn kernel<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
         let tile_rows = TILE_ROWS.min(rows - r0);
         for c0 in (0..cols).step_by(TILE_COLS) {
             let tile_cols = TILE_COLS.min(cols - c0);
-            let acc = if tile_cols == TILE_COLS { full_tile(panel, rhs, c0) } else { edge_tile(panel, rhs, c0, tile_cols) };
+            let acc = if tile_cols == TILE_COLS {
+                full_tile::<T, TILE_COLS>(panel, rhs, c0)
+            } else {
+                edge_tile::<T, TILE_COLS>(panel, rhs, c0, tile_cols)
+            };
             for (r, row) in acc.iter().enumerate().take(tile_rows) {
                 let start = out_offset + (r0 + r) * out_stride + c0;
                 for (o, v) in out[start..start + tile_cols].iter_mut().zip(row) {
@@ -150,7 +163,7 @@ fn kernel<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
 }
 
 #[inline(always)]
-fn full_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>, c0: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
+fn full_tile<T: Real, const TILE_COLS: usize>(panel: &[T], rhs: MatRef<'_, T>, c0: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
     // Separate accumulators per row keep the whole tile in registers.
     let (mut acc0, mut acc1, mut acc2, mut acc3) = ([T::zero(); TILE_COLS], [T::zero(); TILE_COLS], [T::zero(); TILE_COLS], [T::zero(); TILE_COLS]);
     let stride = rhs.row_stride;
@@ -169,7 +182,7 @@ fn full_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>, c0: usize) -> [[T; TILE_C
 }
 
 #[inline(always)]
-fn edge_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>, c0: usize, tile_cols: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
+fn edge_tile<T: Real, const TILE_COLS: usize>(panel: &[T], rhs: MatRef<'_, T>, c0: usize, tile_cols: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
     let mut acc = [[T::zero(); TILE_COLS]; TILE_ROWS];
     for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
         let b = &rhs.data[rhs.offset + k * rhs.row_stride + c0..][..tile_cols];
