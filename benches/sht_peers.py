@@ -1,7 +1,9 @@
 """Spherical harmonic transform: frenbrdf.sht against peer CPU libraries, in one run.
 
-    pip install -e ".[bench]" ducc0 shtns torch-harmonics matplotlib
-    python benches/sht_peers.py [--quick] [--out bench-results/sht]
+    apt-get install -y libfftw3-dev                  # shtns builds against fftw3 (+ fftw3_omp)
+    pip install -e . ducc0 shtns matplotlib
+    pip install --no-deps torch-harmonics            # 0.9.x pins torch<2.15 and would downgrade it
+    python benches/sht_peers.py [--quick] [--workload-only] [--out bench-results/sht]
 
 Peers (each optional: one that will not import is skipped with the reason printed):
 shtns (``shtns.sht`` + ``set_grid``, float64 only on CPU; its Python interface takes one map

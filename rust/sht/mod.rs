@@ -352,8 +352,10 @@ impl<T: Real> Sht<T> {
         output_width: usize,
         transform: impl Fn(&[T], &mut [T]) + Sync,
     ) {
+        // At least a block of maps per chunk: narrower products waste the kernel's tiles,
+        // and each order's slice of a chunk stays small however large the grid.
         let bytes_per_item = 4 * self.half_rings().max(self.lmax + 1) * (self.lmax + 1) * std::mem::size_of::<T>();
-        let chunk = (CHUNK_BYTES / bytes_per_item).max(1);
+        let chunk = (CHUNK_BYTES / bytes_per_item).max(MAP_BLOCK);
         output
             .par_chunks_mut(chunk * output_width)
             .zip(input.par_chunks(chunk * input_width))
