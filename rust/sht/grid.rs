@@ -92,7 +92,7 @@ pub fn equiangular_to_gauss(source_theta: &[f64], target_theta: &[f64]) -> [Vec<
     let n = source_theta.len();
     let x: Vec<f64> = source_theta.iter().map(|t| t.cos()).collect();
     // Lobatto: w_j = (−1)^j, halved at the ends. Interior (roots of U_{n−2}): (−1)^j sin² θ_j.
-    let sign = |j: usize| if j % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = |j: usize| if j.is_multiple_of(2) { 1.0 } else { -1.0 };
     let is_pole = |j: usize| j == 0 || j == n - 1;
     let even_weights: Vec<f64> = (0..n).map(|j| sign(j) * if is_pole(j) { 0.5 } else { 1.0 }).collect();
     let odd_weights: Vec<f64> =

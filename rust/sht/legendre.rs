@@ -10,8 +10,8 @@
 //! and only turned into plain doubles once they are representable.
 
 /// 2^600 and 2^−600: rescaling by them is exact.
-const BIG: f64 = f64::from_bits((1023 + 600) << 52);
-const SMALL: f64 = f64::from_bits((1023 - 600) << 52);
+pub(crate) const BIG: f64 = f64::from_bits((1023 + 600) << 52);
+pub(crate) const SMALL: f64 = f64::from_bits((1023 - 600) << 52);
 
 /// A value `mantissa · 2^(600·scale)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,6 +64,48 @@ impl Recurrence {
 
     pub fn lmax(&self) -> usize {
         self.lmax
+    }
+
+    /// λ_lm for l = m..=lmax (rows) at many rings (columns), row-major into `out`;
+    /// `start` holds λ_mm per ring. Runs across rings, so it vectorises.
+    pub fn rows(&self, m: usize, cos_theta: &[f64], start: &[Scaled], out: &mut [f64]) {
+        let rings = cos_theta.len();
+        let a = &self.a[self.offset[m]..][..self.lmax + 1 - m];
+        let inverse_previous = &self.inverse_previous[self.offset[m]..];
+        let mut previous = vec![0.0; rings];
+        let mut current: Vec<f64> = start.iter().map(|s| s.mantissa).collect();
+        let mut scale: Vec<i32> = start.iter().map(|s| s.scale).collect();
+        let mut any_scaled = scale.iter().any(|&s| s < 0);
+        let mut write_row = |row: &mut [f64], current: &[f64], scale: &[i32], any_scaled: bool| {
+            if any_scaled {
+                for ((value, &mantissa), &scale) in row.iter_mut().zip(current).zip(scale) {
+                    *value = Scaled { mantissa, scale }.value();
+                }
+            } else {
+                row.copy_from_slice(current);
+            }
+        };
+        let mut out_rows = out.chunks_exact_mut(rings);
+        write_row(out_rows.next().expect("at least one degree"), &current, &scale, any_scaled);
+        for (i, row) in out_rows.enumerate().map(|(i, row)| (i + 1, row)) {
+            let (a_i, b_i) = (a[i], inverse_previous[i]);
+            for ((p, c), &x) in previous.iter_mut().zip(current.iter_mut()).zip(cos_theta) {
+                let next = a_i * (x * *c - *p * b_i);
+                *p = *c;
+                *c = next;
+            }
+            if any_scaled {
+                for ((p, c), s) in previous.iter_mut().zip(current.iter_mut()).zip(scale.iter_mut()) {
+                    if *s < 0 && c.abs() > BIG {
+                        *c *= SMALL;
+                        *p *= SMALL;
+                        *s += 1;
+                    }
+                }
+                any_scaled = scale.iter().any(|&s| s < 0);
+            }
+            write_row(row, &current, &scale, any_scaled);
+        }
     }
 
     /// λ_mm(θ) for m = 0..=lmax, carried in scaled form: `out[m]`.
@@ -126,6 +168,28 @@ mod tests {
         let m1 = values(2, 1, theta);
         assert!((m1[0] - (3.0 * c / 2.0).sqrt() * s).abs() < 1e-15);
         assert!((m1[1] - (15.0 * c / 2.0).sqrt() * s * x).abs() < 1e-15);
+    }
+
+    #[test]
+    fn rows_agree_with_columns() {
+        let (lmax, m) = (600, 150);
+        let recurrence = Recurrence::new(lmax);
+        let thetas: Vec<f64> = (1..40).map(|i| i as f64 * 0.04).collect();
+        let mut sectoral = vec![Scaled { mantissa: 0.0, scale: 0 }; lmax + 1];
+        let mut starts = Vec::new();
+        for t in &thetas {
+            recurrence.sectoral(t.sin(), &mut sectoral);
+            starts.push(sectoral[m]);
+        }
+        let cos: Vec<f64> = thetas.iter().map(|t| t.cos()).collect();
+        let mut rows = vec![0.0; (lmax + 1 - m) * thetas.len()];
+        recurrence.rows(m, &cos, &starts, &mut rows);
+        for (p, t) in thetas.iter().enumerate() {
+            let column = values(lmax, m, *t);
+            for (i, v) in column.iter().enumerate() {
+                assert_eq!(rows[i * thetas.len() + p], *v, "l={} θ={t}", m + i);
+            }
+        }
     }
 
     #[test]

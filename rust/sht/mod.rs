@@ -100,7 +100,7 @@ impl<T: Real> LegendreTable<T> {
                 .into_par_iter()
                 .map(|m| {
                     let mut panels = OrderPanels::default();
-                    table.compute(m, &mut panels);
+                    table.compute(m, &mut panels, Orientation::Both);
                     panels
                 })
                 .collect();
@@ -113,45 +113,57 @@ impl<T: Real> LegendreTable<T> {
         self.cos_theta.len()
     }
 
-    fn compute(&self, m: usize, panels: &mut OrderPanels<T>) {
+    /// Computes order m's λ and packs the panels `orientation` asks for.
+    fn compute(&self, m: usize, panels: &mut OrderPanels<T>, orientation: Orientation) {
         let (degrees, half) = (self.lmax + 1 - m, self.half_rings());
+        let start: Vec<Scaled> = (0..half).map(|p| self.sectoral[p * (self.lmax + 1) + m]).collect();
         let mut values = vec![0f64; degrees * half];
-        for (p, &cos_theta) in self.cos_theta.iter().enumerate() {
-            let start = self.sectoral[p * (self.lmax + 1) + m];
-            self.recurrence.column(m, cos_theta, start, &mut values[p..], half);
-        }
+        self.recurrence.rows(m, &self.cos_theta, &start, &mut values);
         let lambda: Vec<T> = values.into_iter().map(T::of).collect();
         for parity in 0..2 {
             let rows = (degrees + 1 - parity) / 2;
-            panels.analysis[parity].pack(MatRef {
-                data: &lambda,
-                offset: parity * half,
-                rows,
-                cols: half,
-                row_stride: 2 * half,
-                col_stride: 1,
-            });
-            panels.synthesis[parity].pack(MatRef {
-                data: &lambda,
-                offset: parity * half,
-                rows: half,
-                cols: rows,
-                row_stride: 1,
-                col_stride: 2 * half,
-            });
+            if orientation != Orientation::Synthesis {
+                panels.analysis[parity].pack(MatRef {
+                    data: &lambda,
+                    offset: parity * half,
+                    rows,
+                    cols: half,
+                    row_stride: 2 * half,
+                    col_stride: 1,
+                });
+            }
+            if orientation != Orientation::Analysis {
+                panels.synthesis[parity].pack(MatRef {
+                    data: &lambda,
+                    offset: parity * half,
+                    rows: half,
+                    cols: rows,
+                    row_stride: 1,
+                    col_stride: 2 * half,
+                });
+            }
         }
     }
 
-    /// Order m's panels: from the cache, or computed into `scratch`.
-    fn panels<'a>(&'a self, m: usize, scratch: &'a mut OrderPanels<T>) -> &'a OrderPanels<T> {
+    /// Order m's panels: from the cache, or computed into `scratch` (only the
+    /// `orientation` asked for).
+    fn panels<'a>(&'a self, m: usize, scratch: &'a mut OrderPanels<T>, orientation: Orientation) -> &'a OrderPanels<T> {
         match &self.cached {
             Some(panels) => &panels[m],
             None => {
-                self.compute(m, scratch);
+                self.compute(m, scratch, orientation);
                 scratch
             }
         }
     }
+}
+
+/// Which packed copies of λ a caller needs.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Orientation {
+    Analysis,
+    Synthesis,
+    Both,
 }
 
 /// The equiangular → Gauss–Legendre resampling, `[m parity][symmetric, antisymmetric]`,
@@ -497,7 +509,7 @@ impl<T: Real> Sht<T> {
                 let (p, south) = if j < half { (j, false) } else { (nlat - 1 - j, true) };
                 let factor = T::of(ring_factors[j]);
                 spectrum.iter_mut().for_each(|v| *v = Complex::new(T::zero(), T::zero()));
-                for m in 0..=self.lmax {
+                for (m, slot) in spectrum.iter_mut().enumerate().take(self.lmax + 1) {
                     let (cosine, sine) = ((m * half + p) * width + b, (m * half + p) * width + batch + b);
                     let (cos_sum, sin_sum) = if south {
                         (sym[cosine] - anti[cosine], sym[sine] - anti[sine])
@@ -505,7 +517,7 @@ impl<T: Real> Sht<T> {
                         (sym[cosine] + anti[cosine], sym[sine] + anti[sine])
                     };
                     // c2r computes Y_0 + 2 Re Σ_m Y_m e^{imφ}.
-                    spectrum[m] = if m == 0 {
+                    *slot = if m == 0 {
                         Complex::new(factor * cos_sum, T::zero())
                     } else {
                         Complex::new(factor * half_t * cos_sum, -(factor * half_t * sin_sum))
@@ -522,7 +534,7 @@ impl<T: Real> Sht<T> {
         let (width, half) = (2 * batch, table.half_rings());
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
         self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each_init(OrderPanels::default, |scratch, (m, block)| {
-            let panels = table.panels(m, scratch);
+            let panels = table.panels(m, scratch, Orientation::Analysis);
             let degrees = self.degrees(m);
             for parity in 0..2 {
                 let rows = (degrees + 1 - parity) / 2;
@@ -553,7 +565,7 @@ impl<T: Real> Sht<T> {
         sym.par_chunks_mut(half * width).zip(anti.par_chunks_mut(half * width)).enumerate().for_each_init(
             OrderPanels::default,
             |scratch, (m, (sym_m, anti_m))| {
-                let panels = table.panels(m, scratch);
+                let panels = table.panels(m, scratch, Orientation::Synthesis);
                 let degrees = self.degrees(m);
                 for (parity, destination) in [(0, sym_m), (1, anti_m)] {
                     let rows = (degrees + 1 - parity) / 2;
