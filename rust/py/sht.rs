@@ -24,6 +24,9 @@ struct ShtPlan {
     plan: Plan,
 }
 
+/// One of the plan's transforms: (plan, values, batch) → values.
+type Transform<T> = fn(&Sht<T>, &[T], usize) -> Result<Vec<T>>;
+
 /// Runs `transform` on a `(batch, n_in)` array of the plan's dtype.
 fn apply<'py, T: Real + numpy::Element>(
     py: Python<'py>,
@@ -31,7 +34,7 @@ fn apply<'py, T: Real + numpy::Element>(
     array: &Bound<'py, PyAny>,
     n_in: usize,
     n_out: usize,
-    transform: fn(&Sht<T>, &[T], usize) -> Result<Vec<T>>,
+    transform: Transform<T>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let array: PyReadonlyArray2<'py, T> = array.extract()?;
     let (batch, width) = (array.shape()[0], array.shape()[1]);

@@ -76,7 +76,7 @@ impl Recurrence {
         let mut current: Vec<f64> = start.iter().map(|s| s.mantissa).collect();
         let mut scale: Vec<i32> = start.iter().map(|s| s.scale).collect();
         let mut any_scaled = scale.iter().any(|&s| s < 0);
-        let mut write_row = |row: &mut [f64], current: &[f64], scale: &[i32], any_scaled: bool| {
+        let write_row = |row: &mut [f64], current: &[f64], scale: &[i32], any_scaled: bool| {
             if any_scaled {
                 for ((value, &mantissa), &scale) in row.iter_mut().zip(current).zip(scale) {
                     *value = Scaled { mantissa, scale }.value();
