@@ -145,6 +145,16 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
     for (tile, panel) in lhs.data.chunks_exact(lhs.depth * TILE_ROWS).enumerate() {
         let r0 = tile * TILE_ROWS;
         let tile_rows = TILE_ROWS.min(rows - r0);
+        if cols == 2 {
+            // One map's (cosine, sine) pair: vectorise across the tile's rows instead.
+            let acc = pair_tile(panel, rhs);
+            for r in 0..tile_rows {
+                let start = out_offset + (r0 + r) * out_stride;
+                out[start] = acc[0][r];
+                out[start + 1] = acc[1][r];
+            }
+            continue;
+        }
         for c0 in (0..cols).step_by(TILE_COLS) {
             let tile_cols = TILE_COLS.min(cols - c0);
             let acc = if tile_cols == TILE_COLS {
@@ -182,6 +192,21 @@ fn full_tile<T: Real, const TILE_COLS: usize>(panel: &[T], rhs: MatRef<'_, T>, c
 }
 
 #[inline(always)]
+fn pair_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>) -> [[T; TILE_ROWS]; 2] {
+    let (mut first, mut second) = ([T::zero(); TILE_ROWS], [T::zero(); TILE_ROWS]);
+    let b_rows = &rhs.data[rhs.offset..];
+    for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
+        let (b0, b1) = (b_rows[k * rhs.row_stride], b_rows[k * rhs.row_stride + 1]);
+        let a: &[T; TILE_ROWS] = a.try_into().unwrap();
+        for r in 0..TILE_ROWS {
+            first[r] = a[r].mul_add(b0, first[r]);
+            second[r] = a[r].mul_add(b1, second[r]);
+        }
+    }
+    [first, second]
+}
+
+#[inline(always)]
 fn edge_tile<T: Real, const TILE_COLS: usize>(panel: &[T], rhs: MatRef<'_, T>, c0: usize, tile_cols: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
     let mut acc = [[T::zero(); TILE_COLS]; TILE_ROWS];
     for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
@@ -201,7 +226,7 @@ mod tests {
 
     #[test]
     fn strided_product_matches_a_loop() {
-        for (m, k, n) in [(5, 4, 3), (9, 45, 40), (4, 1, 16), (1, 7, 33)] {
+        for (m, k, n) in [(5, 4, 3), (9, 45, 40), (4, 1, 16), (1, 7, 33), (7, 9, 2)] {
             let a: Vec<f64> = (0..m * k).map(|i| i as f64 * 0.5 - 3.0).collect();
             let b: Vec<f64> = (0..k * n).map(|i| (i * i) as f64 % 7.0).collect();
             // lhs stored transposed (k × m); dst every other row of a 2m × n buffer.
