@@ -147,11 +147,11 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
         let tile_rows = TILE_ROWS.min(rows - r0);
         if cols == 2 {
             // One map's (cosine, sine) pair: vectorise across the tile's rows instead.
-            let acc = pair_tile(panel, rhs);
-            for r in 0..tile_rows {
+            let [first, second] = pair_tile(panel, rhs);
+            for (r, (a, b)) in first.iter().zip(&second).enumerate().take(tile_rows) {
                 let start = out_offset + (r0 + r) * out_stride;
-                out[start] = acc[0][r];
-                out[start + 1] = acc[1][r];
+                out[start] = *a;
+                out[start + 1] = *b;
             }
             continue;
         }

@@ -122,7 +122,9 @@ impl Recurrence {
         }
     }
 
-    /// λ_lm(θ) for l = m..=lmax into `out[(l − m) · stride]`, starting from λ_mm.
+    /// λ_lm(θ) for l = m..=lmax into `out[(l − m) · stride]`, starting from λ_mm: the
+    /// one-ring form of [`Recurrence::rows`], kept as the tests' reference.
+    #[cfg(test)]
     pub fn column(&self, m: usize, cos_theta: f64, start: Scaled, out: &mut [f64], stride: usize) {
         let a = &self.a[self.offset[m]..];
         let inverse_previous = &self.inverse_previous[self.offset[m]..];
