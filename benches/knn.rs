@@ -38,9 +38,7 @@ fn knn(c: &mut Criterion) {
     let mut rng = StdRng::seed_from_u64(0x6b6e_6e21);
     let sources = unit_vectors(&mut rng, N_SOURCES);
     let targets = unit_vectors(&mut rng, N_TARGETS);
-    let values: Vec<f64> = (0..N_SOURCES * CHANNELS)
-        .map(|_| rng.random_range(0.0..1.0))
-        .collect();
+    let values: Vec<f64> = (0..N_SOURCES * CHANNELS).map(|_| rng.random_range(0.0..1.0)).collect();
 
     {
         let mut group = c.benchmark_group("knn_build");
@@ -52,10 +50,7 @@ fn knn(c: &mut Criterion) {
         group.warm_up_time(Duration::from_secs(3));
         group.measurement_time(Duration::from_secs(40));
         group.bench_function("new_k8_1458000src_1Mdst", |b| {
-            b.iter(|| {
-                KnnInterpolator::new(black_box(&sources), black_box(&targets), K, SIGMA)
-                    .expect("valid inputs")
-            })
+            b.iter(|| KnnInterpolator::new(black_box(&sources), black_box(&targets), K, SIGMA).expect("valid inputs"))
         });
         group.finish();
     }
@@ -68,11 +63,7 @@ fn knn(c: &mut Criterion) {
         group.sample_size(20);
         group.measurement_time(Duration::from_secs(12));
         group.bench_function("apply_3ch_1Mdst", |b| {
-            b.iter(|| {
-                interpolator
-                    .apply(black_box(&values), CHANNELS)
-                    .expect("valid values")
-            })
+            b.iter(|| interpolator.apply(black_box(&values), CHANNELS).expect("valid values"))
         });
         group.finish();
     }

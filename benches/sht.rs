@@ -13,18 +13,24 @@ const SIZES: [(usize, usize, usize); 4] = [(90, 180, 89), (128, 256, 127), (256,
 
 fn bench_type<T: Real>(c: &mut Criterion, name: &str) {
     let mut group = c.benchmark_group(format!("sht_analysis_{name}"));
-    group.sampling_mode(SamplingMode::Flat).sample_size(10).warm_up_time(Duration::from_secs(1));
+    group
+        .sampling_mode(SamplingMode::Flat)
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1));
     for (nlat, nlon, lmax) in SIZES {
         let sht = Sht::<T>::new(nlat, nlon, lmax, Grid::GaussLegendre).expect("valid plan");
         for batch in [1, if nlat >= 512 { 16 } else { 192 }] {
-            let coefficients: Vec<T> =
-                (0..batch * sht.n_coefficients()).map(|i| T::of(((i * 7919) % 1000) as f64 / 1000.0 - 0.5)).collect();
+            let coefficients: Vec<T> = (0..batch * sht.n_coefficients())
+                .map(|i| T::of(((i * 7919) % 1000) as f64 / 1000.0 - 0.5))
+                .collect();
             let maps = sht.synthesis(&coefficients, batch).expect("valid input");
             group.throughput(Throughput::Elements(batch as u64));
             group.measurement_time(Duration::from_secs(if nlat >= 512 { 8 } else { 3 }));
-            group.bench_with_input(BenchmarkId::new(format!("{nlat}x{nlon}_lmax{lmax}"), batch), &maps, |b, maps| {
-                b.iter(|| sht.analysis(black_box(maps), batch).expect("valid input"))
-            });
+            group.bench_with_input(
+                BenchmarkId::new(format!("{nlat}x{nlon}_lmax{lmax}"), batch),
+                &maps,
+                |b, maps| b.iter(|| sht.analysis(black_box(maps), batch).expect("valid input")),
+            );
         }
     }
     group.finish();

@@ -7,8 +7,8 @@
 
 use rayon::prelude::*;
 
-use crate::parallel;
 use crate::error::{invalid_argument, Result};
+use crate::parallel;
 
 pub type Vec3 = [f64; 3];
 
@@ -76,7 +76,11 @@ fn to_local([cos_t, sin_t, cos_p, sin_p]: [f64; 4], v: Vec3) -> Vec3 {
 pub fn half_diff(wi: Vec3, wo: Vec3) -> (Vec3, Vec3) {
     let (wi, wo) = (normalize(wi), normalize(wo));
     let sum = [wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]];
-    let h = if norm(sum) > 1e-12 { normalize(sum) } else { [0.0, 0.0, 1.0] };
+    let h = if norm(sum) > 1e-12 {
+        normalize(sum)
+    } else {
+        [0.0, 0.0, 1.0]
+    };
     (h, to_local(frame_of(h), wi))
 }
 
@@ -114,7 +118,10 @@ pub fn validate_directions(name: &str, directions: &[Vec3]) -> Result<()> {
         !(largest > 0.0 && v.iter().all(|x| x.is_finite()))
     };
     match parallel::position_first(directions, bad) {
-        Some(row) => invalid_argument!("{name} row {row} is not a finite non-zero vector: {:?}", directions[row]),
+        Some(row) => invalid_argument!(
+            "{name} row {row} is not a finite non-zero vector: {:?}",
+            directions[row]
+        ),
         None => Ok(()),
     }
 }
@@ -136,22 +143,40 @@ fn check_same_length(wi: &[Vec3], wo: &[Vec3]) -> Result<()> {
 
 pub fn batch_to_rusinkiewicz(wi: &[Vec3], wo: &[Vec3]) -> Result<Vec<Rusinkiewicz>> {
     check_same_length(wi, wo)?;
-    Ok(wi.par_iter().zip(wo).with_min_len(4096).map(|(&a, &b)| to_rusinkiewicz(a, b)).collect())
+    Ok(wi
+        .par_iter()
+        .zip(wo)
+        .with_min_len(4096)
+        .map(|(&a, &b)| to_rusinkiewicz(a, b))
+        .collect())
 }
 
 pub fn batch_half_diff(wi: &[Vec3], wo: &[Vec3]) -> Result<(Vec<Vec3>, Vec<Vec3>)> {
     check_same_length(wi, wo)?;
-    Ok(wi.par_iter().zip(wo).with_min_len(4096).map(|(&a, &b)| half_diff(a, b)).unzip())
+    Ok(wi
+        .par_iter()
+        .zip(wo)
+        .with_min_len(4096)
+        .map(|(&a, &b)| half_diff(a, b))
+        .unzip())
 }
 
 pub fn batch_from_rusinkiewicz(angles: &[Rusinkiewicz]) -> Result<(Vec<Vec3>, Vec<Vec3>)> {
     validate_angles("angles", angles)?;
-    Ok(angles.par_iter().with_min_len(4096).map(|&a| from_rusinkiewicz(a)).unzip())
+    Ok(angles
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&a| from_rusinkiewicz(a))
+        .unzip())
 }
 
 pub fn batch_half_diff_of_angles(angles: &[Rusinkiewicz]) -> Result<(Vec<Vec3>, Vec<Vec3>)> {
     validate_angles("angles", angles)?;
-    Ok(angles.par_iter().with_min_len(4096).map(|&a| half_diff_of_angles(a)).unzip())
+    Ok(angles
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&a| half_diff_of_angles(a))
+        .unzip())
 }
 
 #[cfg(test)]

@@ -27,11 +27,17 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
-        Error::Io { path: path.to_path_buf(), source }
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     }
 
     pub(crate) fn merl_format(path: &Path, message: impl Into<String>) -> Self {
-        Error::MerlFormat { path: path.to_path_buf(), message: message.into() }
+        Error::MerlFormat {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
     }
 }
 

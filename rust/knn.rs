@@ -11,8 +11,8 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use crate::coords::Vec3;
-use crate::parallel;
 use crate::error::{invalid_argument, Result};
+use crate::parallel;
 
 /// How far from 1 a "unit" vector's norm may be.
 pub const UNIT_TOLERANCE: f64 = 1e-6;
@@ -36,7 +36,10 @@ impl KnnInterpolator {
             return invalid_argument!("src has {} points; at most {} are supported", sources.len(), u32::MAX);
         }
         if k == 0 || k > sources.len() {
-            return invalid_argument!("k = {k} must be between 1 and the number of sources ({})", sources.len());
+            return invalid_argument!(
+                "k = {k} must be between 1 and the number of sources ({})",
+                sources.len()
+            );
         }
         if !(sigma.is_finite() && sigma > 0.0) {
             return invalid_argument!("sigma = {sigma} must be a finite positive number");
@@ -57,7 +60,10 @@ impl KnnInterpolator {
             .zip(targets.par_iter())
             .with_min_len(256)
             .for_each(|((row_indices, row_weights), target)| {
-                let found = tree.query(target).nearest_n::<SquaredEuclidean<f64>>(neighbours).execute();
+                let found = tree
+                    .query(target)
+                    .nearest_n::<SquaredEuclidean<f64>>(neighbours)
+                    .execute();
                 // Results come sorted by distance. Measuring from the nearest keeps the
                 // largest weight at exp(0) = 1, so a σ so small that every exp(−d²/2σ²)
                 // would underflow still returns the nearest neighbour, never 0/0.
@@ -65,14 +71,23 @@ impl KnnInterpolator {
                 let mut total = 0.0;
                 for (j, neighbour) in found.iter().enumerate() {
                     let excess = neighbour.distance - nearest;
-                    let weight = if excess > 0.0 { (-excess * inverse_two_variance).exp() } else { 1.0 };
+                    let weight = if excess > 0.0 {
+                        (-excess * inverse_two_variance).exp()
+                    } else {
+                        1.0
+                    };
                     row_indices[j] = neighbour.item;
                     row_weights[j] = weight;
                     total += weight;
                 }
                 row_weights.iter_mut().for_each(|w| *w /= total);
             });
-        Ok(KnnInterpolator { n_sources: sources.len(), k, indices, weights })
+        Ok(KnnInterpolator {
+            n_sources: sources.len(),
+            k,
+            indices,
+            weights,
+        })
     }
 
     pub fn k(&self) -> usize {

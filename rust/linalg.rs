@@ -54,7 +54,17 @@ impl<T: Real> Packed<T> {
 
     /// Packs `lhs` into this buffer, reusing its allocation.
     pub fn pack(&mut self, lhs: MatRef<'_, T>) {
-        assert!(reaches(lhs.data.len(), lhs.offset, lhs.rows, lhs.cols, lhs.row_stride, lhs.col_stride), "lhs out of bounds");
+        assert!(
+            reaches(
+                lhs.data.len(),
+                lhs.offset,
+                lhs.rows,
+                lhs.cols,
+                lhs.row_stride,
+                lhs.col_stride
+            ),
+            "lhs out of bounds"
+        );
         let tiles = lhs.rows.div_ceil(TILE_ROWS);
         self.rows = lhs.rows;
         self.depth = lhs.cols;
@@ -78,6 +88,11 @@ impl<T: Real> Packed<T> {
     pub fn rows(&self) -> usize {
         self.rows
     }
+
+    /// The inner dimension: columns of the packed matrix.
+    pub fn depth(&self) -> usize {
+        self.depth
+    }
 }
 
 fn reaches(len: usize, offset: usize, rows: usize, cols: usize, row_stride: usize, col_stride: usize) -> bool {
@@ -94,10 +109,22 @@ pub fn matmul<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T
 /// # Panics
 /// If the shapes disagree or a view reaches past its slice.
 pub fn matmul_packed<T: Real>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
-    assert!(dst.rows == lhs.rows && dst.cols == rhs.cols && lhs.depth == rhs.rows, "matmul shapes disagree");
-    assert!(rhs.col_stride == 1 || rhs.cols <= 1, "matmul needs contiguous columns on the right");
-    assert!(reaches(dst.data.len(), dst.offset, dst.rows, dst.cols, dst.row_stride, 1), "dst out of bounds");
-    assert!(reaches(rhs.data.len(), rhs.offset, rhs.rows, rhs.cols, rhs.row_stride, 1), "rhs out of bounds");
+    assert!(
+        dst.rows == lhs.rows && dst.cols == rhs.cols && lhs.depth == rhs.rows,
+        "matmul shapes disagree"
+    );
+    assert!(
+        rhs.col_stride == 1 || rhs.cols <= 1,
+        "matmul needs contiguous columns on the right"
+    );
+    assert!(
+        reaches(dst.data.len(), dst.offset, dst.rows, dst.cols, dst.row_stride, 1),
+        "dst out of bounds"
+    );
+    assert!(
+        reaches(rhs.data.len(), rhs.offset, rhs.rows, rhs.cols, rhs.row_stride, 1),
+        "rhs out of bounds"
+    );
 
     match std::mem::size_of::<T>() {
         4 => dispatch::<T, { TILE_BYTES / 4 }>(dst, lhs, rhs),
@@ -135,10 +162,18 @@ fn kernel_avx2<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed
 
 #[inline(always)]
 fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, rhs: MatRef<'_, T>) {
-    let MatMut { data: out, offset: out_offset, rows, cols, row_stride: out_stride } = dst;
+    let MatMut {
+        data: out,
+        offset: out_offset,
+        rows,
+        cols,
+        row_stride: out_stride,
+    } = dst;
     if lhs.depth == 0 {
         for r in 0..rows {
-            out[out_offset + r * out_stride..][..cols].iter_mut().for_each(|v| *v = T::zero());
+            out[out_offset + r * out_stride..][..cols]
+                .iter_mut()
+                .for_each(|v| *v = T::zero());
         }
         return;
     }
@@ -173,9 +208,18 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
 }
 
 #[inline(always)]
-fn full_tile<T: Real, const TILE_COLS: usize>(panel: &[T], rhs: MatRef<'_, T>, c0: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
+fn full_tile<T: Real, const TILE_COLS: usize>(
+    panel: &[T],
+    rhs: MatRef<'_, T>,
+    c0: usize,
+) -> [[T; TILE_COLS]; TILE_ROWS] {
     // Separate accumulators per row keep the whole tile in registers.
-    let (mut acc0, mut acc1, mut acc2, mut acc3) = ([T::zero(); TILE_COLS], [T::zero(); TILE_COLS], [T::zero(); TILE_COLS], [T::zero(); TILE_COLS]);
+    let (mut acc0, mut acc1, mut acc2, mut acc3) = (
+        [T::zero(); TILE_COLS],
+        [T::zero(); TILE_COLS],
+        [T::zero(); TILE_COLS],
+        [T::zero(); TILE_COLS],
+    );
     let stride = rhs.row_stride;
     let b_rows = &rhs.data[rhs.offset + c0..];
     for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
@@ -207,7 +251,12 @@ fn pair_tile<T: Real>(panel: &[T], rhs: MatRef<'_, T>) -> [[T; TILE_ROWS]; 2] {
 }
 
 #[inline(always)]
-fn edge_tile<T: Real, const TILE_COLS: usize>(panel: &[T], rhs: MatRef<'_, T>, c0: usize, tile_cols: usize) -> [[T; TILE_COLS]; TILE_ROWS] {
+fn edge_tile<T: Real, const TILE_COLS: usize>(
+    panel: &[T],
+    rhs: MatRef<'_, T>,
+    c0: usize,
+    tile_cols: usize,
+) -> [[T; TILE_COLS]; TILE_ROWS] {
     let mut acc = [[T::zero(); TILE_COLS]; TILE_ROWS];
     for (k, a) in panel.chunks_exact(TILE_ROWS).enumerate() {
         let b = &rhs.data[rhs.offset + k * rhs.row_stride + c0..][..tile_cols];
@@ -233,9 +282,29 @@ mod tests {
             let a_t: Vec<f64> = (0..k * m).map(|i| a[(i % m) * k + i / m]).collect();
             let mut dst = vec![0.0; 2 * m * n];
             matmul(
-                MatMut { data: &mut dst, offset: n, rows: m, cols: n, row_stride: 2 * n },
-                MatRef { data: &a_t, offset: 0, rows: m, cols: k, row_stride: 1, col_stride: m },
-                MatRef { data: &b, offset: 0, rows: k, cols: n, row_stride: n, col_stride: 1 },
+                MatMut {
+                    data: &mut dst,
+                    offset: n,
+                    rows: m,
+                    cols: n,
+                    row_stride: 2 * n,
+                },
+                MatRef {
+                    data: &a_t,
+                    offset: 0,
+                    rows: m,
+                    cols: k,
+                    row_stride: 1,
+                    col_stride: m,
+                },
+                MatRef {
+                    data: &b,
+                    offset: 0,
+                    rows: k,
+                    cols: n,
+                    row_stride: n,
+                    col_stride: 1,
+                },
             );
             for r in 0..m {
                 for c in 0..n {

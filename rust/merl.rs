@@ -14,8 +14,8 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::coords::{self, Vec3};
-use crate::parallel;
 use crate::error::{invalid_argument, Error, Result};
+use crate::parallel;
 
 pub const N_THETA_H: usize = 90;
 pub const N_THETA_D: usize = 90;
@@ -59,8 +59,7 @@ pub fn read_merl(path: &Path, physical_units: bool) -> Result<Vec<f64>> {
         ),
         _ => Error::io(path, e),
     })?;
-    let dims: [i32; 3] =
-        std::array::from_fn(|i| i32::from_le_bytes(header[4 * i..4 * i + 4].try_into().unwrap()));
+    let dims: [i32; 3] = std::array::from_fn(|i| i32::from_le_bytes(header[4 * i..4 * i + 4].try_into().unwrap()));
     if dims != [N_THETA_H as i32, N_THETA_D as i32, N_PHI_D as i32] {
         return Err(Error::merl_format(
             path,
@@ -76,7 +75,11 @@ pub fn read_merl(path: &Path, physical_units: bool) -> Result<Vec<f64>> {
             format!(
                 "file is {} bytes but a 90 × 90 × 180 MERL file is {FILE_BYTES} bytes{}",
                 metadata.len(),
-                if (metadata.len() as usize) < FILE_BYTES { " (truncated?)" } else { "" }
+                if (metadata.len() as usize) < FILE_BYTES {
+                    " (truncated?)"
+                } else {
+                    ""
+                }
             ),
         ));
     }
@@ -109,20 +112,30 @@ const READ_CHUNK: usize = 1 << 17;
 /// chunks, checking and scaling each chunk while it is in cache. Returns whether every
 /// value was finite.
 fn read_values(file: &File, values: &mut [f64], physical_units: bool) -> std::io::Result<bool> {
-    let finite_chunks = values.par_chunks_mut(N_BINS).zip(CHANNEL_SCALES).enumerate().map(|(channel, (values, scale))| {
-        values.par_chunks_mut(READ_CHUNK).enumerate().map(move |(index, chunk)| {
-            let offset = HEADER_BYTES + 8 * (channel * N_BINS + index * READ_CHUNK);
-            file.read_exact_at(bytemuck::cast_slice_mut(chunk), offset as u64)?;
-            if cfg!(target_endian = "big") {
-                chunk.iter_mut().for_each(|v| *v = f64::from_bits(v.to_bits().swap_bytes()));
-            }
-            let finite = chunk.iter().all(|v| v.is_finite());
-            if physical_units {
-                chunk.iter_mut().for_each(|v| *v *= scale);
-            }
-            Ok(finite)
-        })
-    });
+    let finite_chunks =
+        values
+            .par_chunks_mut(N_BINS)
+            .zip(CHANNEL_SCALES)
+            .enumerate()
+            .map(|(channel, (values, scale))| {
+                values
+                    .par_chunks_mut(READ_CHUNK)
+                    .enumerate()
+                    .map(move |(index, chunk)| {
+                        let offset = HEADER_BYTES + 8 * (channel * N_BINS + index * READ_CHUNK);
+                        file.read_exact_at(bytemuck::cast_slice_mut(chunk), offset as u64)?;
+                        if cfg!(target_endian = "big") {
+                            chunk
+                                .iter_mut()
+                                .for_each(|v| *v = f64::from_bits(v.to_bits().swap_bytes()));
+                        }
+                        let finite = chunk.iter().all(|v| v.is_finite());
+                        if physical_units {
+                            chunk.iter_mut().for_each(|v| *v *= scale);
+                        }
+                        Ok(finite)
+                    })
+            });
     finite_chunks.flatten().try_reduce(|| true, |a, b| Ok(a && b))
 }
 
@@ -137,13 +150,20 @@ pub fn write_merl(path: &Path, values: &[f64], physical_units: bool) -> Result<(
     if values.len() != N_VALUES {
         return Err(Error::merl_format(
             path,
-            format!("cannot write {} values; a MERL table holds 3 × 90 × 90 × 180 = {N_VALUES}", values.len()),
+            format!(
+                "cannot write {} values; a MERL table holds 3 × 90 × 90 × 180 = {N_VALUES}",
+                values.len()
+            ),
         ));
     }
     if let Some(position) = parallel::position_first(values, |v| !v.is_finite()) {
         return Err(Error::merl_format(
             path,
-            format!("cannot write non-finite value {} at {}", values[position], describe_position(position)),
+            format!(
+                "cannot write non-finite value {} at {}",
+                values[position],
+                describe_position(position)
+            ),
         ));
     }
     if path.is_dir() {
@@ -175,9 +195,14 @@ pub fn write_merl(path: &Path, values: &[f64], physical_units: bool) -> Result<(
 
 /// Applies `f(scale, value)` to every value, channel by channel, in parallel.
 fn for_each_channel(values: &mut [f64], f: impl Fn(f64, &mut f64) + Sync) {
-    values.par_chunks_mut(N_BINS).zip(CHANNEL_SCALES).for_each(|(channel, scale)| {
-        channel.par_chunks_mut(1 << 16).for_each(|chunk| chunk.iter_mut().for_each(|v| f(scale, v)))
-    });
+    values
+        .par_chunks_mut(N_BINS)
+        .zip(CHANNEL_SCALES)
+        .for_each(|(channel, scale)| {
+            channel
+                .par_chunks_mut(1 << 16)
+                .for_each(|chunk| chunk.iter_mut().for_each(|v| f(scale, v)))
+        });
 }
 
 /// The stored value `s` with `s * scale == reflectance` exactly, if one exists (the one
@@ -271,20 +296,29 @@ pub fn lookup(table: &[f64], angles: &[[f64; 3]], method: Lookup) -> Result<Vec<
     if let Some(row) = parallel::position_first(angles, |a| a.iter().any(|x| !x.is_finite())) {
         return invalid_argument!("angles row {row} is not finite: {:?}", angles[row]);
     }
-    Ok(angles.par_iter().with_min_len(4096).map(|&[h, d, p]| lookup_one(table, h, d, p, method)).collect())
+    Ok(angles
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&[h, d, p]| lookup_one(table, h, d, p, method))
+        .collect())
 }
 
 /// Looks up `table` at direction pairs. Pairs with either direction below the horizon
 /// return [`MISSING`], like bins MERL did not measure.
 pub fn lookup_directions(table: &[f64], wi: &[Vec3], wo: &[Vec3], method: Lookup) -> Result<Vec<[f64; 3]>> {
     let angles = coords::batch_to_rusinkiewicz(wi, wo)?;
-    let angles: Vec<[f64; 3]> = angles.iter().map(|&[theta_h, _, theta_d, phi_d]| [theta_h, theta_d, phi_d]).collect();
+    let angles: Vec<[f64; 3]> = angles
+        .iter()
+        .map(|&[theta_h, _, theta_d, phi_d]| [theta_h, theta_d, phi_d])
+        .collect();
     let mut rgb = lookup(table, &angles, method)?;
-    rgb.par_iter_mut().zip(wi.par_iter().zip(wo)).for_each(|(value, (i, o))| {
-        if i[2] < 0.0 || o[2] < 0.0 {
-            *value = [MISSING; 3];
-        }
-    });
+    rgb.par_iter_mut()
+        .zip(wi.par_iter().zip(wo))
+        .for_each(|(value, (i, o))| {
+            if i[2] < 0.0 || o[2] < 0.0 {
+                *value = [MISSING; 3];
+            }
+        });
     Ok(rgb)
 }
 
@@ -323,7 +357,13 @@ pub(crate) fn lookup_one(table: &[f64], theta_h: f64, theta_d: f64, phi_d: f64, 
             }
             // Where no corner was measured, report the nearest bin's own (negative) marker.
             let nearest = nearest_bin_values(table, [h, d, p]);
-            std::array::from_fn(|c| if weight_sum[c] > 0.0 { sum[c] / weight_sum[c] } else { nearest[c] })
+            std::array::from_fn(|c| {
+                if weight_sum[c] > 0.0 {
+                    sum[c] / weight_sum[c]
+                } else {
+                    nearest[c]
+                }
+            })
         }
     }
 }
@@ -346,7 +386,11 @@ mod tests {
         for i in 0..N_THETA_H {
             for j in 0..N_THETA_D {
                 let k = (i * 7 + j) % N_PHI_D;
-                let bin = bin_of_angles(theta_h_of_bin(i as f64), theta_d_of_bin(j as f64), phi_d_of_bin(k as f64));
+                let bin = bin_of_angles(
+                    theta_h_of_bin(i as f64),
+                    theta_d_of_bin(j as f64),
+                    phi_d_of_bin(k as f64),
+                );
                 assert_eq!(bin, [i, j, k]);
             }
         }

@@ -30,7 +30,9 @@ fn as_angle_rows<'a>(array: &'a PyReadonlyArray2<'_, f64>) -> PyResult<&'a [Rusi
             array.shape()
         )));
     }
-    let flat = array.as_slice().map_err(|_| PyValueError::new_err("angles must be C-contiguous"))?;
+    let flat = array
+        .as_slice()
+        .map_err(|_| PyValueError::new_err("angles must be C-contiguous"))?;
     Ok(bytemuck::cast_slice(flat))
 }
 
@@ -87,10 +89,16 @@ fn merl_bin_to_angles<'py>(py: Python<'py>, bins: PyReadonlyArray2<'py, f64>) ->
 fn merl_angles_to_bin<'py>(py: Python<'py>, angles: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray2<i64>>> {
     let angles = as_vec3s("angles", &angles)?;
     if let Some(row) = angles.iter().position(|a| a.iter().any(|x| !x.is_finite())) {
-        return Err(PyValueError::new_err(format!("angles row {row} is not finite: {:?}", angles[row])));
+        return Err(PyValueError::new_err(format!(
+            "angles row {row} is not finite: {:?}",
+            angles[row]
+        )));
     }
     let bins: Vec<[i64; 3]> = py.detach(|| {
-        angles.iter().map(|&[h, d, p]| merl::bin_of_angles(h, d, p).map(|i| i as i64)).collect()
+        angles
+            .iter()
+            .map(|&[h, d, p]| merl::bin_of_angles(h, d, p).map(|i| i as i64))
+            .collect()
     });
     Ok(to_numpy(py, (bins.len(), 3), bins.into_flattened()))
 }

@@ -16,7 +16,11 @@ impl From<Error> for PyErr {
         match error {
             Error::Io { path, source } => {
                 // OSError(errno, strerror, filename) carries the path like Python's own errors.
-                let arguments = (source.raw_os_error().unwrap_or(0), source.to_string(), path.display().to_string());
+                let arguments = (
+                    source.raw_os_error().unwrap_or(0),
+                    source.to_string(),
+                    path.display().to_string(),
+                );
                 match source.kind() {
                     ErrorKind::NotFound => PyFileNotFoundError::new_err(arguments),
                     ErrorKind::PermissionDenied => PyPermissionError::new_err(arguments),

@@ -34,7 +34,9 @@ impl KnnInterpolator {
     /// `(n_src, channels)` values → `(n_dst, channels)`.
     fn apply<'py>(&self, py: Python<'py>, values: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let channels = values.shape()[1];
-        let flat = values.as_slice().map_err(|_| pyo3::exceptions::PyValueError::new_err("values must be C-contiguous"))?;
+        let flat = values
+            .as_slice()
+            .map_err(|_| pyo3::exceptions::PyValueError::new_err("values must be C-contiguous"))?;
         let out = py.detach(|| self.inner.apply(flat, channels))?;
         Ok(to_numpy(py, (self.inner.n_targets(), channels), out))
     }
@@ -60,6 +62,10 @@ impl KnnInterpolator {
     /// Normalised weights `(n_dst, k)`; each row sums to 1.
     #[getter]
     fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        to_numpy(py, (self.inner.n_targets(), self.inner.k()), self.inner.weights().to_vec())
+        to_numpy(
+            py,
+            (self.inner.n_targets(), self.inner.k()),
+            self.inner.weights().to_vec(),
+        )
     }
 }

@@ -33,9 +33,15 @@ fn read_merl(py: Python<'_>, path: PathBuf, physical_units: bool) -> PyResult<Bo
 fn write_merl(py: Python<'_>, path: PathBuf, table: PyReadonlyArrayDyn<'_, f64>, physical_units: bool) -> PyResult<()> {
     let shape = table.shape();
     if shape != [3, N_THETA_H, N_THETA_D, N_PHI_D] {
-        return Err(Error::merl_format(&path, format!("cannot write an array of shape {shape:?}; a MERL table is (3, 90, 90, 180)")).into());
+        return Err(Error::merl_format(
+            &path,
+            format!("cannot write an array of shape {shape:?}; a MERL table is (3, 90, 90, 180)"),
+        )
+        .into());
     }
-    let values = table.as_slice().map_err(|_| PyValueError::new_err("table must be C-contiguous"))?;
+    let values = table
+        .as_slice()
+        .map_err(|_| PyValueError::new_err("table must be C-contiguous"))?;
     py.detach(|| merl::write_merl(&path, values, physical_units))?;
     Ok(())
 }
@@ -44,15 +50,22 @@ fn parse_method(method: &str) -> PyResult<Lookup> {
     match method {
         "nearest" => Ok(Lookup::Nearest),
         "trilinear" => Ok(Lookup::Trilinear),
-        other => Err(PyValueError::new_err(format!("method must be 'nearest' or 'trilinear', got {other:?}"))),
+        other => Err(PyValueError::new_err(format!(
+            "method must be 'nearest' or 'trilinear', got {other:?}"
+        ))),
     }
 }
 
 fn table_slice<'a>(table: &'a PyReadonlyArrayDyn<'_, f64>) -> PyResult<&'a [f64]> {
     if table.shape() != [3, N_THETA_H, N_THETA_D, N_PHI_D] {
-        return Err(PyValueError::new_err(format!("table must have shape (3, 90, 90, 180), got {:?}", table.shape())));
+        return Err(PyValueError::new_err(format!(
+            "table must have shape (3, 90, 90, 180), got {:?}",
+            table.shape()
+        )));
     }
-    table.as_slice().map_err(|_| PyValueError::new_err("table must be C-contiguous"))
+    table
+        .as_slice()
+        .map_err(|_| PyValueError::new_err("table must be C-contiguous"))
 }
 
 /// Looks up a table at `(n, 3)` angles (θ_h, θ_d, φ_d); returns `(n, 3)` RGB.
@@ -63,7 +76,11 @@ fn merl_lookup<'py>(
     angles: PyReadonlyArray2<'py, f64>,
     method: &str,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let (table, angles, method) = (table_slice(&table)?, as_vec3s("angles", &angles)?, parse_method(method)?);
+    let (table, angles, method) = (
+        table_slice(&table)?,
+        as_vec3s("angles", &angles)?,
+        parse_method(method)?,
+    );
     let rgb = py.detach(|| merl::lookup(table, angles, method))?;
     Ok(to_numpy(py, (rgb.len(), 3), rgb.into_flattened()))
 }

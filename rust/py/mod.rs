@@ -7,8 +7,8 @@ mod knn;
 mod merl;
 mod sht;
 
-use numpy::PyUntypedArrayMethods;
 use numpy::ndarray::{Array, Dimension, ShapeBuilder};
+use numpy::PyUntypedArrayMethods;
 use numpy::{IntoPyArray, PyArray, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -38,15 +38,21 @@ fn to_numpy<'py, T: numpy::Element, D: Dimension>(
     shape: impl ShapeBuilder<Dim = D>,
     data: Vec<T>,
 ) -> Bound<'py, PyArray<T, D>> {
-    Array::from_shape_vec(shape, data).expect("the shape matches the data by construction").into_pyarray(py)
+    Array::from_shape_vec(shape, data)
+        .expect("the shape matches the data by construction")
+        .into_pyarray(py)
 }
 
 /// Views an `(n, 3)` C-contiguous float64 array as rows of 3-vectors.
 fn as_vec3s<'a>(name: &str, array: &'a PyReadonlyArray2<'_, f64>) -> PyResult<&'a [Vec3]> {
     let shape = array.shape();
     if shape[1] != 3 {
-        return Err(PyValueError::new_err(format!("{name} must have shape (n, 3), got {shape:?}")));
+        return Err(PyValueError::new_err(format!(
+            "{name} must have shape (n, 3), got {shape:?}"
+        )));
     }
-    let flat = array.as_slice().map_err(|_| PyValueError::new_err(format!("{name} must be C-contiguous")))?;
+    let flat = array
+        .as_slice()
+        .map_err(|_| PyValueError::new_err(format!("{name} must be C-contiguous")))?;
     Ok(bytemuck::cast_slice(flat))
 }

@@ -39,9 +39,14 @@ fn apply<'py, T: Real + numpy::Element>(
     let array: PyReadonlyArray2<'py, T> = array.extract()?;
     let (batch, width) = (array.shape()[0], array.shape()[1]);
     if width != n_in {
-        return Err(PyValueError::new_err(format!("expected (batch, {n_in}) values, got {:?}", array.shape())));
+        return Err(PyValueError::new_err(format!(
+            "expected (batch, {n_in}) values, got {:?}",
+            array.shape()
+        )));
     }
-    let values = array.as_slice().map_err(|_| PyValueError::new_err("array must be C-contiguous"))?;
+    let values = array
+        .as_slice()
+        .map_err(|_| PyValueError::new_err("array must be C-contiguous"))?;
     let out = py.detach(|| transform(plan, values, batch))?;
     Ok(to_numpy(py, (batch, n_out), out).into_any())
 }
@@ -69,12 +74,20 @@ impl ShtPlan {
         let grid = match grid {
             "gauss" => Grid::GaussLegendre,
             "equiangular" => Grid::Equiangular,
-            other => return Err(PyValueError::new_err(format!("grid must be 'gauss' or 'equiangular', got {other:?}"))),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "grid must be 'gauss' or 'equiangular', got {other:?}"
+                )))
+            }
         };
         let plan = match dtype {
             "float64" => Plan::F64(py.detach(|| Sht::new(nlat, nlon, lmax, grid))?),
             "float32" => Plan::F32(py.detach(|| Sht::new(nlat, nlon, lmax, grid))?),
-            other => return Err(PyValueError::new_err(format!("dtype must be 'float64' or 'float32', got {other:?}"))),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "dtype must be 'float64' or 'float32', got {other:?}"
+                )))
+            }
         };
         Ok(ShtPlan { plan })
     }

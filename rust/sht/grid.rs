@@ -56,7 +56,9 @@ fn legendre_and_first_associated(n: usize, theta: f64) -> (f64, f64) {
 
 /// Equiangular colatitudes θ_j = π j / (n − 1), both poles included.
 pub fn equiangular(n: usize) -> Vec<f64> {
-    (0..n).map(|j| if n == 1 { 0.0 } else { PI * j as f64 / (n - 1) as f64 }).collect()
+    (0..n)
+        .map(|j| if n == 1 { 0.0 } else { PI * j as f64 / (n - 1) as f64 })
+        .collect()
 }
 
 /// Clenshaw–Curtis weights for the equiangular rings (exact for polynomials in cos θ of
@@ -95,8 +97,15 @@ pub fn equiangular_to_gauss(source_theta: &[f64], target_theta: &[f64]) -> [Vec<
     let sign = |j: usize| if j.is_multiple_of(2) { 1.0 } else { -1.0 };
     let is_pole = |j: usize| j == 0 || j == n - 1;
     let even_weights: Vec<f64> = (0..n).map(|j| sign(j) * if is_pole(j) { 0.5 } else { 1.0 }).collect();
-    let odd_weights: Vec<f64> =
-        (0..n).map(|j| if is_pole(j) { 0.0 } else { sign(j) * source_theta[j].sin().powi(2) }).collect();
+    let odd_weights: Vec<f64> = (0..n)
+        .map(|j| {
+            if is_pole(j) {
+                0.0
+            } else {
+                sign(j) * source_theta[j].sin().powi(2)
+            }
+        })
+        .collect();
 
     let mut even = vec![0.0; target_theta.len() * n];
     let mut odd = vec![0.0; target_theta.len() * n];
@@ -138,9 +147,20 @@ mod tests {
             let (theta, weights) = gauss_legendre(n);
             assert!((weights.iter().sum::<f64>() - 2.0).abs() < 1e-13, "n={n}");
             for degree in [2 * n - 2, 2 * n - 1] {
-                let integral: f64 = theta.iter().zip(&weights).map(|(t, w)| w * t.cos().powi(degree as i32)).sum();
-                let exact = if degree % 2 == 0 { 2.0 / (degree as f64 + 1.0) } else { 0.0 };
-                assert!((integral - exact).abs() < 1e-13, "n={n} degree={degree}: {integral} vs {exact}");
+                let integral: f64 = theta
+                    .iter()
+                    .zip(&weights)
+                    .map(|(t, w)| w * t.cos().powi(degree as i32))
+                    .sum();
+                let exact = if degree % 2 == 0 {
+                    2.0 / (degree as f64 + 1.0)
+                } else {
+                    0.0
+                };
+                assert!(
+                    (integral - exact).abs() < 1e-13,
+                    "n={n} degree={degree}: {integral} vs {exact}"
+                );
             }
         }
     }
@@ -151,8 +171,16 @@ mod tests {
             let weights = clenshaw_curtis_weights(n);
             let theta = equiangular(n);
             for degree in 0..n {
-                let integral: f64 = theta.iter().zip(&weights).map(|(t, w)| w * t.cos().powi(degree as i32)).sum();
-                let exact = if degree % 2 == 0 { 2.0 / (degree as f64 + 1.0) } else { 0.0 };
+                let integral: f64 = theta
+                    .iter()
+                    .zip(&weights)
+                    .map(|(t, w)| w * t.cos().powi(degree as i32))
+                    .sum();
+                let exact = if degree % 2 == 0 {
+                    2.0 / (degree as f64 + 1.0)
+                } else {
+                    0.0
+                };
                 assert!((integral - exact).abs() < 1e-13, "n={n} degree={degree}");
             }
         }
@@ -168,7 +196,9 @@ mod tests {
         let q = |x: f64| 1.0 - x.powi(3) + 0.5 * x.powi(9); // degree n − 3
         for (k, t) in target.iter().enumerate() {
             let even_value: f64 = (0..n).map(|j| even[k * n + j] * p(source[j].cos())).sum();
-            let odd_value: f64 = (0..n).map(|j| odd[k * n + j] * source[j].sin() * q(source[j].cos())).sum();
+            let odd_value: f64 = (0..n)
+                .map(|j| odd[k * n + j] * source[j].sin() * q(source[j].cos()))
+                .sum();
             assert!((even_value - p(t.cos())).abs() < 1e-12);
             assert!((odd_value - t.sin() * q(t.cos())).abs() < 1e-12);
         }

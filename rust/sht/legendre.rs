@@ -59,7 +59,12 @@ impl Recurrence {
                 inverse_previous.push(if l > m + 1 { 1.0 / coefficient(l - 1, m) } else { 0.0 });
             }
         }
-        Recurrence { lmax, a, inverse_previous, offset }
+        Recurrence {
+            lmax,
+            a,
+            inverse_previous,
+            offset,
+        }
     }
 
     pub fn lmax(&self) -> usize {
@@ -86,7 +91,12 @@ impl Recurrence {
             }
         };
         let mut out_rows = out.chunks_exact_mut(rings);
-        write_row(out_rows.next().expect("at least one degree"), &current, &scale, any_scaled);
+        write_row(
+            out_rows.next().expect("at least one degree"),
+            &current,
+            &scale,
+            any_scaled,
+        );
         for (i, row) in out_rows.enumerate().map(|(i, row)| (i + 1, row)) {
             let (a_i, b_i) = (a[i], inverse_previous[i]);
             for ((p, c), &x) in previous.iter_mut().zip(current.iter_mut()).zip(cos_theta) {
@@ -110,7 +120,10 @@ impl Recurrence {
 
     /// λ_mm(θ) for m = 0..=lmax, carried in scaled form: `out[m]`.
     pub fn sectoral(&self, sin_theta: f64, out: &mut [Scaled]) {
-        let mut current = Scaled { mantissa: (0.25 / std::f64::consts::PI).sqrt(), scale: 0 };
+        let mut current = Scaled {
+            mantissa: (0.25 / std::f64::consts::PI).sqrt(),
+            scale: 0,
+        };
         out[0] = current;
         for (m, slot) in out.iter_mut().enumerate().take(self.lmax + 1).skip(1) {
             current.mantissa *= ((2 * m + 1) as f64 / (2 * m) as f64).sqrt() * sin_theta;
@@ -139,7 +152,11 @@ impl Recurrence {
                 previous *= SMALL;
                 scale += 1;
             }
-            out[i * stride] = Scaled { mantissa: current, scale }.value();
+            out[i * stride] = Scaled {
+                mantissa: current,
+                scale,
+            }
+            .value();
         }
     }
 }
@@ -151,7 +168,13 @@ mod tests {
 
     fn values(lmax: usize, m: usize, theta: f64) -> Vec<f64> {
         let recurrence = Recurrence::new(lmax);
-        let mut sectoral = vec![Scaled { mantissa: 0.0, scale: 0 }; lmax + 1];
+        let mut sectoral = vec![
+            Scaled {
+                mantissa: 0.0,
+                scale: 0
+            };
+            lmax + 1
+        ];
         recurrence.sectoral(theta.sin(), &mut sectoral);
         let mut out = vec![0.0; lmax + 1 - m];
         recurrence.column(m, theta.cos(), sectoral[m], &mut out, 1);
@@ -177,7 +200,13 @@ mod tests {
         let (lmax, m) = (600, 150);
         let recurrence = Recurrence::new(lmax);
         let thetas: Vec<f64> = (1..40).map(|i| i as f64 * 0.04).collect();
-        let mut sectoral = vec![Scaled { mantissa: 0.0, scale: 0 }; lmax + 1];
+        let mut sectoral = vec![
+            Scaled {
+                mantissa: 0.0,
+                scale: 0
+            };
+            lmax + 1
+        ];
         let mut starts = Vec::new();
         for t in &thetas {
             recurrence.sectoral(t.sin(), &mut sectoral);
@@ -209,7 +238,13 @@ mod tests {
         let lmax = 4095;
         let (theta, weights) = crate::sht::grid::gauss_legendre(lmax + 1);
         let recurrence = Recurrence::new(lmax);
-        let mut sectoral = vec![Scaled { mantissa: 0.0, scale: 0 }; lmax + 1];
+        let mut sectoral = vec![
+            Scaled {
+                mantissa: 0.0,
+                scale: 0
+            };
+            lmax + 1
+        ];
         for m in [0, 1, 700, 2048, 4095] {
             let mut norm = vec![0.0; lmax + 1 - m];
             let mut column = vec![0.0; lmax + 1 - m];
@@ -219,7 +254,12 @@ mod tests {
                 norm.iter_mut().zip(&column).for_each(|(n, v)| *n += w * v * v);
             }
             for (i, n) in norm.iter().enumerate() {
-                assert!((n * 2.0 * PI - 1.0).abs() < 1e-11, "l={} m={m}: {}", m + i, n * 2.0 * PI);
+                assert!(
+                    (n * 2.0 * PI - 1.0).abs() < 1e-11,
+                    "l={} m={m}: {}",
+                    m + i,
+                    n * 2.0 * PI
+                );
             }
         }
     }

@@ -84,8 +84,17 @@ impl<T: Real> LegendreTable<T> {
     fn new(recurrence: Arc<Recurrence>, theta: &[f64]) -> Self {
         let lmax = recurrence.lmax();
         let half = &theta[..theta.len().div_ceil(2)];
-        let mut sectoral = vec![Scaled { mantissa: 0.0, scale: 0 }; half.len() * (lmax + 1)];
-        sectoral.par_chunks_mut(lmax + 1).zip(half).for_each(|(row, t)| recurrence.sectoral(t.sin(), row));
+        let mut sectoral = vec![
+            Scaled {
+                mantissa: 0.0,
+                scale: 0
+            };
+            half.len() * (lmax + 1)
+        ];
+        sectoral
+            .par_chunks_mut(lmax + 1)
+            .zip(half)
+            .for_each(|(row, t)| recurrence.sectoral(t.sin(), row));
         let mut table = LegendreTable {
             lmax,
             cos_theta: half.iter().map(|t| t.cos()).collect(),
@@ -207,7 +216,9 @@ impl<T: Real> BufferPool<T> {
     fn take(&self, len: usize) -> Vec<T> {
         let reused = self.free.lock().ok().and_then(|mut free| {
             // The smallest buffer that is large enough: no reallocation, no fresh pages.
-            let best = (0..free.len()).filter(|&i| free[i].capacity() >= len).min_by_key(|&i| free[i].capacity())?;
+            let best = (0..free.len())
+                .filter(|&i| free[i].capacity() >= len)
+                .min_by_key(|&i| free[i].capacity())?;
             Some(free.swap_remove(best))
         });
         let mut buffer = reused.unwrap_or_default();
@@ -263,7 +274,10 @@ impl<T: Real> Sht<T> {
             );
         }
         if nlon < 2 * lmax + 1 {
-            return invalid_argument!("nlon = {nlon} is too small for lmax = {lmax}: need nlon ≥ 2·lmax + 1 = {}", 2 * lmax + 1);
+            return invalid_argument!(
+                "nlon = {nlon} is too small for lmax = {lmax}: need nlon ≥ 2·lmax + 1 = {}",
+                2 * lmax + 1
+            );
         }
         let recurrence = Arc::new(Recurrence::new(lmax));
         let (theta, weights) = match grid {
@@ -294,7 +308,9 @@ impl<T: Real> Sht<T> {
             inverse: planner.plan_fft_inverse(nlon),
             gauss,
             offsets,
-            pool: BufferPool { free: Mutex::new(Vec::new()) },
+            pool: BufferPool {
+                free: Mutex::new(Vec::new()),
+            },
         })
     }
 
@@ -340,9 +356,13 @@ impl<T: Real> Sht<T> {
     pub fn analysis(&self, maps: &[T], batch: usize) -> Result<Vec<T>> {
         self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
         let mut coefficients = vec![T::zero(); batch * self.n_coefficients()];
-        self.for_each_chunk(maps, self.nlat * self.nlon, &mut coefficients, self.n_coefficients(), |maps, out| {
-            self.analysis_chunk(maps, out)
-        });
+        self.for_each_chunk(
+            maps,
+            self.nlat * self.nlon,
+            &mut coefficients,
+            self.n_coefficients(),
+            |maps, out| self.analysis_chunk(maps, out),
+        );
         Ok(coefficients)
     }
 
@@ -350,9 +370,13 @@ impl<T: Real> Sht<T> {
     pub fn synthesis(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
-        self.for_each_chunk(coefficients, self.n_coefficients(), &mut maps, self.nlat * self.nlon, |coefficients, out| {
-            self.synthesis_chunk(coefficients, out, false)
-        });
+        self.for_each_chunk(
+            coefficients,
+            self.n_coefficients(),
+            &mut maps,
+            self.nlat * self.nlon,
+            |coefficients, out| self.synthesis_chunk(coefficients, out, false),
+        );
         Ok(maps)
     }
 
@@ -361,9 +385,13 @@ impl<T: Real> Sht<T> {
     pub fn analysis_adjoint(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
-        self.for_each_chunk(coefficients, self.n_coefficients(), &mut maps, self.nlat * self.nlon, |coefficients, out| {
-            self.synthesis_chunk(coefficients, out, true)
-        });
+        self.for_each_chunk(
+            coefficients,
+            self.n_coefficients(),
+            &mut maps,
+            self.nlat * self.nlon,
+            |coefficients, out| self.synthesis_chunk(coefficients, out, true),
+        );
         Ok(maps)
     }
 
@@ -408,15 +436,26 @@ impl<T: Real> Sht<T> {
             None => {
                 let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
                 let (sym, anti) = self.fold_rings(maps, batch, &ring_factors);
-                let layout = Layout { ring_stride: (self.lmax + 1) * 2 * batch, order_stride: 2 * batch };
+                let layout = Layout {
+                    ring_stride: (self.lmax + 1) * 2 * batch,
+                    order_stride: 2 * batch,
+                };
                 let orders = self.legendre_analysis(&self.at_grid, &sym, &anti, layout, batch);
                 self.pool.give([sym, anti]);
                 orders
             }
             Some((table, resampling)) => {
                 let (sym, anti) = self.fold_rings(maps, batch, &vec![point; self.nlat]);
-                let (gauss_sym, gauss_anti) = self.resample(&sym, &anti, resampling, table.half_rings(), batch);
-                let layout = Layout { ring_stride: 2 * batch, order_stride: table.half_rings() * 2 * batch };
+                let folded = Layout {
+                    ring_stride: (self.lmax + 1) * 2 * batch,
+                    order_stride: 2 * batch,
+                };
+                let (gauss_sym, gauss_anti) =
+                    self.map_rings([&sym, &anti], folded, &resampling.forward, table.half_rings(), batch);
+                let layout = Layout {
+                    ring_stride: 2 * batch,
+                    order_stride: table.half_rings() * 2 * batch,
+                };
                 let orders = self.legendre_analysis(table, &gauss_sym, &gauss_anti, layout, batch);
                 self.pool.give([sym, anti, gauss_sym, gauss_anti]);
                 orders
@@ -434,14 +473,27 @@ impl<T: Real> Sht<T> {
         match (&self.gauss, adjoint) {
             (_, false) | (None, true) => {
                 let (sym, anti) = self.legendre_synthesis(&self.at_grid, &orders, batch);
-                let ring_factors: Vec<f64> =
-                    if adjoint { self.weights.iter().map(|w| w * point).collect() } else { vec![1.0; self.nlat] };
+                let ring_factors: Vec<f64> = if adjoint {
+                    self.weights.iter().map(|w| w * point).collect()
+                } else {
+                    vec![1.0; self.nlat]
+                };
                 self.unfold_rings(&sym, &anti, batch, &ring_factors, maps);
                 self.pool.give([sym, anti]);
             }
             (Some((table, resampling)), true) => {
                 let (gauss_sym, gauss_anti) = self.legendre_synthesis(table, &orders, batch);
-                let (sym, anti) = self.resample_adjoint(&gauss_sym, &gauss_anti, resampling, table.half_rings(), batch);
+                let gauss_layout = Layout {
+                    ring_stride: 2 * batch,
+                    order_stride: table.half_rings() * 2 * batch,
+                };
+                let (sym, anti) = self.map_rings(
+                    [&gauss_sym, &gauss_anti],
+                    gauss_layout,
+                    &resampling.adjoint,
+                    self.half_rings(),
+                    batch,
+                );
                 self.unfold_rings(&sym, &anti, batch, &vec![point; self.nlat], maps);
                 self.pool.give([gauss_sym, gauss_anti, sym, anti]);
             }
@@ -485,42 +537,51 @@ impl<T: Real> Sht<T> {
         let slab = orders * width;
         let mut sym = self.pool.take(self.half_rings() * slab);
         let mut anti = self.pool.take(self.half_rings() * slab);
-        sym.par_chunks_mut(slab).zip(anti.par_chunks_mut(slab)).enumerate().for_each_init(
-            || {
-                let f = &self.forward;
-                let spectra = || vec![f.make_output_vec(); MAP_BLOCK];
-                (f.make_input_vec(), spectra(), spectra(), f.make_scratch_vec())
-            },
-            |(input, north, south, scratch), (p, (sym_p, anti_p))| {
-                let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
-                // Maps in blocks, so that each (m, part) run written below is a whole line.
-                for b0 in (0..batch).step_by(MAP_BLOCK) {
-                    let block = MAP_BLOCK.min(batch - b0);
-                    for i in 0..block {
-                        input.copy_from_slice(ring(b0 + i, p));
-                        self.forward.process_with_scratch(input, &mut north[i], scratch).expect("buffers sized by the plan");
-                        if mirror == p {
-                            south[i].iter_mut().for_each(|v| *v = Complex::new(T::zero(), T::zero()));
-                        } else {
-                            input.copy_from_slice(ring(b0 + i, mirror));
-                            self.forward.process_with_scratch(input, &mut south[i], scratch).expect("buffers sized by the plan");
-                        }
-                    }
-                    // The equator ring has no mirror: symmetric part only.
-                    let anti_factor = if mirror == p { T::zero() } else { factor };
-                    for m in 0..orders {
-                        let (cosine, sine) = (m * width + b0, m * width + batch + b0);
+        sym.par_chunks_mut(slab)
+            .zip(anti.par_chunks_mut(slab))
+            .enumerate()
+            .for_each_init(
+                || {
+                    let f = &self.forward;
+                    let spectra = || vec![f.make_output_vec(); MAP_BLOCK];
+                    (f.make_input_vec(), spectra(), spectra(), f.make_scratch_vec())
+                },
+                |(input, north, south, scratch), (p, (sym_p, anti_p))| {
+                    let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
+                    // Maps in blocks, so that each (m, part) run written below is a whole line.
+                    for b0 in (0..batch).step_by(MAP_BLOCK) {
+                        let block = MAP_BLOCK.min(batch - b0);
                         for i in 0..block {
-                            let (n, s) = (north[i][m], south[i][m]);
-                            sym_p[cosine + i] = factor * (n.re + s.re);
-                            anti_p[cosine + i] = anti_factor * (n.re - s.re);
-                            sym_p[sine + i] = -(factor * (n.im + s.im));
-                            anti_p[sine + i] = -(anti_factor * (n.im - s.im));
+                            input.copy_from_slice(ring(b0 + i, p));
+                            self.forward
+                                .process_with_scratch(input, &mut north[i], scratch)
+                                .expect("buffers sized by the plan");
+                            if mirror == p {
+                                south[i]
+                                    .iter_mut()
+                                    .for_each(|v| *v = Complex::new(T::zero(), T::zero()));
+                            } else {
+                                input.copy_from_slice(ring(b0 + i, mirror));
+                                self.forward
+                                    .process_with_scratch(input, &mut south[i], scratch)
+                                    .expect("buffers sized by the plan");
+                            }
+                        }
+                        // The equator ring has no mirror: symmetric part only.
+                        let anti_factor = if mirror == p { T::zero() } else { factor };
+                        for m in 0..orders {
+                            let (cosine, sine) = (m * width + b0, m * width + batch + b0);
+                            for i in 0..block {
+                                let (n, s) = (north[i][m], south[i][m]);
+                                sym_p[cosine + i] = factor * (n.re + s.re);
+                                anti_p[cosine + i] = anti_factor * (n.re - s.re);
+                                sym_p[sine + i] = -(factor * (n.im + s.im));
+                                anti_p[sine + i] = -(anti_factor * (n.im - s.im));
+                            }
                         }
                     }
-                }
-            },
-        );
+                },
+            );
         (sym, anti)
     }
 
@@ -529,56 +590,79 @@ impl<T: Real> Sht<T> {
     fn unfold_rings(&self, sym: &[T], anti: &[T], batch: usize, ring_factors: &[f64], maps: &mut [T]) {
         let (nlat, half, width) = (self.nlat, self.half_rings(), 2 * batch);
         let half_t = T::of(0.5);
-        maps.par_chunks_mut(self.nlon).enumerate().with_min_len(8).for_each_init(
-            || (self.inverse.make_input_vec(), self.inverse.make_scratch_vec()),
-            |(spectrum, scratch), (row, ring)| {
-                let (b, j) = (row / nlat, row % nlat);
-                let (p, south) = if j < half { (j, false) } else { (nlat - 1 - j, true) };
-                let factor = T::of(ring_factors[j]);
-                spectrum.iter_mut().for_each(|v| *v = Complex::new(T::zero(), T::zero()));
-                for (m, slot) in spectrum.iter_mut().enumerate().take(self.lmax + 1) {
-                    let (cosine, sine) = ((m * half + p) * width + b, (m * half + p) * width + batch + b);
-                    let (cos_sum, sin_sum) = if south {
-                        (sym[cosine] - anti[cosine], sym[sine] - anti[sine])
-                    } else {
-                        (sym[cosine] + anti[cosine], sym[sine] + anti[sine])
-                    };
-                    // c2r computes Y_0 + 2 Re Σ_m Y_m e^{imφ}.
-                    *slot = if m == 0 {
-                        Complex::new(factor * cos_sum, T::zero())
-                    } else {
-                        Complex::new(factor * half_t * cos_sum, -(factor * half_t * sin_sum))
-                    };
-                }
-                self.inverse.process_with_scratch(spectrum, ring, scratch).expect("buffers sized by the plan");
-            },
-        );
+        maps.par_chunks_mut(self.nlon)
+            .enumerate()
+            .with_min_len(8)
+            .for_each_init(
+                || (self.inverse.make_input_vec(), self.inverse.make_scratch_vec()),
+                |(spectrum, scratch), (row, ring)| {
+                    let (b, j) = (row / nlat, row % nlat);
+                    let (p, south) = if j < half { (j, false) } else { (nlat - 1 - j, true) };
+                    let factor = T::of(ring_factors[j]);
+                    spectrum
+                        .iter_mut()
+                        .for_each(|v| *v = Complex::new(T::zero(), T::zero()));
+                    for (m, slot) in spectrum.iter_mut().enumerate().take(self.lmax + 1) {
+                        let (cosine, sine) = ((m * half + p) * width + b, (m * half + p) * width + batch + b);
+                        let (cos_sum, sin_sum) = if south {
+                            (sym[cosine] - anti[cosine], sym[sine] - anti[sine])
+                        } else {
+                            (sym[cosine] + anti[cosine], sym[sine] + anti[sine])
+                        };
+                        // c2r computes Y_0 + 2 Re Σ_m Y_m e^{imφ}.
+                        *slot = if m == 0 {
+                            Complex::new(factor * cos_sum, T::zero())
+                        } else {
+                            Complex::new(factor * half_t * cos_sum, -(factor * half_t * sin_sum))
+                        };
+                    }
+                    self.inverse
+                        .process_with_scratch(spectrum, ring, scratch)
+                        .expect("buffers sized by the plan");
+                },
+            );
     }
 
     /// Per order m: coefficients `[m][l − m][part][batch]` = λ_m · folded spectrum, the
     /// even-(l − m) degrees from the symmetric part and the odd ones from the antisymmetric.
-    fn legendre_analysis(&self, table: &LegendreTable<T>, sym: &[T], anti: &[T], layout: Layout, batch: usize) -> Vec<T> {
+    fn legendre_analysis(
+        &self,
+        table: &LegendreTable<T>,
+        sym: &[T],
+        anti: &[T],
+        layout: Layout,
+        batch: usize,
+    ) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
-        self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each_init(OrderPanels::default, |scratch, (m, block)| {
-            let panels = table.panels(m, scratch, Orientation::Analysis);
-            let degrees = self.degrees(m);
-            for parity in 0..2 {
-                let rows = (degrees + 1 - parity) / 2;
-                matmul_packed(
-                    MatMut { data: &mut *block, offset: parity * width, rows, cols: width, row_stride: 2 * width },
-                    &panels.analysis[parity],
-                    MatRef {
-                        data: if parity == 0 { sym } else { anti },
-                        offset: m * layout.order_stride,
-                        rows: half,
-                        cols: width,
-                        row_stride: layout.ring_stride,
-                        col_stride: 1,
-                    },
-                );
-            }
-        });
+        self.split_orders(&mut orders, batch)
+            .into_par_iter()
+            .enumerate()
+            .for_each_init(OrderPanels::default, |scratch, (m, block)| {
+                let panels = table.panels(m, scratch, Orientation::Analysis);
+                let degrees = self.degrees(m);
+                for parity in 0..2 {
+                    let rows = (degrees + 1 - parity) / 2;
+                    matmul_packed(
+                        MatMut {
+                            data: &mut *block,
+                            offset: parity * width,
+                            rows,
+                            cols: width,
+                            row_stride: 2 * width,
+                        },
+                        &panels.analysis[parity],
+                        MatRef {
+                            data: if parity == 0 { sym } else { anti },
+                            offset: m * layout.order_stride,
+                            rows: half,
+                            cols: width,
+                            row_stride: layout.ring_stride,
+                            col_stride: 1,
+                        },
+                    );
+                }
+            });
         orders
     }
 
@@ -589,60 +673,82 @@ impl<T: Real> Sht<T> {
         let mut sym = self.pool.take((self.lmax + 1) * half * width);
         let mut anti = self.pool.take((self.lmax + 1) * half * width);
         let starts = self.order_starts(batch);
-        sym.par_chunks_mut(half * width).zip(anti.par_chunks_mut(half * width)).enumerate().for_each_init(
-            OrderPanels::default,
-            |scratch, (m, (sym_m, anti_m))| {
+        sym.par_chunks_mut(half * width)
+            .zip(anti.par_chunks_mut(half * width))
+            .enumerate()
+            .for_each_init(OrderPanels::default, |scratch, (m, (sym_m, anti_m))| {
                 let panels = table.panels(m, scratch, Orientation::Synthesis);
                 let degrees = self.degrees(m);
                 for (parity, destination) in [(0, sym_m), (1, anti_m)] {
                     let rows = (degrees + 1 - parity) / 2;
                     matmul_packed(
-                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width },
+                        MatMut {
+                            data: destination,
+                            offset: 0,
+                            rows: half,
+                            cols: width,
+                            row_stride: width,
+                        },
                         &panels.synthesis[parity],
-                        MatRef { data: orders, offset: starts[m] + parity * width, rows, cols: width, row_stride: 2 * width, col_stride: 1 },
-                        );
+                        MatRef {
+                            data: orders,
+                            offset: starts[m] + parity * width,
+                            rows,
+                            cols: width,
+                            row_stride: 2 * width,
+                            col_stride: 1,
+                        },
+                    );
                 }
-            },
-        );
+            });
         (sym, anti)
     }
 
-    /// Equiangular → Gauss–Legendre rings per order: `[half ring][m]` → `[m][Gauss half ring]`.
-    fn resample(&self, sym: &[T], anti: &[T], resampling: &Resampling<T>, gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
-        let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
-        let mut out = [self.pool.take(orders * gauss_half * width), self.pool.take(orders * gauss_half * width)];
+    /// Maps each order's folded spectra to other rings with a packed per-parity matrix
+    /// (`matrices[m % 2][symmetric, antisymmetric]`): the equiangular → Gauss–Legendre
+    /// resampling or its adjoint. Order m's input starts at `m · input.order_stride`, its
+    /// rings `input.ring_stride` apart; the output is `[m][ring][part][batch]`.
+    fn map_rings(
+        &self,
+        [sym, anti]: [&[T]; 2],
+        input: Layout,
+        matrices: &[[Packed<T>; 2]; 2],
+        rings_out: usize,
+        batch: usize,
+    ) -> (Vec<T>, Vec<T>) {
+        let (width, orders) = (2 * batch, self.lmax + 1);
+        let mut out = [
+            self.pool.take(orders * rings_out * width),
+            self.pool.take(orders * rings_out * width),
+        ];
         let [out_sym, out_anti] = &mut out;
-        out_sym.par_chunks_mut(gauss_half * width).zip(out_anti.par_chunks_mut(gauss_half * width)).enumerate().for_each(
-            |(m, (sym_m, anti_m))| {
+        out_sym
+            .par_chunks_mut(rings_out * width)
+            .zip(out_anti.par_chunks_mut(rings_out * width))
+            .enumerate()
+            .for_each(|(m, (sym_m, anti_m))| {
                 for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
+                    let matrix = &matrices[m % 2][part];
                     matmul_packed(
-                        MatMut { data: destination, offset: 0, rows: gauss_half, cols: width, row_stride: width },
-                        &resampling.forward[m % 2][part],
-                        MatRef { data: source, offset: m * width, rows: half, cols: width, row_stride: orders * width, col_stride: 1 },
-                        );
+                        MatMut {
+                            data: destination,
+                            offset: 0,
+                            rows: rings_out,
+                            cols: width,
+                            row_stride: width,
+                        },
+                        matrix,
+                        MatRef {
+                            data: source,
+                            offset: m * input.order_stride,
+                            rows: matrix.depth(),
+                            cols: width,
+                            row_stride: input.ring_stride,
+                            col_stride: 1,
+                        },
+                    );
                 }
-            },
-        );
-        let [sym, anti] = out;
-        (sym, anti)
-    }
-
-    /// Adjoint of [`Sht::resample`]: `[m][Gauss half ring]` → `[m][half ring]`.
-    fn resample_adjoint(&self, sym: &[T], anti: &[T], resampling: &Resampling<T>, gauss_half: usize, batch: usize) -> (Vec<T>, Vec<T>) {
-        let (width, half, orders) = (2 * batch, self.half_rings(), self.lmax + 1);
-        let mut out = [self.pool.take(orders * half * width), self.pool.take(orders * half * width)];
-        let [out_sym, out_anti] = &mut out;
-        out_sym.par_chunks_mut(half * width).zip(out_anti.par_chunks_mut(half * width)).enumerate().for_each(
-            |(m, (sym_m, anti_m))| {
-                for (part, (source, destination)) in [(sym, sym_m), (anti, anti_m)].into_iter().enumerate() {
-                    matmul_packed(
-                        MatMut { data: destination, offset: 0, rows: half, cols: width, row_stride: width },
-                        &resampling.adjoint[m % 2][part],
-                        MatRef { data: source, offset: m * gauss_half * width, rows: gauss_half, cols: width, row_stride: width, col_stride: 1 },
-                        );
-                }
-            },
-        );
+            });
         let [sym, anti] = out;
         (sym, anti)
     }
@@ -668,15 +774,22 @@ impl<T: Real> Sht<T> {
     fn gather(&self, coefficients: &[T], batch: usize) -> Vec<T> {
         let n = self.n_coefficients();
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * 2 * batch);
-        self.split_orders(&mut orders, batch).into_par_iter().enumerate().for_each(|(m, block)| {
-            let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-            for (i, row) in block.chunks_exact_mut(2 * batch).enumerate() {
-                for (b, item) in coefficients.chunks_exact(n).enumerate() {
-                    row[b] = scale * item[self.offsets[m] + i];
-                    row[batch + b] = if m == 0 { T::zero() } else { scale * item[self.offsets[m] + degrees + i] };
+        self.split_orders(&mut orders, batch)
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(m, block)| {
+                let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
+                for (i, row) in block.chunks_exact_mut(2 * batch).enumerate() {
+                    for (b, item) in coefficients.chunks_exact(n).enumerate() {
+                        row[b] = scale * item[self.offsets[m] + i];
+                        row[batch + b] = if m == 0 {
+                            T::zero()
+                        } else {
+                            scale * item[self.offsets[m] + degrees + i]
+                        };
+                    }
                 }
-            }
-        });
+            });
         orders
     }
 
@@ -729,7 +842,11 @@ fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights
                     let mirror = n_source - 1 - j;
                     let entry = &matrix[k * n_source..];
                     let value = if mirror == j {
-                        if sign > 0.0 { entry[j] } else { 0.0 }
+                        if sign > 0.0 {
+                            entry[j]
+                        } else {
+                            0.0
+                        }
                     } else {
                         0.5 * (entry[j] + sign * entry[mirror])
                     };
@@ -747,11 +864,21 @@ fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights
                 } else {
                     (target_half, source_half, source_half, 1)
                 };
-                Packed::new(MatRef { data: matrix, offset: 0, rows, cols, row_stride, col_stride })
+                Packed::new(MatRef {
+                    data: matrix,
+                    offset: 0,
+                    rows,
+                    cols,
+                    row_stride,
+                    col_stride,
+                })
             })
         })
     };
-    Resampling { forward: pack(false), adjoint: pack(true) }
+    Resampling {
+        forward: pack(false),
+        adjoint: pack(true),
+    }
 }
 
 #[cfg(test)]

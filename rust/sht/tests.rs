@@ -40,9 +40,22 @@ fn adjoint_satisfies_the_dot_product_identity() {
         let sht = Sht::<f64>::new(15, 29, 13, grid).unwrap();
         let maps = random(2 * 15 * 29, 3);
         let coefficients = random(2 * sht.n_coefficients(), 5);
-        let lhs: f64 = sht.analysis(&maps, 2).unwrap().iter().zip(&coefficients).map(|(a, b)| a * b).sum();
-        let rhs: f64 = maps.iter().zip(&sht.analysis_adjoint(&coefficients, 2).unwrap()).map(|(a, b)| a * b).sum();
-        assert!((lhs - rhs).abs() < 1e-13 * lhs.abs().max(1.0), "{grid:?}: {lhs} vs {rhs}");
+        let lhs: f64 = sht
+            .analysis(&maps, 2)
+            .unwrap()
+            .iter()
+            .zip(&coefficients)
+            .map(|(a, b)| a * b)
+            .sum();
+        let rhs: f64 = maps
+            .iter()
+            .zip(&sht.analysis_adjoint(&coefficients, 2).unwrap())
+            .map(|(a, b)| a * b)
+            .sum();
+        assert!(
+            (lhs - rhs).abs() < 1e-13 * lhs.abs().max(1.0),
+            "{grid:?}: {lhs} vs {rhs}"
+        );
     }
 }
 
@@ -73,7 +86,10 @@ fn reused_plans_give_the_same_results() {
         sht.analysis(&first, 4).unwrap();
         assert_eq!(sht.analysis(&second, 2).unwrap(), expected);
         let coefficients = random(3 * sht.n_coefficients(), 3);
-        let expected = (sht.synthesis(&coefficients, 3).unwrap(), sht.analysis_adjoint(&coefficients, 3).unwrap());
+        let expected = (
+            sht.synthesis(&coefficients, 3).unwrap(),
+            sht.analysis_adjoint(&coefficients, 3).unwrap(),
+        );
         sht.synthesis(&random(5 * sht.n_coefficients(), 4), 5).unwrap();
         sht.analysis(&first, 4).unwrap();
         assert_eq!(sht.synthesis(&coefficients, 3).unwrap(), expected.0);
@@ -94,9 +110,15 @@ fn batches_match_single_maps() {
         let synthesised = sht.synthesis(&coefficients, batch).unwrap();
         for b in [0, 7, 8, 19] {
             let single = sht.analysis(&maps[b * points..][..points], 1).unwrap();
-            assert!(max_relative_error(&analysed[b * n..][..n], &single) < 1e-13, "{grid:?} analysis map {b}");
+            assert!(
+                max_relative_error(&analysed[b * n..][..n], &single) < 1e-13,
+                "{grid:?} analysis map {b}"
+            );
             let single = sht.synthesis(&coefficients[b * n..][..n], 1).unwrap();
-            assert!(max_relative_error(&synthesised[b * points..][..points], &single) < 1e-13, "{grid:?} synthesis map {b}");
+            assert!(
+                max_relative_error(&synthesised[b * points..][..points], &single) < 1e-13,
+                "{grid:?} synthesis map {b}"
+            );
         }
     }
 }
