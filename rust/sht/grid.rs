@@ -141,25 +141,30 @@ fn barycentric_row(x: &[f64], w: &[f64], y: f64, row: &mut [f64]) {
 mod tests {
     use super::*;
 
+    /// |Σ w_j cos^d θ_j − ∫_{−1}^{1} x^d dx|.
+    fn quadrature_error(theta: &[f64], weights: &[f64], degree: usize) -> f64 {
+        let integral: f64 = theta
+            .iter()
+            .zip(weights)
+            .map(|(t, w)| w * t.cos().powi(degree as i32))
+            .sum();
+        let exact = if degree % 2 == 0 {
+            2.0 / (degree as f64 + 1.0)
+        } else {
+            0.0
+        };
+        (integral - exact).abs()
+    }
+
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
         for n in [1, 2, 5, 90, 91, 1024] {
             let (theta, weights) = gauss_legendre(n);
             assert!((weights.iter().sum::<f64>() - 2.0).abs() < 1e-13, "n={n}");
             for degree in [2 * n - 2, 2 * n - 1] {
-                let integral: f64 = theta
-                    .iter()
-                    .zip(&weights)
-                    .map(|(t, w)| w * t.cos().powi(degree as i32))
-                    .sum();
-                let exact = if degree % 2 == 0 {
-                    2.0 / (degree as f64 + 1.0)
-                } else {
-                    0.0
-                };
                 assert!(
-                    (integral - exact).abs() < 1e-13,
-                    "n={n} degree={degree}: {integral} vs {exact}"
+                    quadrature_error(&theta, &weights, degree) < 1e-13,
+                    "n={n} degree={degree}"
                 );
             }
         }
@@ -168,20 +173,12 @@ mod tests {
     #[test]
     fn clenshaw_curtis_integrates_polynomials_exactly() {
         for n in [2, 3, 10, 91] {
-            let weights = clenshaw_curtis_weights(n);
-            let theta = equiangular(n);
+            let (theta, weights) = (equiangular(n), clenshaw_curtis_weights(n));
             for degree in 0..n {
-                let integral: f64 = theta
-                    .iter()
-                    .zip(&weights)
-                    .map(|(t, w)| w * t.cos().powi(degree as i32))
-                    .sum();
-                let exact = if degree % 2 == 0 {
-                    2.0 / (degree as f64 + 1.0)
-                } else {
-                    0.0
-                };
-                assert!((integral - exact).abs() < 1e-13, "n={n} degree={degree}");
+                assert!(
+                    quadrature_error(&theta, &weights, degree) < 1e-13,
+                    "n={n} degree={degree}"
+                );
             }
         }
     }
