@@ -148,7 +148,7 @@ mod tests {
             .zip(weights)
             .map(|(t, w)| w * t.cos().powi(degree as i32))
             .sum();
-        let exact = if degree % 2 == 0 {
+        let exact = if degree.is_multiple_of(2) {
             2.0 / (degree as f64 + 1.0)
         } else {
             0.0

@@ -21,6 +21,11 @@ pub struct Scaled {
 }
 
 impl Scaled {
+    pub const ZERO: Scaled = Scaled {
+        mantissa: 0.0,
+        scale: 0,
+    };
+
     /// The value as a plain double; 0 where it is below ~10^−180, where it can no longer
     /// matter next to the O(1) values of the same transform.
     #[inline]
@@ -168,13 +173,7 @@ mod tests {
 
     fn values(lmax: usize, m: usize, theta: f64) -> Vec<f64> {
         let recurrence = Recurrence::new(lmax);
-        let mut sectoral = vec![
-            Scaled {
-                mantissa: 0.0,
-                scale: 0
-            };
-            lmax + 1
-        ];
+        let mut sectoral = vec![Scaled::ZERO; lmax + 1];
         recurrence.sectoral(theta.sin(), &mut sectoral);
         let mut out = vec![0.0; lmax + 1 - m];
         recurrence.column(m, theta.cos(), sectoral[m], &mut out, 1);
@@ -200,13 +199,7 @@ mod tests {
         let (lmax, m) = (600, 150);
         let recurrence = Recurrence::new(lmax);
         let thetas: Vec<f64> = (1..40).map(|i| i as f64 * 0.04).collect();
-        let mut sectoral = vec![
-            Scaled {
-                mantissa: 0.0,
-                scale: 0
-            };
-            lmax + 1
-        ];
+        let mut sectoral = vec![Scaled::ZERO; lmax + 1];
         let mut starts = Vec::new();
         for t in &thetas {
             recurrence.sectoral(t.sin(), &mut sectoral);
@@ -238,13 +231,7 @@ mod tests {
         let lmax = 4095;
         let (theta, weights) = crate::sht::grid::gauss_legendre(lmax + 1);
         let recurrence = Recurrence::new(lmax);
-        let mut sectoral = vec![
-            Scaled {
-                mantissa: 0.0,
-                scale: 0
-            };
-            lmax + 1
-        ];
+        let mut sectoral = vec![Scaled::ZERO; lmax + 1];
         for m in [0, 1, 700, 2048, 4095] {
             let mut norm = vec![0.0; lmax + 1 - m];
             let mut column = vec![0.0; lmax + 1 - m];

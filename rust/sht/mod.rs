@@ -84,13 +84,7 @@ impl<T: Real> LegendreTable<T> {
     fn new(recurrence: Arc<Recurrence>, theta: &[f64]) -> Self {
         let lmax = recurrence.lmax();
         let half = &theta[..theta.len().div_ceil(2)];
-        let mut sectoral = vec![
-            Scaled {
-                mantissa: 0.0,
-                scale: 0
-            };
-            half.len() * (lmax + 1)
-        ];
+        let mut sectoral = vec![Scaled::ZERO; half.len() * (lmax + 1)];
         sectoral
             .par_chunks_mut(lmax + 1)
             .zip(half)
@@ -368,21 +362,16 @@ impl<T: Real> Sht<T> {
 
     /// Coefficients `(batch, (lmax+1)²)` → maps `(batch, nlat, nlon)`.
     pub fn synthesis(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
-        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
-        let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
-        self.for_each_chunk(
-            coefficients,
-            self.n_coefficients(),
-            &mut maps,
-            self.nlat * self.nlon,
-            |coefficients, out| self.synthesis_chunk(coefficients, out, false),
-        );
-        Ok(maps)
+        self.coefficients_to_maps(coefficients, batch, false)
     }
 
     /// The adjoint (transpose) of [`Sht::analysis`]: coefficients → maps, so that
     /// ⟨analysis(x), c⟩ = ⟨x, analysis_adjoint(c)⟩. This is the backward pass of analysis.
     pub fn analysis_adjoint(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
+        self.coefficients_to_maps(coefficients, batch, true)
+    }
+
+    fn coefficients_to_maps(&self, coefficients: &[T], batch: usize, adjoint: bool) -> Result<Vec<T>> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
         self.for_each_chunk(
@@ -390,7 +379,7 @@ impl<T: Real> Sht<T> {
             self.n_coefficients(),
             &mut maps,
             self.nlat * self.nlon,
-            |coefficients, out| self.synthesis_chunk(coefficients, out, true),
+            |coefficients, out| self.synthesis_chunk(coefficients, out, adjoint),
         );
         Ok(maps)
     }
