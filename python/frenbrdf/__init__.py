@@ -14,8 +14,10 @@ from .coords import (
 from .exceptions import MerlFormatError
 from .knn import KnnInterpolator, knn_interpolate
 from .merl import (
+    merl_above_horizon,
     merl_angles_to_bin,
     merl_bin_angles,
+    merl_bin_grid,
     merl_bin_to_angles,
     merl_lookup,
     merl_lookup_directions,
@@ -31,8 +33,10 @@ __all__ = [
     "directions_to_rusinkiewicz",
     "half_diff_vectors",
     "knn_interpolate",
+    "merl_above_horizon",
     "merl_angles_to_bin",
     "merl_bin_angles",
+    "merl_bin_grid",
     "merl_bin_to_angles",
     "merl_lookup",
     "merl_lookup_directions",

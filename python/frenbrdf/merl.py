@@ -111,6 +111,26 @@ def merl_bin_angles() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return theta_h, theta_d, phi_d
 
 
+def merl_bin_grid() -> np.ndarray:
+    """The (θ_h, θ_d, φ_d) angles of every bin: float64 ``(90, 90, 180, 3)``."""
+    theta_h, theta_d, phi_d = merl_bin_angles()
+    return np.stack(np.meshgrid(theta_h, theta_d, phi_d, indexing="ij"), axis=-1)
+
+
+def merl_above_horizon() -> np.ndarray:
+    """Bins whose directions (with φ_h = 0) both lie strictly above the surface.
+
+    A measured MERL file has data exactly here; elsewhere it stores negative
+    "missing" markers. Returns bool ``(90, 90, 180)``.
+    """
+    from .coords import rusinkiewicz_to_directions
+
+    grid = merl_bin_grid()
+    angles = np.stack([grid[..., 0], np.zeros(grid.shape[:-1]), grid[..., 1], grid[..., 2]], axis=-1)
+    wi, wo = rusinkiewicz_to_directions(angles)
+    return (wi[..., 2] > 0) & (wo[..., 2] > 0)
+
+
 def merl_bin_to_angles(bins) -> np.ndarray:
     """Bin coordinates ``(..., 3)`` (integer or fractional) → angles (θ_h, θ_d, φ_d)."""
     flat, leading = rows("bins", bins, 3)
