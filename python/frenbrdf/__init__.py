@@ -13,6 +13,8 @@ from .coords import (
 )
 from .exceptions import MerlFormatError
 from .knn import KnnInterpolator, knn_interpolate
+from .models import NBRDF, Model, interpolate
+from .training import TrainConfig, TrainResult, config_for, train
 from .merl import (
     merl_above_horizon,
     merl_angles_to_bin,
@@ -30,6 +32,12 @@ __all__ = [
     "__version__",
     "KnnInterpolator",
     "MerlFormatError",
+    "Model",
+    "NBRDF",
+    "TrainConfig",
+    "TrainResult",
+    "config_for",
+    "interpolate",
     "directions_to_rusinkiewicz",
     "half_diff_vectors",
     "knn_interpolate",
@@ -43,6 +51,7 @@ __all__ = [
     "read_merl",
     "rusinkiewicz_to_directions",
     "rusinkiewicz_to_half_diff",
+    "train",
     "valid_mask",
     "write_merl",
 ]

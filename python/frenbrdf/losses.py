@@ -1,0 +1,230 @@
+"""The training losses: L_rec (paper Eq. 1), the regularisers and L_fre (DESIGN §5).
+
+All values are in the mapped space of :mod:`frenbrdf.data`. The total loss is composed
+in one place, :func:`frenbrdf.train.loss_terms`:
+
+    L = L_rec + λ1 · weights + λ2 · latents + η · L_fre
+
+The frequency loss treats each of S half-angle slices θ_h of a BRDF as a function of the
+difference direction D on the sphere, g_s(D), and compares spherical-harmonic
+coefficients of the truth and of the decoded NBRDF:
+
+- φ_d ∈ [π, 2π) is filled by reciprocity, f(φ_d + π) = f(φ_d);
+- below the equator (θ_d > π/2, outside the measured domain) g is extended evenly,
+  θ_d → π − θ_d (``extension="mirror"``), or set to 0 (``"zero"``);
+- truth: the material's valid MERL bins of the slice are scattered points on the sphere,
+  interpolated onto the SHT grid by kNN Gaussian weights (chordal distance, paper Eq. 5;
+  weights computed once per slice and reused for every material), then analysed;
+- prediction: the NBRDF evaluated at the grid nodes, analysed by the differentiable SHT.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch import nn
+
+from .data import BinGeometry, save_json  # noqa: F401  (BinGeometry documents the bin order)
+from .knn import KnnInterpolator
+from .merl import SHAPE, merl_bin_angles
+from .models.nbrdf import nbrdf_forward
+from .sht import SHT
+from .sht_torch import SHTAnalysis
+
+
+def reconstruction_loss(predicted: torch.Tensor, true: torch.Tensor, cos_in: torch.Tensor,
+                        kind: str = "l1") -> torch.Tensor:
+    """Mean cosine-weighted error over samples and channels: L1 (paper Eq. 1) or MSE (HyperBRDF).
+
+    ``predicted``, ``true`` ``(B, N, 3)``; ``cos_in`` ``(B, N)``.
+    """
+    error = (predicted - true) * cos_in.unsqueeze(-1)
+    return error.abs().mean() if kind == "l1" else error.square().mean()
+
+
+def weight_penalty(params: list[torch.Tensor]) -> torch.Tensor:
+    """Σ over the NBRDF's tensors of the mean squared weight (averaged over materials)."""
+    return sum(p.square().mean() for p in params)
+
+
+def latent_penalty(z: torch.Tensor) -> torch.Tensor:
+    """Mean squared latent."""
+    return z.square().mean()
+
+
+# --------------------------------------------------------------------------- frequency loss
+
+
+@dataclass
+class FrequencyLossConfig:
+    """Settings of L_fre (DESIGN §5)."""
+
+    lmax: int = 49
+    """Band limit of the spherical-harmonic expansion."""
+    grid: str = "gauss"
+    """SHT grid: ``"gauss"`` (nlat = lmax + 1) or ``"equiangular"`` (nlat = lmax + 2); nlon = 2 lmax + 2."""
+    slices: tuple[int, ...] = (0, 6, 12, 24, 36, 48, 60, 72)
+    """θ_h slices as MERL θ_h bin indices (0 … 89); the bins are denser near the specular peak."""
+    k: int = 2
+    """Neighbours of the kNN interpolation of the truth."""
+    sigma: float = 0.05
+    """Gaussian width (chordal distance) of the kNN weights."""
+    extension: str = "mirror"
+    """Below the equator: ``"mirror"`` (θ_d → π − θ_d) or ``"zero"``."""
+
+    def __post_init__(self):
+        self.slices = tuple(int(s) for s in self.slices)
+        problems = []
+        if self.lmax < 1:
+            problems.append(f"lmax must be ≥ 1, got {self.lmax}")
+        if self.grid not in ("gauss", "equiangular"):
+            problems.append(f"grid must be 'gauss' or 'equiangular', got {self.grid!r}")
+        if not self.slices or min(self.slices) < 0 or max(self.slices) >= SHAPE[1] or len(set(self.slices)) != len(
+                self.slices):
+            problems.append(f"slices must be distinct θ_h bin indices in 0 … {SHAPE[1] - 1}, got {self.slices}")
+        if self.k < 1:
+            problems.append(f"k must be ≥ 1, got {self.k}")
+        if not (self.sigma > 0 and np.isfinite(self.sigma)):
+            problems.append(f"sigma must be a positive number, got {self.sigma}")
+        if self.extension not in ("mirror", "zero"):
+            problems.append(f"extension must be 'mirror' or 'zero', got {self.extension!r}")
+        if problems:
+            raise ValueError("frequency loss: " + "; ".join(problems))
+
+    @property
+    def nlat(self) -> int:
+        return self.lmax + 1 if self.grid == "gauss" else self.lmax + 2
+
+    @property
+    def nlon(self) -> int:
+        return 2 * self.lmax + 2
+
+    def key(self) -> str:
+        """A short hash of the settings, for cache file names."""
+        return hashlib.sha256(repr(sorted(asdict(self).items())).encode()).hexdigest()[:16]
+
+
+def _unit(theta, phi) -> np.ndarray:
+    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+class FrequencyLoss(nn.Module):
+    """L_fre between decoded NBRDFs and precomputed true coefficients.
+
+    ``forward(params, true)``: NBRDF parameters of B materials and their true
+    coefficients ``(B, S, 3, ncoeff)`` → the mean squared coefficient difference.
+    """
+
+    def __init__(self, config: FrequencyLossConfig):
+        super().__init__()
+        self.config = config
+        self.sht = SHTAnalysis(config.nlat, config.nlon, config.lmax, config.grid)
+        theta = SHT(config.nlat, config.nlon, config.lmax, config.grid).theta
+        phi = 2 * np.pi * np.arange(config.nlon) / config.nlon
+        theta, phi = np.meshgrid(theta, phi, indexing="ij")
+        # Fold every node into the measured domain: φ_d mod π (reciprocity), θ_d mirrored.
+        inside = theta <= np.pi / 2 + 1e-12
+        folded = _unit(np.minimum(theta, np.pi - theta), np.mod(phi, np.pi)).reshape(-1, 3)
+        use = inside.reshape(-1) | (config.extension == "mirror")
+        # Many nodes fold onto the same direction: evaluate each distinct one once.
+        unique, inverse = np.unique(np.round(folded[use], 12), axis=0, return_inverse=True)
+        gather = np.full(folded.shape[0], len(unique), dtype=np.int64)  # index len(unique) = the zero row
+        gather[use] = inverse.reshape(-1)
+        theta_h = merl_bin_angles()[0][list(config.slices)]
+        half = _unit(theta_h, np.zeros_like(theta_h))  # φ_h = 0
+        coords = np.concatenate([np.repeat(half, len(unique), axis=0), np.tile(unique, (len(theta_h), 1))], axis=1)
+        self.register_buffer("node_coords", torch.from_numpy(coords.astype(np.float32)), persistent=False)
+        self.register_buffer("gather", torch.from_numpy(gather), persistent=False)
+        self.n_unique = len(unique)
+
+    def predicted_maps(self, params: list[torch.Tensor]) -> torch.Tensor:
+        """The decoded NBRDFs on the SHT grid: ``(B, S, 3, nlat, nlon)``."""
+        batch, n_slices = params[0].shape[0], len(self.config.slices)
+        values = nbrdf_forward(params, self.node_coords.expand(batch, -1, -1))
+        values = values.reshape(batch, n_slices, self.n_unique, 3)
+        values = torch.cat([values, values.new_zeros(batch, n_slices, 1, 3)], dim=2)  # the zero row
+        maps = values[:, :, self.gather]  # (B, S, nlat·nlon, 3)
+        return maps.transpose(2, 3).reshape(batch, n_slices, 3, self.config.nlat, self.config.nlon)
+
+    def predicted_coefficients(self, params: list[torch.Tensor]) -> torch.Tensor:
+        """``(B, S, 3, ncoeff)``, differentiable."""
+        return self.sht(self.predicted_maps(params))
+
+    def forward(self, params: list[torch.Tensor], true: torch.Tensor) -> torch.Tensor:
+        return (self.predicted_coefficients(params) - true).square().mean()
+
+
+class FrequencyTruth:
+    """True SH coefficients of materials, by kNN interpolation + SHT, cached on disk.
+
+    The kNN weights depend only on which bins of a slice hold data, so they are built
+    once per (slice, mask) and reused for every material.
+    """
+
+    def __init__(self, config: FrequencyLossConfig, cache_dir: str | os.PathLike | None = None):
+        self.config = config
+        self.sht = SHT(config.nlat, config.nlon, config.lmax, config.grid, "float64")
+        theta = self.sht.theta
+        phi = 2 * np.pi * np.arange(config.nlon) / config.nlon
+        self.nodes = _unit(*np.meshgrid(theta, phi, indexing="ij")).reshape(-1, 3)
+        _, theta_d, phi_d = merl_bin_angles()
+        theta_d, phi_d = np.meshgrid(theta_d, phi_d, indexing="ij")
+        self.bin_directions = _unit(theta_d, phi_d).reshape(-1, 3)  # (90·180, 3), the bins of one slice
+        self.cache_dir = Path(cache_dir) if cache_dir is not None else None
+        self._interpolators: dict[bytes, tuple[KnnInterpolator, np.ndarray]] = {}
+
+    def _interpolator(self, slice_valid: np.ndarray) -> tuple[KnnInterpolator, np.ndarray]:
+        key = hashlib.sha1(np.packbits(slice_valid).tobytes()).digest()
+        if key not in self._interpolators:
+            bins = np.flatnonzero(slice_valid)
+            d = self.bin_directions[bins]
+            copies = [d, d * [-1, -1, 1]]  # reciprocity: φ_d + π
+            if self.config.extension == "mirror":
+                copies += [c * [1, 1, -1] for c in copies]
+            sources = np.concatenate(copies)
+            self._interpolators[key] = (KnnInterpolator(sources, self.nodes, self.config.k, self.config.sigma),
+                                        np.tile(bins, len(copies)))
+        return self._interpolators[key]
+
+    def maps(self, mapped: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """One material's slices on the grid: mapped ``(N_BINS, 3)``, valid ``(N_BINS,)`` → ``(S, 3, nlat, nlon)``."""
+        per_slice = SHAPE[2] * SHAPE[3]
+        out = np.empty((len(self.config.slices), 3, self.config.nlat, self.config.nlon))
+        below = self.nodes[:, 2] < -1e-12
+        for s, i in enumerate(self.config.slices):
+            rows = slice(i * per_slice, (i + 1) * per_slice)
+            slice_valid, slice_values = valid[rows], mapped[rows].astype(np.float64)
+            if not slice_valid.any():
+                raise ValueError(f"θ_h slice {i} holds no valid bin; choose other frequency-loss slices")
+            interpolator, source_bins = self._interpolator(slice_valid)
+            grid_values = interpolator.apply(slice_values[source_bins])  # (nlat·nlon, 3)
+            if self.config.extension == "zero":
+                grid_values[below] = 0.0
+            out[s] = grid_values.T.reshape(3, self.config.nlat, self.config.nlon)
+        return out
+
+    def coefficients(self, mapped: np.ndarray, valid: np.ndarray, cache_key: str | None = None) -> np.ndarray:
+        """``(S, 3, ncoeff)`` float32, from the disk cache when ``cache_key`` is given and present."""
+        path = None
+        if self.cache_dir is not None and cache_key is not None:
+            path = self.cache_dir / f"{cache_key}-{self.config.key()}.npy"
+            if path.exists():
+                try:
+                    cached = np.load(path)
+                    if cached.shape == (len(self.config.slices), 3, self.sht.n_coefficients):
+                        return cached
+                except (OSError, ValueError):
+                    pass  # a damaged cache file is recomputed and replaced
+        coefficients = self.sht.analysis(self.maps(mapped, valid)).astype(np.float32)
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            with open(temporary, "wb") as file:
+                np.save(file, coefficients)
+            os.replace(temporary, path)
+        return coefficients

@@ -1,0 +1,9 @@
+"""The networks: set encoder, hypernetwork decoder and the decoded NBRDF."""
+
+from .autoencoder import AutoEncoder, Model, ModelConfig, interpolate
+from .encoder import EncoderConfig, SetEncoder
+from .hypernetwork import DecoderConfig, HyperNetwork
+from .nbrdf import NBRDF, NBRDFConfig, nbrdf_forward
+
+__all__ = ["AutoEncoder", "DecoderConfig", "EncoderConfig", "HyperNetwork", "Model", "ModelConfig", "NBRDF",
+           "NBRDFConfig", "SetEncoder", "interpolate", "nbrdf_forward"]

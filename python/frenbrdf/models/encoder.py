@@ -1,0 +1,45 @@
+"""The set encoder: DeepSets over (mapped RGB, H, D) samples, mean pooled into a latent."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+#: One sample: mapped RGB (3) and the NBRDF coordinates H, D (6).
+SAMPLE_SIZE = 9
+
+
+def mlp(sizes: list[int]) -> nn.Sequential:
+    """Linear layers with ReLU between them (none after the last)."""
+    layers: list[nn.Module] = []
+    for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+        layers += [nn.Linear(fan_in, fan_out), nn.ReLU()]
+    return nn.Sequential(*layers[:-1])
+
+
+@dataclass
+class EncoderConfig:
+    """Set encoder: per-sample MLP, then the mean over the samples."""
+
+    hidden: tuple[int, ...] = (128, 128, 128)
+    """Hidden widths of the per-sample MLP."""
+    latent: int = 40
+    """Size of the latent z."""
+
+    def __post_init__(self):
+        self.hidden = tuple(int(h) for h in self.hidden)
+        if min(self.hidden, default=1) < 1 or self.latent < 1:
+            raise ValueError(f"encoder sizes must be positive, got hidden={self.hidden}, latent={self.latent}")
+
+
+class SetEncoder(nn.Module):
+    """``(B, N, 9)`` samples → ``(B, latent)``; any N ≥ 1, order-invariant."""
+
+    def __init__(self, config: EncoderConfig):
+        super().__init__()
+        self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent])
+
+    def forward(self, samples: torch.Tensor) -> torch.Tensor:
+        return self.per_sample(samples).mean(dim=-2)

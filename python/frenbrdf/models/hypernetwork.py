@@ -1,0 +1,50 @@
+"""The hypernetwork decoder: a latent z → the weights of one NBRDF."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+from .encoder import mlp
+
+
+@dataclass
+class DecoderConfig:
+    """One MLP head per NBRDF parameter tensor (latent → hidden → numel)."""
+
+    hidden: tuple[int, ...] = (128, 128)
+    """Hidden widths of every head."""
+    last_layer_scale: float = 0.1
+    """Factor on the default initialisation of each head's last weight matrix."""
+
+    def __post_init__(self):
+        self.hidden = tuple(int(h) for h in self.hidden)
+        if min(self.hidden, default=1) < 1 or not self.last_layer_scale > 0:
+            raise ValueError(f"decoder sizes and last_layer_scale must be positive, got {self}")
+
+
+class HyperNetwork(nn.Module):
+    """``z (B, latent)`` → a list of NBRDF parameter tensors ``(B, *shape)``.
+
+    Each head's last layer starts small (``last_layer_scale``) with its bias set to a
+    standard initialisation of the NBRDF tensor, so every latent first decodes to about
+    the same well-conditioned random NBRDF and the heads learn deviations from it.
+    """
+
+    def __init__(self, latent: int, shapes: list[tuple[int, ...]], config: DecoderConfig):
+        super().__init__()
+        self.shapes = [tuple(shape) for shape in shapes]
+        self.heads = nn.ModuleList(mlp([latent, *config.hidden, math.prod(shape)]) for shape in self.shapes)
+        with torch.no_grad():
+            for head, shape in zip(self.heads, self.shapes):
+                last = head[-1]
+                last.weight.mul_(config.last_layer_scale)
+                fan_in = shape[-1] if len(shape) == 2 else shape[0]
+                bound = 1.0 / math.sqrt(fan_in)  # torch.nn.Linear's default
+                last.bias.uniform_(-bound, bound) if len(shape) == 2 else last.bias.zero_()
+
+    def forward(self, z: torch.Tensor) -> list[torch.Tensor]:
+        return [head(z).reshape(z.shape[0], *shape) for head, shape in zip(self.heads, self.shapes)]

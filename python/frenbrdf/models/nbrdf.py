@@ -1,0 +1,127 @@
+"""The NBRDF: a small MLP from (H, D) to mapped RGB reflectance, evaluated in batches.
+
+The network's weights are not module parameters: the hypernetwork produces them, one
+set per material, and :func:`nbrdf_forward` evaluates B materials at once with batched
+matrix products. :class:`NBRDF` is the user-facing object: decoded materials plus the
+mapping back to reflectance.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from ..coords import half_diff_vectors
+from ..data import LogRelativeMapping, N_BINS, bin_geometry
+from ..merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, write_merl
+
+#: The NBRDF input: H and D as Cartesian 3-vectors.
+N_INPUTS = 6
+#: The output: RGB.
+N_OUTPUTS = 3
+
+
+@dataclass
+class NBRDFConfig:
+    """Size of the decoded NBRDF (ReLU hidden layers, linear output in the mapped space)."""
+
+    hidden: tuple[int, ...] = (32, 32)
+    """Hidden layer widths: (21, 21) is Sztrajman's NBRDF (675 weights), (60, 60, 60, 60) HyperBRDF's (11,583)."""
+
+    def __post_init__(self):
+        self.hidden = tuple(int(h) for h in self.hidden)
+        if not self.hidden or min(self.hidden) < 1:
+            raise ValueError(f"nbrdf.hidden must be one or more positive layer widths, got {self.hidden}")
+
+    def shapes(self) -> list[tuple[int, ...]]:
+        """Shapes of the parameter tensors, in order: weight (out, in), bias (out,), …"""
+        sizes = [N_INPUTS, *self.hidden, N_OUTPUTS]
+        shapes = []
+        for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+            shapes += [(fan_out, fan_in), (fan_out,)]
+        return shapes
+
+    @property
+    def n_weights(self) -> int:
+        return sum(int(np.prod(shape)) for shape in self.shapes())
+
+
+def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Tensor:
+    """Evaluates B NBRDFs: ``params`` as from :meth:`NBRDFConfig.shapes` with a leading B,
+    ``coords`` ``(B, N, 6)`` → mapped RGB ``(B, N, 3)``."""
+    x = coords
+    n_layers = len(params) // 2
+    for layer in range(n_layers):
+        weight, bias = params[2 * layer], params[2 * layer + 1]
+        x = torch.baddbmm(bias.unsqueeze(1), x, weight.transpose(1, 2))
+        if layer < n_layers - 1:
+            x = torch.relu(x)
+    return x
+
+
+class NBRDF:
+    """Decoded materials: evaluate them at direction pairs or write them as MERL tables.
+
+    Parameters
+    ----------
+    params
+        Parameter tensors with a leading material axis B (see :func:`nbrdf_forward`).
+    mapping
+        The mapping from network outputs to reflectance.
+
+    Examples
+    --------
+    >>> nbrdf = model.decode(z)                                        # doctest: +SKIP
+    >>> rgb = nbrdf(wi, wo)          # (..., 3) reflectance, ≥ 0      # doctest: +SKIP
+    >>> nbrdf.to_merl("decoded.binary")                                # doctest: +SKIP
+    """
+
+    def __init__(self, params: list[torch.Tensor], mapping: LogRelativeMapping):
+        self.params = [p.detach().cpu().to(torch.float32) for p in params]
+        self.mapping = mapping
+
+    def __len__(self) -> int:
+        return self.params[0].shape[0]
+
+    def _only(self) -> None:
+        if len(self) != 1:
+            raise ValueError(f"this NBRDF holds {len(self)} materials; index one first, e.g. nbrdf[0]")
+
+    def __getitem__(self, index: int) -> NBRDF:
+        return NBRDF([p[[index]] for p in self.params], self.mapping)
+
+    @torch.no_grad()
+    def mapped(self, coords) -> np.ndarray:
+        """Network output (mapped values) at (H, D) ``(..., 6)`` → ``(..., 3)``."""
+        self._only()
+        coords = torch.as_tensor(np.asarray(coords, dtype=np.float32))
+        flat = coords.reshape(1, -1, N_INPUTS)
+        out = torch.cat([nbrdf_forward(self.params, chunk) for chunk in flat.split(1 << 18, dim=1)], dim=1)
+        return out.reshape(*coords.shape[:-1], N_OUTPUTS).numpy().astype(np.float64)
+
+    def __call__(self, wi, wo) -> np.ndarray:
+        """Reflectance at direction pairs, each ``(..., 3)`` → RGB ``(..., 3)``; 0 below the horizon."""
+        self._only()
+        wi, wo = np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64)
+        h, d = half_diff_vectors(wi, wo)
+        rgb = self.mapping.inverse(self.mapped(np.concatenate([h, d], axis=-1)), self.mapping.reference_at(wi, wo))
+        above = (wi[..., 2] > 0) & (wo[..., 2] > 0)
+        return np.where(above[..., None], rgb, 0.0)
+
+    def merl_table(self) -> np.ndarray:
+        """The material at every MERL bin, ``(3, 90, 90, 180)``, missing bins marked as MERL does."""
+        self._only()
+        mapped = self.mapped(bin_geometry().half_diff.numpy()).T
+        table = self.mapping.inverse(mapped, self.mapping.reference_bins()).reshape(SHAPE)
+        missing = ~merl_above_horizon()
+        for channel, scale in enumerate(CHANNEL_SCALES):
+            table[channel][missing] = -1.0 * scale
+        assert table.shape[1:] == SHAPE[1:] and table[0].size == N_BINS
+        return table
+
+    def to_merl(self, path: str | os.PathLike) -> None:
+        """Writes the material as a MERL file (atomically)."""
+        write_merl(path, self.merl_table())
