@@ -44,3 +44,30 @@ def merl_file(tmp_path, merl_table) -> Path:
 def unit_vectors(rng: np.random.Generator, n: int) -> np.ndarray:
     v = rng.normal(size=(n, 3))
     return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def toy_table(rng: np.random.Generator) -> np.ndarray:
+    """A Lambert + normalised Blinn–Phong material at the MERL bins, missing bins marked."""
+    import frenbrdf
+    from frenbrdf.merl import CHANNEL_SCALES
+
+    grid = frenbrdf.merl_bin_grid()
+    diffuse, specular, exponent = rng.uniform(0.05, 0.8, 3), rng.uniform(0.05, 1.0), rng.uniform(10, 300)
+    lobe = specular * (exponent + 2) / (2 * np.pi) * np.cos(grid[..., 0]) ** exponent
+    table = np.stack([diffuse[c] / np.pi + lobe for c in range(3)])
+    missing = ~frenbrdf.merl_above_horizon()
+    for c in range(3):
+        table[c][missing] = -CHANNEL_SCALES[c]
+    return table
+
+
+@pytest.fixture(scope="session")
+def toy_materials(tmp_path_factory) -> Path:
+    """A folder of 8 small-but-real MERL files (Lambert + Blinn–Phong, random colours)."""
+    import frenbrdf
+
+    folder = tmp_path_factory.mktemp("toy-materials")
+    rng = np.random.default_rng(7)
+    for i in range(8):
+        frenbrdf.write_merl(folder / f"toy-{i:02d}.binary", toy_table(rng))
+    return folder

@@ -43,18 +43,113 @@ def _torch_version() -> str:
     return torch.__version__
 
 
+def _synth(args: argparse.Namespace) -> int:
+    from .synth import write_bank
+
+    paths = write_bank(args.out_dir, n=args.n, seed=args.seed, progress=not args.quiet)
+    print(f"wrote {len(paths)} MERL files to {args.out_dir}")
+    return 0
+
+
+def _import_nbrdf(args: argparse.Namespace) -> int:
+    from .nbrdf_import import import_nbrdf
+
+    paths = import_nbrdf(args.weights, args.out_dir, progress=not args.quiet)
+    print(f"wrote {len(paths)} MERL files to {args.out_dir}")
+    return 0
+
+
+def _train(args: argparse.Namespace) -> int:
+    from .training import config_for, load_config, train
+
+    overrides = {"method": args.method, "data": args.data, "out": args.out, "epochs": args.epochs,
+                 "seed": args.seed, "device": args.device}
+    if args.config:
+        cfg = load_config(args.config, **overrides)
+    else:
+        cfg = config_for(args.method or "frenbrdf", **{k: v for k, v in overrides.items()
+                                                        if v is not None and k != "method"})
+    cfg.progress = not args.quiet
+    result = train(cfg, resume=args.resume)
+    summary = {"run_dir": str(result.run_dir), "method": cfg.method, "best_epoch": result.best_epoch,
+               "best_val_rec": result.best_val, "seconds": round(result.seconds, 1)}
+    print(json.dumps(summary, indent=2) if args.json else
+          f"{cfg.method}: best validation L_rec {result.best_val:.4g} at epoch {result.best_epoch}; "
+          f"{result.seconds:.0f} s; run folder {result.run_dir}")
+    return 0
+
+
+def _fit_nbrdf(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .fitting import FitConfig, fit_nbrdf, save_nbrdf
+    from .merl import read_merl
+
+    config = FitConfig(hidden=tuple(int(h) for h in args.hidden.split(",")), epochs=args.epochs, seed=args.seed)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for path in map(Path, args.materials):
+        nbrdf = fit_nbrdf(read_merl(path), config, progress=not args.quiet)
+        save_nbrdf(out / f"{path.stem}.pt", nbrdf)
+        if args.merl:
+            nbrdf.to_merl(out / f"{path.stem}.binary")
+        print(f"fitted {path.name} -> {out / (path.stem + '.pt')}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="frenbrdf", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     info = commands.add_parser("info", help="report the installation and run a self-check")
     info.add_argument("--json", action="store_true", help="print the report as JSON")
     info.set_defaults(run=_info)
+
+    synth = commands.add_parser("synth", help="write the default bank of analytic materials as MERL files")
+    synth.add_argument("out_dir", help="folder to write to (created)")
+    synth.add_argument("--n", type=int, default=100, help="number of materials (default 100)")
+    synth.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    synth.add_argument("--quiet", action="store_true", help="no progress bar")
+    synth.set_defaults(run=_synth)
+
+    imported = commands.add_parser("import-nbrdf", help="evaluate published NBRDF weights (Keras .h5) "
+                                   "at every MERL bin and write MERL files")
+    imported.add_argument("weights", nargs="+", help=".h5 files")
+    imported.add_argument("out_dir", help="folder to write to (created)")
+    imported.add_argument("--quiet", action="store_true", help="no progress bar")
+    imported.set_defaults(run=_import_nbrdf)
+
+    train = commands.add_parser("train", help="train FreNBRDF or a baseline on a folder of MERL files")
+    train.add_argument("--method", choices=("frenbrdf", "nbrdf", "hyperbrdf"), help="default: frenbrdf")
+    train.add_argument("--data", help="folder of MERL files")
+    train.add_argument("--out", help="run folder (created)")
+    train.add_argument("--config", help="JSON file with any TrainConfig keys, over the method's preset")
+    train.add_argument("--epochs", type=int)
+    train.add_argument("--seed", type=int)
+    train.add_argument("--device", choices=("cpu", "cuda", "auto"))
+    train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+    train.add_argument("--json", action="store_true", help="print the summary as JSON")
+    train.add_argument("--quiet", action="store_true", help="no progress bars")
+    train.set_defaults(run=_train)
+
+    fit = commands.add_parser("fit-nbrdf", help="fit one NBRDF per material (Sztrajman et al.; the quality ceiling)")
+    fit.add_argument("materials", nargs="+", help="MERL files")
+    fit.add_argument("--out", required=True, help="folder for the fitted NBRDFs (<name>.pt)")
+    fit.add_argument("--hidden", default="21,21", help="hidden widths (default 21,21)")
+    fit.add_argument("--epochs", type=int, default=10)
+    fit.add_argument("--seed", type=int, default=0)
+    fit.add_argument("--merl", action="store_true", help="also write each fit as a MERL file")
+    fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    fit.set_defaults(run=_fit_nbrdf)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    return args.run(args)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.run(args)
+    except (ValueError, OSError) as error:  # bad input: a clear message, not a traceback
+        parser.exit(2, f"frenbrdf {args.command}: error: {error}\n")
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ from __future__ import annotations
 import functools
 import json
 import os
-import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -149,14 +148,16 @@ class LogRelativeMapping:
         if config.reference == "per_channel":
             reference = np.nan_to_num(np.nanmedian(tables.transpose(1, 0, 2).reshape(3, -1), axis=1))
         else:
-            reference = np.empty(tables.shape[1:], dtype=np.float64)
-            step = 1 << 16  # bounds the temporary copies of the median
-            for start in range(0, tables.shape[2], step):
-                chunk = tables[:, :, start:start + step]
-                with warnings.catch_warnings():  # bins missing in every material get f_ref = 0
-                    warnings.simplefilter("ignore", RuntimeWarning)
-                    reference[:, start:start + step] = np.nan_to_num(np.nanmedian(chunk, axis=0)) \
-                        if np.isnan(chunk).any() else np.median(chunk, axis=0)
+            # Bins missing in no material take the plain median, bins missing in some the
+            # median of the others (slower), bins missing in all get f_ref = 0.
+            missing = np.isnan(tables)
+            some, every = missing.any(axis=0), missing.all(axis=0)
+            reference = np.zeros(tables.shape[1:], dtype=np.float64)
+            complete = ~some
+            reference[complete] = np.median(tables[:, complete], axis=0)
+            partial = some & ~every
+            if partial.any():
+                reference[partial] = np.nanmedian(tables[:, partial], axis=0)
             reference = reference.reshape(SHAPE)
         return cls(np.maximum(reference, 0.0), config.epsilon)
 

@@ -329,9 +329,6 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
     files = {path.stem: path for path in material_files}
     device = _device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")))
     rank_info = _Distributed.start(device)
-    if cfg.batch_materials % rank_info.world:
-        raise ValueError(f"batch_materials ({cfg.batch_materials}) must be divisible by the number of ranks "
-                         f"({rank_info.world})")
 
     checkpoint = load_checkpoint(run_dir / "last.pt") if resume else None
     if checkpoint is not None:
@@ -350,8 +347,14 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
         save_json(run_dir / "config.json", to_dict(cfg))
         save_json(run_dir / "split.json", split.to_json())
 
-    mapping, bank, truth = _prepare(cfg, split, files, rank_info)
     n_train = len(split.train)
+    # Full batches only (the last partial one is dropped; each epoch reshuffles), so that
+    # every step's batch splits evenly across ranks.
+    batch_size = min(cfg.batch_materials, n_train)
+    if batch_size % rank_info.world:
+        raise ValueError(f"a batch of {batch_size} materials does not split evenly across {rank_info.world} ranks; "
+                         "choose batch_materials divisible by the number of ranks")
+    mapping, bank, truth = _prepare(cfg, split, files, rank_info)
 
     torch.manual_seed(cfg.seed)
     network = AutoEncoder(cfg.model).to(device)
@@ -375,7 +378,10 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
                 "model": network.state_dict(), "optimizer": optimizer.state_dict(),
                 "generator": generator.get_state(), "epoch": epoch, "best": best, "history": history}
 
-    steps_per_epoch = math.ceil(n_train / cfg.batch_materials)
+    if not history:  # the untrained model's validation loss: the baseline every epoch improves on
+        initial = evaluate_split(network, frequency, cfg, bank, truth, range(n_train, len(bank)), device)
+        history.append({"epoch": -1, **{f"val_{k}": v for k, v in initial.items()}})
+    steps_per_epoch = n_train // batch_size
     bar = tqdm(total=(cfg.epochs - first_epoch) * steps_per_epoch, desc=f"train {cfg.method}",
                disable=not (cfg.progress and rank_info.main))
     for epoch in range(first_epoch, cfg.epochs):
@@ -383,7 +389,7 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
         sums: dict[str, float] = {}
         order = torch.randperm(n_train, generator=generator)
         for step_in_epoch in range(steps_per_epoch):
-            batch = order[step_in_epoch * cfg.batch_materials:(step_in_epoch + 1) * cfg.batch_materials].tolist()
+            batch = order[step_in_epoch * batch_size:(step_in_epoch + 1) * batch_size].tolist()
             # Every rank draws the whole batch's samples (same generator), then keeps its share:
             # the run equals a single-process run on the same seed.
             context = bank.sample(batch, cfg.context_samples, generator)

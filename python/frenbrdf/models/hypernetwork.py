@@ -31,7 +31,9 @@ class HyperNetwork(nn.Module):
 
     Each head's last layer starts small (``last_layer_scale``) with its bias set to a
     standard initialisation of the NBRDF tensor, so every latent first decodes to about
-    the same well-conditioned random NBRDF and the heads learn deviations from it.
+    the same well-conditioned random NBRDF and the heads learn deviations from it. The
+    NBRDF's output layer starts at zero instead: the first prediction is the mapped value
+    0, i.e. the reference (median) BRDF.
     """
 
     def __init__(self, latent: int, shapes: list[tuple[int, ...]], config: DecoderConfig):
@@ -39,12 +41,15 @@ class HyperNetwork(nn.Module):
         self.shapes = [tuple(shape) for shape in shapes]
         self.heads = nn.ModuleList(mlp([latent, *config.hidden, math.prod(shape)]) for shape in self.shapes)
         with torch.no_grad():
-            for head, shape in zip(self.heads, self.shapes):
+            for index, (head, shape) in enumerate(zip(self.heads, self.shapes)):
                 last = head[-1]
                 last.weight.mul_(config.last_layer_scale)
-                fan_in = shape[-1] if len(shape) == 2 else shape[0]
-                bound = 1.0 / math.sqrt(fan_in)  # torch.nn.Linear's default
-                last.bias.uniform_(-bound, bound) if len(shape) == 2 else last.bias.zero_()
+                output_layer = index >= len(self.shapes) - 2
+                if len(shape) == 2 and not output_layer:
+                    bound = 1.0 / math.sqrt(shape[1])  # torch.nn.Linear's default
+                    last.bias.uniform_(-bound, bound)
+                else:
+                    last.bias.zero_()
 
     def forward(self, z: torch.Tensor) -> list[torch.Tensor]:
         return [head(z).reshape(z.shape[0], *shape) for head, shape in zip(self.heads, self.shapes)]

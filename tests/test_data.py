@@ -1,0 +1,93 @@
+"""Data: material folders, the split, the log-relative mapping and sampling."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from hypothesis import given
+from hypothesis import strategies as st
+
+import frenbrdf
+from frenbrdf.data import (N_BINS, LogRelativeMapping, MappingConfig, Split, bin_geometry, list_materials, mapped_bank,
+                           read_tables, split_materials)
+
+
+def test_split_is_70_10_20_disjoint_and_reproducible():
+    names = [f"m{i:03d}" for i in range(100)]
+    split = split_materials(names, seed=3)
+    assert (len(split.train), len(split.val), len(split.test)) == (70, 10, 20)
+    assert set(split.train) | set(split.val) | set(split.test) == set(names)
+    assert not set(split.train) & set(split.val) and not set(split.train) & set(split.test)
+    assert split == split_materials(list(reversed(names)), seed=3)
+    assert split != split_materials(names, seed=4)
+    assert Split.from_json(split.to_json()) == split
+
+
+@pytest.mark.parametrize("n", [0, 1, 2])
+def test_split_needs_three_materials(n):
+    with pytest.raises(ValueError, match="at least 3 materials"):
+        split_materials([f"m{i}" for i in range(n)], seed=0)
+
+
+def test_list_materials_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        list_materials(tmp_path / "absent")
+    with pytest.raises(ValueError, match="no MERL files"):
+        list_materials(tmp_path)
+
+
+@given(st.floats(0, 1e4, allow_subnormal=False), st.floats(0, 10))
+def test_mapping_inverts_exactly(f, reference):
+    mapping = LogRelativeMapping(np.full(3, reference))
+    for value in (f, 0.0):
+        mapped = mapping.forward(np.full(3, value), mapping.reference)
+        assert np.all(np.isfinite(mapped))
+        np.testing.assert_allclose(mapping.inverse(mapped, mapping.reference), value, rtol=1e-12, atol=1e-15)
+
+
+def test_mapping_rejects_bad_reference():
+    with pytest.raises(ValueError, match="shape"):
+        LogRelativeMapping(np.zeros(4))
+    with pytest.raises(ValueError, match="finite and non-negative"):
+        LogRelativeMapping(np.array([0.1, np.nan, 0.1]))
+    with pytest.raises(ValueError, match="epsilon"):
+        MappingConfig(epsilon=0)
+
+
+def test_reference_is_the_median_over_valid_bins(toy_materials):
+    files = list_materials(toy_materials)[:5]
+    tables = read_tables(files, progress=False)
+    assert np.array_equal(np.isnan(tables[0, 0]), ~frenbrdf.merl_above_horizon().reshape(-1))
+    mapping = LogRelativeMapping.from_tables(tables, MappingConfig())
+    valid = frenbrdf.merl_above_horizon()
+    np.testing.assert_allclose(mapping.reference[:, valid], np.median(tables[:, :, valid.reshape(-1)], axis=0))
+    assert np.all(mapping.reference[:, ~valid] == 0)  # missing everywhere: f_ref = 0
+    per_channel = LogRelativeMapping.from_tables(tables, MappingConfig(reference="per_channel"))
+    assert per_channel.reference.shape == (3,)
+
+
+def test_samples_never_touch_missing_bins(toy_materials):
+    files = list_materials(toy_materials)[:3]
+    tables = read_tables(files, progress=False)
+    bank = mapped_bank([f.stem for f in files], tables, LogRelativeMapping.from_tables(tables, MappingConfig()))
+    batch = bank.sample([0, 2], 20_000, torch.Generator().manual_seed(0))
+    assert batch.coords.shape == (2, 20_000, 6) and batch.values.shape == (2, 20_000, 3)
+    assert torch.isfinite(batch.values).all()
+    geometry = bin_geometry()
+    valid = torch.from_numpy(frenbrdf.merl_above_horizon().reshape(-1))
+    valid_rows = {row.tobytes() for row in geometry.half_diff[valid].numpy()}
+    assert all(row.tobytes() in valid_rows for row in batch.coords.reshape(-1, 6)[::10].numpy())
+    assert (batch.cos_in > 0).all() and (batch.cos_in <= 1).all()
+    assert batch.encoder_input().shape == (2, 20_000, 9)
+
+
+def test_bin_geometry_matches_the_nbrdf_convention():
+    geometry = bin_geometry()
+    assert geometry.half_diff.shape == (N_BINS, 6)
+    theta_h, theta_d, phi_d = frenbrdf.merl_bin_angles()
+    i, j, k = 40, 30, 100
+    flat = k + 180 * (j + 90 * i)
+    expected = [np.sin(theta_h[i]), 0, np.cos(theta_h[i]),
+                np.sin(theta_d[j]) * np.cos(phi_d[k]), np.sin(theta_d[j]) * np.sin(phi_d[k]), np.cos(theta_d[j])]
+    np.testing.assert_allclose(geometry.half_diff[flat].numpy(), expected, atol=1e-6)

@@ -1,0 +1,106 @@
+"""Models: batched NBRDF, set encoder, hypernetwork, the public Model API and interpolation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+import frenbrdf
+from frenbrdf.data import LogRelativeMapping
+from frenbrdf.models import (AutoEncoder, DecoderConfig, EncoderConfig, HyperNetwork, Model, ModelConfig, NBRDF,
+                             NBRDFConfig, SetEncoder, interpolate, nbrdf_forward)
+
+from .conftest import unit_vectors
+
+
+def random_params(config: NBRDFConfig, batch: int, seed: int = 0, dtype=torch.float32) -> list[torch.Tensor]:
+    generator = torch.Generator().manual_seed(seed)
+    return [torch.randn(batch, *shape, generator=generator, dtype=dtype) * 0.5 for shape in config.shapes()]
+
+
+def test_nbrdf_sizes_match_the_published_networks():
+    assert NBRDFConfig((21, 21)).n_weights == 675
+    assert NBRDFConfig((60, 60, 60, 60)).n_weights == 11_583
+    with pytest.raises(ValueError, match="positive"):
+        NBRDFConfig(())
+
+
+def test_batched_nbrdf_equals_one_material_at_a_time():
+    config = NBRDFConfig((7, 5, 9))
+    params = random_params(config, batch=4)
+    coords = torch.randn(4, 50, 6)
+    batched = nbrdf_forward(params, coords)
+    for b in range(4):
+        x = coords[b]
+        for layer in range(0, len(params), 2):
+            x = x @ params[layer][b].T + params[layer + 1][b]
+            x = torch.relu(x) if layer < len(params) - 2 else x
+        torch.testing.assert_close(batched[b], x)
+
+
+def test_set_encoder_is_order_invariant_and_takes_any_set_size():
+    encoder = SetEncoder(EncoderConfig(hidden=(16, 16), latent=5))
+    samples = torch.randn(3, 100, 9)
+    z = encoder(samples)
+    assert z.shape == (3, 5)
+    torch.testing.assert_close(encoder(samples[:, torch.randperm(100)]), z)
+    assert encoder(samples[:, :1]).shape == (3, 5)
+
+
+def test_hypernetwork_heads_produce_every_tensor():
+    shapes = NBRDFConfig((8, 8)).shapes()
+    decoder = HyperNetwork(6, shapes, DecoderConfig(hidden=(16,)))
+    with torch.no_grad():
+        params = decoder(torch.randn(4, 6))
+    assert [tuple(p.shape) for p in params] == [(4, *s) for s in shapes]
+    # The last layers start small: latents decode to nearly the same NBRDF at first.
+    spread = max(float((p[0] - p[1]).abs().max()) for p in params)
+    scale = max(float(p.abs().max()) for p in params)
+    assert spread < 0.5 * scale
+
+
+def test_nbrdf_object_reflectance_and_merl_table(tmp_path):
+    rng = np.random.default_rng(0)
+    mapping = LogRelativeMapping(np.full(3, 0.2))
+    nbrdf = NBRDF(random_params(NBRDFConfig((8,)), batch=2), mapping)
+    with pytest.raises(ValueError, match="holds 2 materials"):
+        nbrdf(np.array([0, 0, 1.0]), np.array([0, 0, 1.0]))
+    one = nbrdf[1]
+    wi, wo = unit_vectors(rng, 1000), unit_vectors(rng, 1000)
+    rgb = one(wi, wo)
+    below = (wi[:, 2] <= 0) | (wo[:, 2] <= 0)
+    assert rgb.shape == (1000, 3) and np.all(rgb >= 0) and np.all(rgb[below] == 0)
+    h, d = frenbrdf.half_diff_vectors(wi, wo)
+    expected = mapping.inverse(one.mapped(np.concatenate([h, d], axis=-1)), mapping.reference)
+    np.testing.assert_allclose(rgb[~below], expected[~below], rtol=1e-6)
+    one.to_merl(tmp_path / "decoded.binary")
+    table = frenbrdf.read_merl(tmp_path / "decoded.binary")
+    assert np.array_equal(frenbrdf.valid_mask(table), frenbrdf.merl_above_horizon())
+
+
+def test_model_encode_decode_and_input_errors():
+    config = ModelConfig(nbrdf=NBRDFConfig((8,)), encoder=EncoderConfig((16,), 4), decoder=DecoderConfig((16,)))
+    model = Model(AutoEncoder(config), LogRelativeMapping(np.full(3, 0.1)), config)
+    rng = np.random.default_rng(1)
+    wi, wo = unit_vectors(rng, 200), unit_vectors(rng, 200)
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    z = model.encode(rng.uniform(0, 1, (200, 3)), (wi, wo))
+    assert z.shape == (4,) and np.all(np.isfinite(z))
+    assert len(model.decode(np.stack([z, z]))) == 2
+    with pytest.raises(ValueError, match="finite and ≥ 0"):
+        model.encode(np.full((200, 3), -1.0), (wi, wo))
+    with pytest.raises(ValueError, match="shape"):
+        model.encode(np.ones((200, 4)), (wi, wo))
+    with pytest.raises(ValueError, match="z must be finite"):
+        model.decode(np.full(4, np.nan))
+
+
+def test_interpolate_endpoints_and_range():
+    z_a, z_b = np.zeros(3), np.arange(3.0)
+    np.testing.assert_array_equal(interpolate(z_a, z_b, 0), z_a)
+    np.testing.assert_array_equal(interpolate(z_a, z_b, 1), z_b)
+    assert interpolate(z_a, z_b, [0, 0.5, 1]).shape == (3, 3)
+    with pytest.raises(ValueError, match="extrapolate=True"):
+        interpolate(z_a, z_b, 1.5)
+    np.testing.assert_array_equal(interpolate(z_a, z_b, 2.0, extrapolate=True), 2 * z_b)

@@ -1,0 +1,150 @@
+"""Training: a tiny run learns, resumes exactly, stops on NaN, refuses bad configs, runs under DDP."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+import frenbrdf
+from frenbrdf import cli, training
+from frenbrdf.data import list_materials
+from frenbrdf.training import TrainingDiverged, config_for, load_config, load_checkpoint, train
+
+
+def tiny(method: str, data: Path, out: Path, **overrides):
+    """A config that trains in seconds on the CPU."""
+    settings = dict(data=str(data), out=str(out), epochs=4, batch_materials=2, lr=3e-3, context_samples=256,
+                    query_samples=512, cache_dir=str(out.parent / "cache"), progress=False)
+    cfg = config_for(method, **{**settings, **overrides})
+    cfg.model.nbrdf.hidden = (16, 16)
+    cfg.model.encoder.hidden, cfg.model.encoder.latent = (32, 32), 8
+    cfg.model.decoder.hidden = (32,)
+    cfg.loss.frequency.lmax, cfg.loss.frequency.slices = 11, (0, 30, 60)
+    return cfg
+
+
+def test_tiny_frenbrdf_training_loss_falls(toy_materials, tmp_path):
+    result = train(tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=15, split=(0.5, 0.25, 0.25)))
+    untrained = result.history[0]
+    assert untrained["epoch"] == -1
+    assert result.best_val < 0.8 * untrained["val_rec"], [epoch["val_rec"] for epoch in result.history]
+    assert all(epoch["train_fre"] > 0 for epoch in result.history[1:])
+
+
+@pytest.mark.parametrize("method", ["frenbrdf", "nbrdf", "hyperbrdf"])
+def test_every_method_writes_a_loadable_run(method, toy_materials, tmp_path):
+    cfg = tiny(method, toy_materials, tmp_path / method, epochs=2)
+    result = train(cfg)
+    assert ("train_fre" in result.history[-1]) == (method == "frenbrdf")
+    for name in ("config.json", "split.json", "history.json", "best.pt", "last.pt"):
+        assert (result.run_dir / name).exists(), name
+    assert not list(result.run_dir.glob(".*.tmp"))
+    split = json.loads((result.run_dir / "split.json").read_text())
+    assert len(split["train"]) + len(split["val"]) + len(split["test"]) == 8
+    model = frenbrdf.Model.load(result.run_dir)
+    assert model.method == method and model.config.nbrdf.hidden == cfg.model.nbrdf.hidden
+
+
+def test_resume_reproduces_the_uninterrupted_run(toy_materials, tmp_path):
+    whole = train(tiny("frenbrdf", toy_materials, tmp_path / "whole"))
+    train(tiny("frenbrdf", toy_materials, tmp_path / "parts", epochs=2))
+    resumed = train(tiny("frenbrdf", toy_materials, tmp_path / "parts"), resume=True)
+    assert resumed.history == whole.history
+    a, b = load_checkpoint(tmp_path / "whole" / "last.pt"), load_checkpoint(tmp_path / "parts" / "last.pt")
+    for name, tensor in a["model"].items():
+        assert torch.equal(tensor, b["model"][name]), name
+
+
+def test_nan_loss_stops_with_the_step_and_term_and_keeps_the_checkpoint(toy_materials, tmp_path, monkeypatch):
+    cfg = tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=3)
+    calls = {"n": 0}
+    real = training.reconstruction_loss
+
+    def poisoned(*args, **kwargs):
+        value = real(*args, **kwargs)
+        if torch.is_grad_enabled():  # a training step, not validation
+            calls["n"] += 1
+            if calls["n"] == 4:  # 2 steps per epoch: the second step of epoch 1
+                return value * float("nan")
+        return value
+
+    monkeypatch.setattr(training, "reconstruction_loss", poisoned)
+    with pytest.raises(TrainingDiverged, match=r"step 3: loss term\(s\) \['rec'\]"):
+        train(cfg)
+    checkpoint = load_checkpoint(tmp_path / "run" / "last.pt")
+    assert checkpoint["epoch"] == 0
+    assert all(torch.isfinite(t).all() for t in checkpoint["model"].values())
+
+
+def test_bad_configs_fail_before_any_work(toy_materials, tmp_path):
+    with pytest.raises(ValueError, match="method must be one of"):
+        config_for("gan")
+    with pytest.raises(ValueError, match="epochs must be ≥ 1"):
+        config_for("frenbrdf", epochs=0)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        train(tiny("nbrdf", tmp_path / "absent", tmp_path / "run"))
+    with pytest.raises(ValueError, match="no MERL files"):
+        train(tiny("nbrdf", tmp_path, tmp_path / "run"))
+    two = tmp_path / "two"
+    two.mkdir()
+    for path in list_materials(toy_materials)[:2]:
+        (two / path.name).symlink_to(path)
+    with pytest.raises(ValueError, match="at least 3 materials"):
+        train(tiny("nbrdf", two, tmp_path / "run"))
+    config_file = tmp_path / "config.json"
+    config_file.write_text(json.dumps({"epochs": 2, "model": {"nbrdf": {"hiden": [8]}}}))
+    with pytest.raises(ValueError, match=r"unknown key\(s\) \['hiden'\]"):
+        load_config(config_file)
+    config_file.write_text(json.dumps({"method": "hyperbrdf", "epochs": 2}))
+    loaded = load_config(config_file, data="d", out="o")
+    assert loaded.model.nbrdf.hidden == (60, 60, 60, 60) and loaded.epochs == 2 and loaded.lr == 5e-5
+    assert not (tmp_path / "run").exists()
+
+
+def test_cli_train_and_resume(toy_materials, tmp_path, capsys):
+    config_file = tmp_path / "tiny.json"
+    config_file.write_text(json.dumps(training.to_dict(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1))))
+    argv = ["train", "--config", str(config_file), "--json", "--quiet"]
+    assert cli.main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["best_epoch"] == 0
+    assert cli.main([*argv, "--epochs", "2", "--resume"]) == 0
+    assert json.loads(capsys.readouterr().out)["best_epoch"] in (0, 1)
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["train", "--data", str(tmp_path / "absent"), "--out", str(tmp_path / "x"), "--quiet"])
+    assert exit_info.value.code == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+DDP_SCRIPT = """
+import sys, torch
+from tests.test_training import tiny
+from frenbrdf.training import train
+from pathlib import Path
+cfg = tiny("frenbrdf", Path(sys.argv[1]), Path(sys.argv[2]), epochs=2)
+cfg.batch_materials = 4
+train(cfg)
+"""
+
+
+def test_ddp_on_two_cpu_processes_equals_one_process(toy_materials, tmp_path):
+    root = Path(__file__).resolve().parents[1]
+    script = tmp_path / "ddp_train.py"
+    script.write_text(DDP_SCRIPT)
+    env = {**os.environ, "PYTHONPATH": str(root), "OMP_NUM_THREADS": "1"}
+    single = subprocess.run([sys.executable, str(script), str(toy_materials), str(tmp_path / "single")],
+                            env=env, cwd=root, capture_output=True, text=True, timeout=300)
+    assert single.returncode == 0, single.stderr[-2000:]
+    ddp = subprocess.run([sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2",
+                          str(script), str(toy_materials), str(tmp_path / "ddp")],
+                         env=env, cwd=root, capture_output=True, text=True, timeout=300)
+    assert ddp.returncode == 0, ddp.stderr[:3000]
+    a, b = load_checkpoint(tmp_path / "single" / "last.pt"), load_checkpoint(tmp_path / "ddp" / "last.pt")
+    # Same samples, same initialisation; only the order of the gradient sums differs.
+    for name, tensor in a["model"].items():
+        torch.testing.assert_close(b["model"][name], tensor, rtol=1e-4, atol=1e-5)
