@@ -1,0 +1,345 @@
+"""The synthetic material bank: determinism, physics of the analytic BRDFs, MERL files."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+from collections import Counter
+
+import numpy as np
+import pytest
+
+import frenbrdf
+from frenbrdf import synth
+from frenbrdf.merl import CHANNEL_SCALES, SHAPE
+from frenbrdf.synth import KIND_SHARES, KINDS, METALS, AnalyticMaterial
+
+from .conftest import unit_vectors
+
+SILVER, GOLD = METALS["silver"], METALS["gold"]
+WHITE = (1.0, 1.0, 1.0)
+
+#: Hand-made materials at the edges of the parameter ranges, one or more per kind.
+EXTREMES = {
+    "white-lambert": AnalyticMaterial("white-lambert", diffuse=WHITE),
+    "white-mirror-plastic": AnalyticMaterial("white-mirror-plastic", diffuse=WHITE, specular=1.0, roughness=0.01,
+                                             ior=1.7),
+    "white-rough-plastic": AnalyticMaterial("white-rough-plastic", diffuse=WHITE, specular=1.0, roughness=0.6,
+                                            ior=1.7),
+    "mirror-silver": AnalyticMaterial("mirror-silver", metal_n=SILVER[0], metal_k=SILVER[1], roughness=0.01),
+    "rough-gold": AnalyticMaterial("rough-gold", metal_n=GOLD[0], metal_k=GOLD[1], roughness=0.6),
+    "white-fabric": AnalyticMaterial("white-fabric", diffuse=WHITE, sheen=WHITE, sheen_roughness=0.3),
+    "coated-white": AnalyticMaterial("coated-white", diffuse=WHITE, coat=1.0, coat_roughness=0.01, coat_ior=1.6),
+    "coated-silver": AnalyticMaterial("coated-silver", metal_n=SILVER[0], metal_k=SILVER[1], roughness=0.2,
+                                      coat=1.0, coat_roughness=0.1),
+}
+#: White dielectric bases are energy-preserving: they reflect all the light they receive.
+PRESERVING = ("white-lambert", "white-mirror-plastic", "white-rough-plastic", "white-fabric")
+
+
+@pytest.fixture(scope="module")
+def bank() -> list[AnalyticMaterial]:
+    return synth.material_bank(100, seed=0)
+
+
+@pytest.fixture(scope="module")
+def one_of_each_kind(bank) -> dict[str, AnalyticMaterial]:
+    return {kind: next(m for m in bank if m.kind == kind) for kind in KINDS}
+
+
+def directional_albedo(material: AnalyticMaterial, theta_i: float, n: int = 128) -> np.ndarray:
+    """∫ f cos θ_o dω_o by deterministic multiple importance sampling, RGB.
+
+    Strategies: cosine-weighted and uniform directions (the latter for lobes that peak at
+    grazing, such as sheen), and one GGX half-vector density per roughness
+    the material has (so mirror-like lobes are resolved), each on an n × n grid of
+    stratum midpoints, combined with the balance heuristic.
+    """
+    wi = np.array([np.sin(theta_i), 0.0, np.cos(theta_i)])
+    alphas = [material.roughness] if material.metal_n is not None or material.specular > 0 else []
+    alphas += [material.coat_roughness] if material.coat > 0 else []
+    u1, u2 = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n, indexing="ij")
+    u1, phi = u1.reshape(-1), 2 * np.pi * u2.reshape(-1)
+
+    def ggx_d(cos_h, alpha):
+        return alpha**2 / (np.pi * (1 + cos_h**2 * (alpha**2 - 1)) ** 2)
+
+    samples = [np.stack([np.sqrt(u1) * np.cos(phi), np.sqrt(u1) * np.sin(phi), np.sqrt(1 - u1)], axis=-1),
+               np.stack([np.sqrt(1 - u1**2) * np.cos(phi), np.sqrt(1 - u1**2) * np.sin(phi), u1], axis=-1)]
+    for alpha in alphas:
+        cos_h = 1 / np.sqrt(1 + alpha**2 * u1 / (1 - u1))
+        sin_h = np.sqrt(1 - cos_h**2)
+        h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], axis=-1)
+        samples.append(2 * (h @ wi)[:, None] * h - wi)
+    wo = np.concatenate(samples)
+    wo = wo[wo[:, 2] > 0]
+
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    ggx_pdfs = [ggx_d(h[:, 2], a) * h[:, 2] / (4 * np.sum(wo * h, axis=-1)) for a in alphas]
+    pdfs = wo[:, 2] / np.pi + 1 / (2 * np.pi) + sum(ggx_pdfs)
+    f = synth.evaluate(material, wi, wo)
+    return np.sum(f * (wo[:, 2] / pdfs)[:, None], axis=0) / n**2
+
+
+def fresnel_complex(cos, n, k):
+    """Unpolarised Fresnel reflectance from air into n + ik, in complex arithmetic."""
+    eta = n + 1j * k
+    cos_t = np.sqrt(1 - (1 - cos**2) / eta**2 + 0j)
+    r_s = (cos - eta * cos_t) / (cos + eta * cos_t)
+    r_p = (eta * cos - cos_t) / (eta * cos + cos_t)
+    return 0.5 * (np.abs(r_s) ** 2 + np.abs(r_p) ** 2)
+
+
+# --- The bank ------------------------------------------------------------------------
+
+
+def test_the_same_seed_gives_the_same_bank_and_tables():
+    first, second = synth.material_bank(12, seed=3), synth.material_bank(12, seed=3)
+    assert first == second
+    np.testing.assert_array_equal(synth.merl_table(first[0]), synth.merl_table(second[0]))
+
+    other = synth.material_bank(12, seed=4)
+    assert [m.to_dict() for m in other] != [m.to_dict() for m in first]
+    assert not np.array_equal(synth.merl_table(other[0]), synth.merl_table(first[0]))
+
+
+def test_a_bank_of_100_holds_every_kind_in_its_share(bank):
+    assert len(bank) == 100
+    assert Counter(m.kind for m in bank) == {kind: round(100 * share) for kind, share in KIND_SHARES.items()}
+    names = [m.name for m in bank]
+    assert len(set(names)) == 100
+    assert all(re.fullmatch(r"synth-\d{3}-[a-z-]+-(" + "|".join(KINDS) + ")", name) for name in names)
+    assert [int(name.split("-")[1]) for name in names] == list(range(100))
+    changes = sum(a.kind != b.kind for a, b in zip(bank, bank[1:]))
+    assert changes > 50  # shuffled, not grouped by kind
+
+
+def test_bank_parameters_lie_in_physical_ranges(bank):
+    metals = set(METALS.values())
+    for m in bank:
+        if m.kind in ("plastic", "metal"):
+            assert 0.01 <= m.roughness <= 0.6
+        if m.metal_n is not None:
+            assert (m.metal_n, m.metal_k) in metals
+            assert max(m.tint) == pytest.approx(1.0) and min(m.tint) > 0.2
+        if m.kind == "plastic":
+            assert m.specular == 1.0 and 1.4 <= m.ior <= 1.7
+        if m.kind == "coated":
+            assert 0.6 <= m.coat <= 1 and 0.01 <= m.coat_roughness <= 0.15
+        assert max(m.diffuse) <= 0.9
+    # Colours spread like paints: some dark, some bright, moderately saturated on average.
+    albedos = np.array([m.diffuse for m in bank if any(m.diffuse)])
+    assert np.sum(albedos.max(axis=1) < 0.08) >= 5 and np.sum(albedos.max(axis=1) > 0.5) >= 10
+    saturation = 1 - albedos.min(axis=1) ** (1 / 2.2) / albedos.max(axis=1) ** (1 / 2.2)
+    assert 0.25 < saturation.mean() < 0.6
+    roughness = np.array([m.roughness for m in bank if m.kind in ("plastic", "metal")])
+    assert roughness.min() < 0.03 and roughness.max() > 0.3
+    assert len({m.metal_n for m in bank if m.kind == "metal"}) >= 5
+
+
+@pytest.mark.parametrize("n", [5, 6, 7, 11])
+def test_small_banks_still_hold_every_kind(n):
+    bank = synth.material_bank(n, seed=1)
+    assert len(bank) == n and {m.kind for m in bank} == set(KINDS)
+
+
+@pytest.mark.parametrize("n", [1, 2, 4])
+def test_tiny_banks_hold_n_materials(n):
+    assert len(synth.material_bank(n)) == n
+
+
+def test_a_bank_needs_one_material(tmp_path):
+    with pytest.raises(ValueError, match="n >= 1"):
+        synth.material_bank(0)
+    with pytest.raises(ValueError, match="n >= 1"):
+        synth.write_bank(tmp_path / "bank", n=0, progress=False)
+    assert not (tmp_path / "bank").exists()
+
+
+@pytest.mark.parametrize(
+    "fields",
+    [
+        {"name": "a/b"},
+        {"name": "x", "diffuse": (1.2, 0, 0)},
+        {"name": "x", "roughness": 0.0},
+        {"name": "x", "sheen": WHITE, "sheen_roughness": 0.1},
+        {"name": "x", "metal_n": SILVER[0]},
+        {"name": "x", "metal_n": SILVER[0], "metal_k": SILVER[1], "diffuse": (0.5, 0.5, 0.5)},
+    ],
+)
+def test_unphysical_materials_are_refused(fields):
+    with pytest.raises(ValueError):
+        AnalyticMaterial(**fields)
+
+
+def test_top_lobes_that_reflect_more_than_all_light_are_refused():
+    too_bright = AnalyticMaterial("x", specular=1.0, roughness=0.3, sheen=WHITE, sheen_roughness=0.3)
+    with pytest.raises(ValueError, match="more light"):
+        synth.evaluate(too_bright, [0, 0, 1], [0, 0, 1])
+
+
+# --- Physics of the BRDFs ------------------------------------------------------------
+
+
+def every_material(one_of_each_kind):
+    return [*one_of_each_kind.values(), *EXTREMES.values()]
+
+
+def test_evaluate_is_reciprocal_finite_non_negative_and_zero_below_the_horizon(one_of_each_kind):
+    rng = np.random.default_rng(5)
+    wi, wo = unit_vectors(rng, 5000), unit_vectors(rng, 5000)
+    wo[:50] = -wi[:50]  # ω_i = −ω_o: no half vector
+    wo[50:100] = wi[50:100] * [-1, -1, 1]  # mirror configurations: the lobe peaks
+    for material in every_material(one_of_each_kind):
+        f = synth.evaluate(material, wi, wo)
+        assert f.shape == (5000, 3)
+        assert np.all(np.isfinite(f)) and np.all(f >= 0), material.name
+        np.testing.assert_allclose(f, synth.evaluate(material, wo, wi), rtol=1e-12, atol=0, err_msg=material.name)
+        below = (wi[:, 2] <= 0) | (wo[:, 2] <= 0)
+        assert np.all(f[below] == 0) and np.all(f[~below].max(axis=1) > 0), material.name
+
+
+def test_evaluate_broadcasts_directions():
+    material = EXTREMES["rough-gold"]
+    wo = unit_vectors(np.random.default_rng(0), 12).reshape(3, 4, 3)
+    f = synth.evaluate(material, [0.0, 0.0, 1.0], wo)
+    assert f.shape == (3, 4, 3)
+    np.testing.assert_allclose(f, synth.evaluate(material, np.broadcast_to([0.0, 0.0, 1.0], wo.shape), wo))
+
+
+THETA_I = np.radians([0.0, 30.0, 60.0, 80.0, 89.0])
+
+
+def test_no_material_reflects_more_light_than_it_receives(one_of_each_kind):
+    for material in every_material(one_of_each_kind):
+        for theta in THETA_I:
+            albedo = directional_albedo(material, theta)
+            assert np.all(albedo <= 1 + 2e-3), (material.name, np.degrees(theta), albedo)
+            assert np.all(albedo > 0), material.name
+
+
+@pytest.mark.parametrize("name", PRESERVING)
+def test_white_dielectric_bases_reflect_all_light(name):
+    # The coupled matte term receives exactly what the lobes above it do not reflect.
+    for theta in THETA_I:
+        np.testing.assert_allclose(directional_albedo(EXTREMES[name], theta), 1.0, atol=3e-3,
+                                   err_msg=f"{name} at θ_i = {np.degrees(theta):.0f}°")
+
+
+def test_the_albedo_estimator_is_exact_for_lambert():
+    material = AnalyticMaterial("grey", diffuse=(0.2, 0.5, 0.8))
+    for theta in THETA_I:
+        np.testing.assert_allclose(directional_albedo(material, theta), [0.2, 0.5, 0.8], rtol=1e-3)
+
+
+def test_a_coat_brightens_the_highlight_and_dims_the_rest():
+    base = AnalyticMaterial("base", diffuse=(0.5, 0.3, 0.1))
+    coated = dataclasses.replace(base, name="coated", coat=1.0, coat_roughness=0.05)
+    wi = np.array([np.sin(0.5), 0.0, np.cos(0.5)])
+    mirror, off_mirror = wi * [-1, -1, 1], np.array([0.6, 0.0, 0.8])
+    assert np.all(synth.evaluate(coated, wi, mirror) > 10 * synth.evaluate(base, wi, mirror))
+    ratio = synth.evaluate(coated, wi, off_mirror) / synth.evaluate(base, wi, off_mirror)
+    assert np.all((0.85 < ratio) & (ratio < 0.97))  # about (1 − 0.05)² transmitted, in and out
+
+
+def test_metal_reflectance_follows_the_exact_conductor_fresnel():
+    # In the mirror configuration (θ_h = 0) the lobe is F(θ_d) · D(0) · V(θ_d, θ_d).
+    n, k = GOLD
+    alpha = 0.2
+    material = AnalyticMaterial("gold", metal_n=n, metal_k=k, roughness=alpha)
+    theta_d = np.radians(np.linspace(0, 89, 60))
+    cos = np.cos(theta_d)[:, None]
+    wi = np.stack([np.sin(theta_d), 0 * theta_d, np.cos(theta_d)], axis=-1)
+    f = synth.evaluate(material, wi, wi * [-1, -1, 1])
+    d_peak = 1 / (np.pi * alpha**2)
+    visibility = 0.5 / (2 * cos * np.sqrt(alpha**2 + cos**2 * (1 - alpha**2)))
+    expected = fresnel_complex(cos, np.array(n), np.array(k))
+    np.testing.assert_allclose(f / (d_peak * visibility), expected, rtol=1e-10)
+
+
+# --- MERL tables ---------------------------------------------------------------------
+
+
+def test_tables_mark_missing_bins_as_merl_does(tmp_path, one_of_each_kind):
+    table = synth.merl_table(one_of_each_kind["metal"])
+    above = frenbrdf.merl_above_horizon()
+    assert table.shape == SHAPE and table.dtype == np.float64
+    np.testing.assert_array_equal(frenbrdf.valid_mask(table), above)
+    assert np.all(np.isfinite(table[:, above])) and np.all(table[:, above] >= 0)
+
+    path = tmp_path / "metal.binary"
+    frenbrdf.write_merl(path, table)
+    stored = frenbrdf.read_merl(path, physical_units=False)
+    assert np.all(stored[:, ~above] == -1.0)
+    assert np.all(stored[:, above] >= 0)
+    np.testing.assert_array_equal(table[:, ~above], -np.broadcast_to(np.array(CHANNEL_SCALES)[:, None],
+                                                                      (3, int((~above).sum()))))
+
+
+def test_tables_hold_the_brdf_at_the_bin_directions(one_of_each_kind):
+    rng = np.random.default_rng(2)
+    bins = np.stack([rng.integers(0, 90, 3000), rng.integers(0, 90, 3000), rng.integers(0, 180, 3000)], axis=-1)
+    angles = frenbrdf.merl_bin_to_angles(bins)
+    wi, wo = frenbrdf.rusinkiewicz_to_directions(np.stack([angles[:, 0], 0 * angles[:, 0], angles[:, 1],
+                                                           angles[:, 2]], axis=-1))
+    valid = frenbrdf.merl_above_horizon()[tuple(bins.T)]
+    assert 0.5 < valid.mean() < 0.95
+    for material in one_of_each_kind.values():
+        table = synth.merl_table(material)
+        from_table = table[:, bins[:, 0], bins[:, 1], bins[:, 2]].T
+        np.testing.assert_allclose(from_table[valid], synth.evaluate(material, wi, wo)[valid], rtol=1e-9,
+                                   err_msg=material.name)
+        assert np.all(np.isfinite(table)) and np.all(table[:, frenbrdf.merl_above_horizon()] >= 0)
+
+
+def test_a_lambert_table_is_albedo_over_pi():
+    albedo = np.array([0.7, 0.2, 0.05])
+    table = synth.merl_table(AnalyticMaterial("paint", diffuse=albedo))
+    above = frenbrdf.merl_above_horizon()
+    np.testing.assert_allclose(table[:, above], np.broadcast_to((albedo / np.pi)[:, None], (3, int(above.sum()))),
+                               rtol=1e-15)
+
+
+def test_a_metal_table_starts_at_its_fresnel_f0():
+    # At θ_h = θ_d = 0 both directions are the normal: f = F0 · tint / (4π α²).
+    n, k = np.array(METALS["copper"])
+    tint, alpha = (1.0, 0.8, 0.6), 0.1
+    table = synth.merl_table(AnalyticMaterial("copper", metal_n=n, metal_k=k, tint=tint, roughness=alpha))
+    f0 = ((n - 1) ** 2 + k**2) / ((n + 1) ** 2 + k**2)
+    np.testing.assert_allclose(table[:, 0, 0, 0] * 4 * np.pi * alpha**2, f0 * tint, rtol=1e-12)
+    assert f0[0] > f0[1] > f0[2]  # copper is red
+
+
+def test_a_rougher_lobe_has_a_lower_peak_and_wider_tail():
+    def slice_at(alpha):  # θ_d = 30°, φ_d = 90°, along θ_h
+        n, k = METALS["aluminium"]
+        return synth.merl_table(AnalyticMaterial("al", metal_n=n, metal_k=k, roughness=alpha))[1, :, 30, 90]
+
+    smooth, rough = slice_at(0.05), slice_at(0.4)
+    assert smooth[0] > 10 * rough[0]
+    assert rough[60] > 10 * smooth[60]
+    assert np.all(np.diff(smooth[:60]) < 0)  # GGX falls off monotonically away from the peak
+
+
+# --- Writing a bank ------------------------------------------------------------------
+
+
+def test_write_bank_writes_merl_files_and_a_manifest(tmp_path):
+    out = tmp_path / "new" / "bank"
+    paths = synth.write_bank(out, n=3, seed=7, progress=False)
+    bank = synth.material_bank(3, seed=7)
+    assert paths == [out / f"{m.name}.binary" for m in bank]
+    assert sorted(p.name for p in out.iterdir()) == sorted([*(p.name for p in paths), synth.MANIFEST_NAME])
+    for path, material in zip(paths, bank):
+        assert path.stat().st_size == frenbrdf.merl.FILE_BYTES
+        np.testing.assert_allclose(frenbrdf.read_merl(path), synth.merl_table(material), rtol=1e-15)
+
+    manifest = json.loads((out / synth.MANIFEST_NAME).read_text())
+    assert manifest["n"] == 3 and manifest["seed"] == 7
+    assert [entry["file"] for entry in manifest["materials"]] == [p.name for p in paths]
+    field_names = {field.name for field in dataclasses.fields(AnalyticMaterial)}
+    for entry, material in zip(manifest["materials"], bank):
+        assert entry["kind"] == material.kind
+        assert AnalyticMaterial(**{key: entry[key] for key in field_names}) == material
