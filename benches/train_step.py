@@ -25,22 +25,26 @@ from frenbrdf.models import AutoEncoder
 from frenbrdf.training import _Distributed, _prepare, config_for, loss_terms
 
 
-def median_seconds(function, steps: int, device: torch.device) -> float:
-    times = []
-    for i in range(steps + 3):  # 3 warm-up steps
-        if device.type == "cuda":
-            torch.cuda.synchronize()
-        start = time.perf_counter()
-        function()
-        if device.type == "cuda":
-            torch.cuda.synchronize()
-        if i >= 3:
-            times.append(time.perf_counter() - start)
-    return statistics.median(times)
+def median_seconds(functions: dict, steps: int, device: torch.device) -> dict[str, float]:
+    """Median time of each function, calls interleaved so that drift affects all alike."""
+    times: dict[str, list[float]] = {name: [] for name in functions}
+    for i in range(steps + 3):  # 3 warm-up rounds
+        for name, function in functions.items():
+            if device.type == "cuda":
+                torch.cuda.synchronize()
+            start = time.perf_counter()
+            function()
+            if device.type == "cuda":
+                torch.cuda.synchronize()
+            if i >= 3:
+                times[name].append(time.perf_counter() - start)
+    return {name: statistics.median(values) for name, values in times.items()}
 
 
-def time_method(method: str, data: Path, steps: int, device: torch.device) -> dict:
+def time_method(method: str, data: Path, steps: int, device: torch.device, slices=None) -> dict:
     cfg = config_for(method, data=str(data), out="", progress=False, cache_dir=str(data / ".cache"))
+    if slices is not None:
+        cfg.loss.frequency.slices = slices
     files = {path.stem: path for path in list_materials(data)}
     split = split_materials(files, seed=0)
     _, bank, truth = _prepare(cfg, split, files, _Distributed())
@@ -62,22 +66,26 @@ def time_method(method: str, data: Path, steps: int, device: torch.device) -> di
         optimizer.step()
 
     result = {"method": method, "nbrdf_hidden": list(cfg.model.nbrdf.hidden), "batch_materials": len(batch),
-              "samples": [cfg.context_samples, cfg.query_samples], "eta": cfg.loss.eta,
-              "step_s": median_seconds(lambda: step(cfg.loss.eta > 0), steps, device)}
-    if cfg.loss.eta > 0:
-        result["step_without_fre_s"] = median_seconds(lambda: step(False), steps, device)
-        result["fre_added_share"] = result["step_s"] / result["step_without_fre_s"] - 1
-        params = [p.detach().requires_grad_() for p in network(context.encoder_input())[1]]
-        result["fre_nbrdf_eval_s"] = median_seconds(lambda: frequency.predicted_maps(params), steps, device)
-        result["fre_forward_backward_s"] = median_seconds(lambda: frequency(params, true).backward(), steps, device)
+              "samples": [cfg.context_samples, cfg.query_samples], "eta": cfg.loss.eta}
+    if cfg.loss.eta == 0:
+        result["step_s"] = median_seconds({"step": lambda: step(False)}, steps, device)["step"]
+        return result
+    params = [p.detach().requires_grad_() for p in network(context.encoder_input())[1]]
+    timed = median_seconds({"step": lambda: step(True), "without": lambda: step(False),
+                            "nbrdf_eval": lambda: frequency.predicted_maps(params),
+                            "fre": lambda: frequency(params, true).backward()}, steps, device)
+    result.update(step_s=timed["step"], step_without_fre_s=timed["without"],
+                  fre_added_share=timed["step"] / timed["without"] - 1,
+                  fre_nbrdf_eval_s=timed["nbrdf_eval"], fre_forward_backward_s=timed["fre"])
     return result
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path)
-    parser.add_argument("--steps", type=int, default=20)
+    parser.add_argument("--steps", type=int, default=30)
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--slices", help="θ_h bin indices of the L_fre slices, e.g. 0,24,48,72 (default: the config's)")
     parser.add_argument("--out", type=Path, default=Path("bench-results"))
     args = parser.parse_args()
     device = torch.device(args.device)
@@ -88,9 +96,10 @@ def main():
 
             data = Path(scratch)
             write_bank(data, n=16, seed=0, progress=False)
-        results = [time_method(method, data, args.steps, device) for method in ("frenbrdf", "nbrdf", "hyperbrdf")]
+        slices = tuple(int(i) for i in args.slices.split(",")) if args.slices else None
+        results = [time_method(method, data, args.steps, device, slices) for method in ("frenbrdf", "nbrdf", "hyperbrdf")]
     lines = [f"Training step at default settings on {device} (torch threads: {torch.get_num_threads()}), "
-             f"median of {args.steps} steps.", "",
+             f"median of {args.steps} steps; L_fre slices: {args.slices or 'default'}.", "",
              "| method | NBRDF | step (ms) | without L_fre (ms) | L_fre adds |", "|---|---|---|---|---|"]
     for r in results:
         without = f"{1e3 * r['step_without_fre_s']:.1f}" if "step_without_fre_s" in r else "–"

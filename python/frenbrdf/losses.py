@@ -68,8 +68,10 @@ class FrequencyLossConfig:
     """Band limit of the spherical-harmonic expansion."""
     grid: str = "gauss"
     """SHT grid: ``"gauss"`` (nlat = lmax + 1) or ``"equiangular"`` (nlat = lmax + 2); nlon = 2 lmax + 2."""
-    slices: tuple[int, ...] = (0, 6, 12, 24, 36, 48, 60, 72)
-    """θ_h slices as MERL θ_h bin indices (0 … 89); the bins are denser near the specular peak."""
+    slices: tuple[int, ...] = (0, 24, 48, 72)
+    """θ_h slices as MERL θ_h bin indices (0 … 89, θ_h = (i/90)² · 90°: 0°, 6.4°, 25.6°, 57.6°).
+    The cost of L_fre grows linearly with their number: four keep it within 30 % of a
+    training step at the default sizes (``benches/train_step.py``; eight cost 53 %)."""
     k: int = 2
     """Neighbours of the kNN interpolation of the truth."""
     sigma: float = 0.05
@@ -125,31 +127,31 @@ class FrequencyLoss(nn.Module):
         self.config = config
         self.sht = SHTAnalysis(config.nlat, config.nlon, config.lmax, config.grid)
         theta = SHT(config.nlat, config.nlon, config.lmax, config.grid).theta
-        phi = 2 * np.pi * np.arange(config.nlon) / config.nlon
-        theta, phi = np.meshgrid(theta, phi, indexing="ij")
-        # Fold every node into the measured domain: φ_d mod π (reciprocity), θ_d mirrored.
-        inside = theta <= np.pi / 2 + 1e-12
-        folded = _unit(np.minimum(theta, np.pi - theta), np.mod(phi, np.pi)).reshape(-1, 3)
-        use = inside.reshape(-1) | (config.extension == "mirror")
-        # Many nodes fold onto the same direction: evaluate each distinct one once.
-        unique, inverse = np.unique(np.round(folded[use], 12), axis=0, return_inverse=True)
-        gather = np.full(folded.shape[0], len(unique), dtype=np.int64)  # index len(unique) = the zero row
-        gather[use] = inverse.reshape(-1)
+        # Both grids are symmetric about the equator, and nlon is even: the folded function
+        # (φ_d mod π, θ_d mirrored) is fixed by its values on the northern rings (equator
+        # included) at φ ∈ [0, π). Evaluate the NBRDF there only and copy.
+        if not np.allclose(theta[::-1], np.pi - theta, atol=1e-12):
+            raise AssertionError("SHT rings are not symmetric about the equator")
+        self.n_north = (config.nlat + 1) // 2
+        phi = 2 * np.pi * np.arange(config.nlon // 2) / config.nlon
+        directions = _unit(*np.meshgrid(theta[:self.n_north], phi, indexing="ij")).reshape(-1, 3)
         theta_h = merl_bin_angles()[0][list(config.slices)]
         half = _unit(theta_h, np.zeros_like(theta_h))  # φ_h = 0
-        coords = np.concatenate([np.repeat(half, len(unique), axis=0), np.tile(unique, (len(theta_h), 1))], axis=1)
+        coords = np.concatenate([np.repeat(half, len(directions), axis=0), np.tile(directions, (len(half), 1))], axis=1)
         self.register_buffer("node_coords", torch.from_numpy(coords.astype(np.float32)), persistent=False)
-        self.register_buffer("gather", torch.from_numpy(gather), persistent=False)
-        self.n_unique = len(unique)
 
     def predicted_maps(self, params: list[torch.Tensor]) -> torch.Tensor:
         """The decoded NBRDFs on the SHT grid: ``(B, S, 3, nlat, nlon)``."""
-        batch, n_slices = params[0].shape[0], len(self.config.slices)
+        batch, n_slices, config = params[0].shape[0], len(self.config.slices), self.config
         values = nbrdf_forward(params, self.node_coords.expand(batch, -1, -1))
-        values = values.reshape(batch, n_slices, self.n_unique, 3)
-        values = torch.cat([values, values.new_zeros(batch, n_slices, 1, 3)], dim=2)  # the zero row
-        maps = values[:, :, self.gather]  # (B, S, nlat·nlon, 3)
-        return maps.transpose(2, 3).reshape(batch, n_slices, 3, self.config.nlat, self.config.nlon)
+        north = values.reshape(batch, n_slices, self.n_north, config.nlon // 2, 3).permute(0, 1, 4, 2, 3)
+        north = torch.cat([north, north], dim=-1)  # φ + π: reciprocity
+        n_south = config.nlat - self.n_north
+        if config.extension == "mirror":
+            south = north[..., :n_south, :].flip(-2)  # θ → π − θ
+        else:
+            south = north.new_zeros(*north.shape[:-2], n_south, config.nlon)
+        return torch.cat([north, south], dim=-2)
 
     def predicted_coefficients(self, params: list[torch.Tensor]) -> torch.Tensor:
         """``(B, S, 3, ncoeff)``, differentiable."""
