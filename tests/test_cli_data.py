@@ -1,0 +1,69 @@
+"""The data commands: synth, import-nbrdf and fit-nbrdf, through the CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import frenbrdf
+from frenbrdf import cli
+from frenbrdf.fitting import FitConfig, fit_nbrdf, load_nbrdf
+
+from .conftest import SHARED_DATA, toy_table
+
+
+def test_synth_command_writes_a_bank(tmp_path, capsys):
+    assert cli.main(["synth", str(tmp_path / "bank"), "--n", "3", "--seed", "1", "--quiet"]) == 0
+    files = sorted((tmp_path / "bank").glob("*.binary"))
+    assert len(files) == 3 and "wrote 3 MERL files" in capsys.readouterr().out
+    manifest = json.loads((tmp_path / "bank" / "bank.json").read_text())
+    assert manifest["n"] == 3 and manifest["seed"] == 1
+    table = frenbrdf.read_merl(files[0])
+    assert np.array_equal(frenbrdf.valid_mask(table), frenbrdf.merl_above_horizon())
+
+
+def test_synth_command_rejects_bad_n(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["synth", str(tmp_path / "bank"), "--n", "0", "--quiet"])
+    assert exit_info.value.code == 2 and "synth: error" in capsys.readouterr().err
+
+
+def test_import_nbrdf_command(tmp_path, capsys):
+    weights = SHARED_DATA / "merl-nbrdf" / "gold-paint.h5"
+    if not weights.exists():
+        pytest.skip(f"published NBRDF weights not found at {weights} (../shared is absent)")
+    assert cli.main(["import-nbrdf", str(weights), str(tmp_path / "out"), "--quiet"]) == 0
+    table = frenbrdf.read_merl(tmp_path / "out" / "gold-paint.binary")
+    assert np.array_equal(frenbrdf.valid_mask(table), frenbrdf.merl_above_horizon())
+    with pytest.raises(SystemExit):
+        cli.main(["import-nbrdf", str(tmp_path / "absent.h5"), str(tmp_path / "out2"), "--quiet"])
+    assert "absent.h5" in capsys.readouterr().err
+
+
+def test_fit_nbrdf_reproduces_a_material(tmp_path):
+    table = toy_table(np.random.default_rng(3))
+    nbrdf = fit_nbrdf(table, FitConfig(epochs=1), progress=False)
+    fitted = nbrdf.merl_table()
+    valid = frenbrdf.valid_mask(table)
+    def median_relative_error(prediction):
+        return np.median(np.abs(prediction - table[:, valid]) / (table[:, valid] + 1e-2))
+
+    constant = np.median(table[:, valid], axis=1, keepdims=True)  # the best a featureless fit can do
+    assert median_relative_error(fitted[:, valid]) < 0.2 * median_relative_error(constant)
+    assert np.array_equal(frenbrdf.valid_mask(fitted), valid)
+
+
+def test_fit_nbrdf_command_saves_a_loadable_nbrdf(tmp_path, capsys):
+    path = tmp_path / "toy.binary"
+    frenbrdf.write_merl(path, toy_table(np.random.default_rng(4)))
+    assert cli.main(["fit-nbrdf", str(path), "--out", str(tmp_path / "fits"), "--epochs", "1", "--hidden", "8,8",
+                     "--merl", "--quiet"]) == 0
+    nbrdf = load_nbrdf(tmp_path / "fits" / "toy.pt")
+    assert [tuple(p.shape[1:]) for p in nbrdf.params][:2] == [(8, 6), (8,)]
+    written = frenbrdf.read_merl(tmp_path / "fits" / "toy.binary")
+    np.testing.assert_allclose(written, nbrdf.merl_table(), rtol=1e-12)
+    with pytest.raises(ValueError, match="not a saved NBRDF"):
+        (tmp_path / "bad.pt").write_bytes(b"junk")
+        load_nbrdf(tmp_path / "bad.pt")
