@@ -13,7 +13,7 @@ import torch
 
 import frenbrdf
 from frenbrdf import cli, training
-from frenbrdf.data import list_materials
+from frenbrdf.data import list_materials, split_materials
 from frenbrdf.training import TrainingDiverged, config_for, load_config, load_checkpoint, train
 
 
@@ -97,6 +97,15 @@ def test_bad_configs_fail_before_any_work(toy_materials, tmp_path):
         (two / path.name).symlink_to(path)
     with pytest.raises(ValueError, match="at least 3 materials"):
         train(tiny("nbrdf", two, tmp_path / "run"))
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    for path in list_materials(toy_materials)[:4]:
+        (broken / path.name).symlink_to(path)
+    (broken / "truncated.binary").write_bytes(list_materials(toy_materials)[0].read_bytes()[:1000])
+    names = [path.stem for path in list_materials(broken)]
+    seed = next(seed for seed in range(100) if "truncated" not in split_materials(names, seed).test)
+    with pytest.raises(frenbrdf.MerlFormatError, match="truncated.binary"):
+        train(tiny("nbrdf", broken, tmp_path / "run", seed=seed))
     config_file = tmp_path / "config.json"
     config_file.write_text(json.dumps({"epochs": 2, "model": {"nbrdf": {"hiden": [8]}}}))
     with pytest.raises(ValueError, match=r"unknown key\(s\) \['hiden'\]"):

@@ -342,11 +342,6 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
             raise ValueError(f"the run's materials {missing[:5]} are not in {cfg.data}")
     else:
         split = split_materials(files, cfg.seed, cfg.split)
-    if rank_info.main:
-        run_dir.mkdir(parents=True, exist_ok=True)
-        save_json(run_dir / "config.json", to_dict(cfg))
-        save_json(run_dir / "split.json", split.to_json())
-
     n_train = len(split.train)
     # Full batches only (the last partial one is dropped; each epoch reshuffles), so that
     # every step's batch splits evenly across ranks.
@@ -354,7 +349,11 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
     if batch_size % rank_info.world:
         raise ValueError(f"a batch of {batch_size} materials does not split evenly across {rank_info.world} ranks; "
                          "choose batch_materials divisible by the number of ranks")
-    mapping, bank, truth = _prepare(cfg, split, files, rank_info)
+    mapping, bank, truth = _prepare(cfg, split, files, rank_info)  # reads every file: bad data fails here
+    if rank_info.main:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        save_json(run_dir / "config.json", to_dict(cfg))
+        save_json(run_dir / "split.json", split.to_json())
 
     torch.manual_seed(cfg.seed)
     network = AutoEncoder(cfg.model).to(device)
