@@ -9,7 +9,7 @@ import torch
 import frenbrdf
 from frenbrdf.data import LogRelativeMapping
 from frenbrdf.models import (AutoEncoder, DecoderConfig, EncoderConfig, HyperNetwork, Model, ModelConfig, NBRDF,
-                             NBRDFConfig, SetEncoder, interpolate, nbrdf_forward)
+                             NBRDFConfig, SetEncoder, interpolate, nbrdf_coordinates, nbrdf_forward)
 
 from .conftest import unit_vectors
 
@@ -71,8 +71,7 @@ def test_nbrdf_object_reflectance_and_merl_table(tmp_path):
     rgb = one(wi, wo)
     below = (wi[:, 2] <= 0) | (wo[:, 2] <= 0)
     assert rgb.shape == (1000, 3) and np.all(rgb >= 0) and np.all(rgb[below] == 0)
-    h, d = frenbrdf.half_diff_vectors(wi, wo)
-    expected = mapping.inverse(one.mapped(np.concatenate([h, d], axis=-1)), mapping.reference)
+    expected = mapping.inverse(one.mapped(nbrdf_coordinates(wi, wo)), mapping.reference)
     np.testing.assert_allclose(rgb[~below], expected[~below], rtol=1e-6)
     one.to_merl(tmp_path / "decoded.binary")
     table = frenbrdf.read_merl(tmp_path / "decoded.binary")
@@ -104,3 +103,23 @@ def test_interpolate_endpoints_and_range():
     with pytest.raises(ValueError, match="extrapolate=True"):
         interpolate(z_a, z_b, 1.5)
     np.testing.assert_array_equal(interpolate(z_a, z_b, 2.0, extrapolate=True), 2 * z_b)
+
+
+def test_decoded_materials_are_isotropic():
+    """Rotating both directions about the normal changes nothing (the networks see φ_h = 0)."""
+    rng = np.random.default_rng(5)
+    nbrdf = NBRDF(random_params(NBRDFConfig((8,)), batch=1), LogRelativeMapping(np.full(3, 0.2)))
+    wi, wo = unit_vectors(rng, 500), unit_vectors(rng, 500)
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    angle = 1.1
+    rotation = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]])
+    np.testing.assert_allclose(nbrdf(wi @ rotation.T, wo @ rotation.T), nbrdf(wi, wo), rtol=1e-5, atol=1e-7)
+
+
+def test_nbrdf_coordinates_at_the_bins_are_the_training_inputs():
+    from frenbrdf.data import bin_geometry
+    from frenbrdf.evaluation import _bin_directions
+
+    bins = np.random.default_rng(0).choice(90 * 90 * 180, 2000)
+    wi, wo = _bin_directions(bins)
+    np.testing.assert_allclose(nbrdf_coordinates(wi, wo), bin_geometry().half_diff[bins].numpy(), atol=1e-6)

@@ -6,6 +6,7 @@ import argparse
 import json
 import platform
 import sys
+from pathlib import Path
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -97,6 +98,49 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _evaluate(args: argparse.Namespace) -> int:
+    from .evaluation import EvaluateConfig, evaluate_runs
+
+    config = EvaluateConfig(samples=args.samples, edits=args.edits, progress=not args.quiet)
+    if args.quick:
+        config.edits, config.edit_resolution = min(args.edits, 120), 96
+    report = evaluate_runs(args.runs, args.out, data=args.data, config=config)
+    print((Path(args.out) / "evaluation.md").read_text())
+    if args.json:
+        print(json.dumps(report["summary"], indent=2))
+    return 0
+
+
+def _render(args: argparse.Namespace) -> int:
+    from .render import Scene, render, save_png
+
+    material = Path(args.material)
+    if args.mitsuba:
+        from .mitsuba import render_material
+
+        render_material(str(material), out_path=args.out, spp=args.spp, resolution=args.resolution)
+    else:
+        save_png(args.out, render(_load_material(material), Scene(resolution=args.resolution)))
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _load_material(path: Path):
+    """A MERL file or a saved NBRDF (.pt)."""
+    from .fitting import load_nbrdf
+    from .merl import read_merl
+
+    return load_nbrdf(path) if path.suffix == ".pt" else read_merl(path)
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from .demo import run_demo
+
+    out = run_demo(args.out, args.data, epochs=args.epochs, progress=not args.quiet)
+    print(f"report: {out / 'README.md'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="frenbrdf", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -140,6 +184,32 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--merl", action="store_true", help="also write each fit as a MERL file")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")
     fit.set_defaults(run=_fit_nbrdf)
+
+    evaluate = commands.add_parser("evaluate", help="reconstruction and editing tables and figures for runs")
+    evaluate.add_argument("runs", nargs="+", help="run folders (one per method, same data and split)")
+    evaluate.add_argument("--out", required=True, help="folder for the tables and figures")
+    evaluate.add_argument("--data", help="folder of MERL files (default: the one the runs were trained on)")
+    evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")
+    evaluate.add_argument("--edits", type=int, default=2000, help="interpolations for editing (default 2000)")
+    evaluate.add_argument("--quick", action="store_true", help="at most 120 interpolations, 96² editing renders")
+    evaluate.add_argument("--json", action="store_true", help="also print the summary as JSON")
+    evaluate.add_argument("--quiet", action="store_true", help="no progress bars")
+    evaluate.set_defaults(run=_evaluate)
+
+    render = commands.add_parser("render", help="render a material (MERL file or saved NBRDF .pt) on a sphere")
+    render.add_argument("material")
+    render.add_argument("--out", required=True, help="PNG file")
+    render.add_argument("--resolution", type=int, default=256)
+    render.add_argument("--mitsuba", action="store_true", help="path-trace with Mitsuba 3 instead")
+    render.add_argument("--spp", type=int, default=64, help="samples per pixel (--mitsuba)")
+    render.set_defaults(run=_render)
+
+    demo = commands.add_parser("demo", help="the main job: synthesise data, train all methods, evaluate, report")
+    demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")
+    demo.add_argument("--data", help="folder of MERL files instead of the synthetic bank")
+    demo.add_argument("--epochs", type=int, help="training epochs per method (default: the demo's)")
+    demo.add_argument("--quiet", action="store_true", help="no progress bars")
+    demo.set_defaults(run=_demo)
     return parser
 
 

@@ -3,7 +3,8 @@
 from .autoencoder import AutoEncoder, Model, ModelConfig, interpolate
 from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
-from .nbrdf import NBRDF, NBRDFConfig, nbrdf_forward
+from .nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates, nbrdf_forward
 
 __all__ = ["AutoEncoder", "DecoderConfig", "EncoderConfig", "HyperNetwork", "Model", "ModelConfig", "NBRDF",
-           "NBRDFConfig", "SetEncoder", "interpolate", "nbrdf_forward"]
+           "NBRDFConfig", "SetEncoder", "interpolate", "nbrdf_coordinates",
+           "nbrdf_forward"]

@@ -10,11 +10,10 @@ import numpy as np
 import torch
 from torch import nn
 
-from ..coords import half_diff_vectors
 from ..data import LogRelativeMapping, MappingConfig
 from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
-from .nbrdf import NBRDF, NBRDFConfig
+from .nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates
 
 
 @dataclass
@@ -92,9 +91,8 @@ class Model:
             raise ValueError(f"wi and wo must have the shape of values {values.shape}, got {wi.shape} and {wo.shape}")
         if not np.all(np.isfinite(values)) or values.min() < 0:
             raise ValueError("values must be finite and ≥ 0 (leave missing samples out)")
-        h, d = half_diff_vectors(wi, wo)
         mapped = self.mapping.forward(values, self.mapping.reference_at(wi, wo))
-        samples = np.concatenate([mapped, h, d], axis=-1)[None].astype(np.float32)
+        samples = np.concatenate([mapped, nbrdf_coordinates(wi, wo)], axis=-1)[None].astype(np.float32)
         return self.network.encoder(torch.from_numpy(samples))[0].numpy().astype(np.float64)
 
     @torch.no_grad()

@@ -49,6 +49,18 @@ class NBRDFConfig:
         return sum(int(np.prod(shape)) for shape in self.shapes())
 
 
+def nbrdf_coordinates(wi, wo) -> np.ndarray:
+    """The NBRDF input of direction pairs, each ``(..., 3)`` → ``(..., 6)``: (H, D) with φ_h = 0.
+
+    An isotropic BRDF does not depend on φ_h, and the networks only ever see H in the
+    xz-plane (as at the MERL bins), so H is rotated about the normal onto it:
+    H = (sin θ_h, 0, cos θ_h). D, already expressed in H's frame, is unchanged.
+    """
+    h, d = half_diff_vectors(wi, wo)
+    h_isotropic = np.stack([np.hypot(h[..., 0], h[..., 1]), np.zeros(h.shape[:-1]), h[..., 2]], axis=-1)
+    return np.concatenate([h_isotropic, d], axis=-1)
+
+
 def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Tensor:
     """Evaluates B NBRDFs: ``params`` as from :meth:`NBRDFConfig.shapes` with a leading B,
     ``coords`` ``(B, N, 6)`` → mapped RGB ``(B, N, 3)``."""
@@ -93,21 +105,21 @@ class NBRDF:
     def __getitem__(self, index: int) -> NBRDF:
         return NBRDF([p[[index]] for p in self.params], self.mapping)
 
-    @torch.no_grad()
+    @torch.inference_mode()
     def mapped(self, coords) -> np.ndarray:
         """Network output (mapped values) at (H, D) ``(..., 6)`` → ``(..., 3)``."""
         self._only()
         coords = torch.as_tensor(np.asarray(coords, dtype=np.float32))
         flat = coords.reshape(1, -1, N_INPUTS)
-        out = torch.cat([nbrdf_forward(self.params, chunk) for chunk in flat.split(1 << 18, dim=1)], dim=1)
+        # Chunks small enough that the hidden activations stay in cache (5× faster than one big batch).
+        out = torch.cat([nbrdf_forward(self.params, chunk) for chunk in flat.split(1 << 14, dim=1)], dim=1)
         return out.reshape(*coords.shape[:-1], N_OUTPUTS).numpy().astype(np.float64)
 
     def __call__(self, wi, wo) -> np.ndarray:
         """Reflectance at direction pairs, each ``(..., 3)`` → RGB ``(..., 3)``; 0 below the horizon."""
         self._only()
         wi, wo = np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64)
-        h, d = half_diff_vectors(wi, wo)
-        rgb = self.mapping.inverse(self.mapped(np.concatenate([h, d], axis=-1)), self.mapping.reference_at(wi, wo))
+        rgb = self.mapping.inverse(self.mapped(nbrdf_coordinates(wi, wo)), self.mapping.reference_at(wi, wo))
         above = (wi[..., 2] > 0) & (wo[..., 2] > 0)
         return np.where(above[..., None], rgb, 0.0)
 

@@ -1,0 +1,271 @@
+"""Evaluation (DESIGN §7): reconstruction and editing tables, histograms, render grids.
+
+- Reconstruction: each test material is encoded from N random valid bins (default 4000,
+  the same bins for every method), decoded, rendered and compared with the render of the
+  true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the frequency loss.
+- Editing: random pairs (a, b) of test materials and t ∈ {0, 0.2, …, 1}; the truth is
+  the table (1 − t)·a + t·b (its render is the same blend of the linear renders, since
+  rendering is linear in the BRDF), the prediction decode((1 − t)·z_a + t·z_b).
+
+``evaluate_runs`` does both for several runs side by side and writes Markdown, JSON and
+PNG figures; ``frenbrdf evaluate`` is its command line.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from .data import N_BINS, list_materials, save_json
+from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
+from .merl import merl_bin_grid, read_merl
+from .models.autoencoder import Model
+from .render import Scene, render_linear, save_png, tonemap
+
+#: The paper's numbers (MERL, their protocol), DESIGN §7.
+PAPER = {
+    "hyperbrdf": {"rmse_x100": 6.89, "psnr": 26.3, "ssim_x10": 9.26, "lfre_x1000": 6.74, "edit_psnr": 22.4,
+                  "edit_ssim_x10": 9.13},
+    "nbrdf": {"rmse_x100": 6.60, "psnr": 29.2, "ssim_x10": 9.50, "lfre_x1000": 6.80, "edit_psnr": 27.6,
+              "edit_ssim_x10": 9.42},
+    "frenbrdf": {"rmse_x100": 6.74, "psnr": 29.9, "ssim_x10": 9.88, "lfre_x1000": 0.23, "edit_psnr": 30.1,
+                 "edit_ssim_x10": 9.82},
+}
+ROWS = [("rmse_x100", "Recon RMSE×10² ↓"), ("psnr", "Recon PSNR ↑"), ("ssim_x10", "Recon SSIM×10 ↑"),
+        ("lfre_x1000", "Recon L_fre×10³ ↓"), ("edit_psnr", "Edit PSNR ↑"), ("edit_ssim_x10", "Edit SSIM×10 ↑")]
+
+
+def image_metrics(truth: np.ndarray, prediction: np.ndarray) -> dict[str, float]:
+    """RMSE, PSNR and SSIM of two display images in [0, 1] ``(H, W, 3)`` (scikit-image)."""
+    from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
+
+    mse = mean_squared_error(truth, prediction)
+    psnr = peak_signal_noise_ratio(truth, prediction, data_range=1.0) if mse > 0 else float("inf")
+    ssim = structural_similarity(truth, prediction, data_range=1.0, channel_axis=-1)
+    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim)}
+
+
+@dataclass
+class EvaluateConfig:
+    """Settings of :func:`evaluate_runs`."""
+
+    samples: int = 4000
+    """Samples given to the encoder per test material."""
+    edits: int = 2000
+    """Interpolations (pair, t) in the editing table."""
+    weights: tuple[float, ...] = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
+    """Interpolation weights t."""
+    seed: int = 0
+    resolution: int = 256
+    """Render size; the editing table may use ``edit_resolution``."""
+    edit_resolution: int = 128
+    """Render size of the editing table (thousands of renders)."""
+    max_materials: int = 0
+    """Evaluate at most this many test materials (0: all)."""
+    progress: bool = True
+
+
+def _bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    from .coords import rusinkiewicz_to_directions
+
+    angles = merl_bin_grid().reshape(-1, 3)[bins]
+    return rusinkiewicz_to_directions(np.stack([angles[:, 0], np.zeros(len(bins)), angles[:, 1], angles[:, 2]], -1))
+
+
+class _FrequencyMetric:
+    """L_fre between a true table and a decoded latent, in the model's mapped space."""
+
+    def __init__(self, config: FrequencyLossConfig = FrequencyLossConfig()):
+        self.truth, self.loss = FrequencyTruth(config), FrequencyLoss(config)
+
+    def __call__(self, model: Model, table: np.ndarray, z: np.ndarray) -> float:
+        flat = table.reshape(3, N_BINS)
+        valid = np.all(flat >= 0, axis=0)
+        with np.errstate(invalid="ignore"):
+            mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
+        true = self.truth.coefficients(np.nan_to_num(mapped).T, valid)
+        with torch.no_grad():
+            params = model.network.decoder(torch.from_numpy(z[None].astype(np.float32)))
+            predicted = self.loss.predicted_coefficients(params)[0].numpy()
+        return float(np.mean((predicted - true) ** 2))
+
+
+def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig()) -> dict:
+    """Evaluates runs (one per method) on their common test split; writes tables and figures to ``out_dir``."""
+    start = time.perf_counter()
+    runs = [Path(r) for r in run_dirs]
+    if not runs:
+        raise ValueError("give at least one run folder")
+    models, test_sets, data_dirs = {}, [], set()
+    for run in runs:
+        if not (run / "best.pt").exists():
+            raise FileNotFoundError(f"{run} holds no best.pt: is it a training run folder?")
+        model = Model.load(run)
+        cfg = json.loads((run / "config.json").read_text())
+        name = model.method if model.method not in models else f"{model.method} ({run.name})"
+        models[name] = model
+        test_sets.append(tuple(json.loads((run / "split.json").read_text())["test"]))
+        data_dirs.add(cfg["data"])
+    if len(set(test_sets)) != 1:
+        raise ValueError("the runs were trained on different splits; evaluate runs of the same data and seed together")
+    data_dir = Path(data) if data else Path(data_dirs.pop())
+    files = {path.stem: path for path in list_materials(data_dir)}
+    names = sorted(test_sets[0])[: config.max_materials or None]
+    missing = [n for n in names if n not in files]
+    if missing:
+        raise FileNotFoundError(f"test materials {missing[:3]} not found in {data_dir}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(config.seed)
+    scene, edit_scene = Scene(resolution=config.resolution), Scene(resolution=config.edit_resolution)
+    frequency_metric = _FrequencyMetric()
+    show = config.progress
+
+    # Reconstruction.
+    truth_linear, edit_truth_linear, latents = {}, {}, {m: {} for m in models}
+    per_material = {m: [] for m in models}
+    renders = {}
+    for name in tqdm(names, desc="reconstruction", disable=not show):
+        table = read_merl(files[name])
+        flat = table.reshape(3, N_BINS)
+        valid_bins = np.flatnonzero(np.all(flat >= 0, axis=0))
+        bins = rng.choice(valid_bins, size=config.samples, replace=len(valid_bins) < config.samples)
+        wi, wo = _bin_directions(bins)
+        truth_linear[name] = render_linear(table, scene)
+        edit_truth_linear[name] = render_linear(table, edit_scene)
+        truth_image = tonemap(truth_linear[name])
+        renders[name] = {"truth": truth_image}
+        for method, model in models.items():
+            z = model.encode(flat[:, bins].T, (wi, wo))
+            latents[method][name] = z
+            image = tonemap(render_linear(model.decode(z)[0], scene))
+            renders[name][method] = image
+            metrics = image_metrics(truth_image, image)
+            metrics["lfre"] = frequency_metric(model, table, z)
+            per_material[method].append({"material": name, **metrics})
+
+    # Editing.
+    pairs = [tuple(rng.choice(len(names), size=2, replace=False)) for _ in range(
+        max(1, int(np.ceil(config.edits / len(config.weights)))))] if len(names) >= 2 else []
+    edits = {m: [] for m in models}
+    with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing", disable=not show) as bar:
+        for a, b in pairs:
+            name_a, name_b = names[a], names[b]
+            for t in config.weights:
+                truth_image = tonemap((1 - t) * edit_truth_linear[name_a] + t * edit_truth_linear[name_b])
+                for method, model in models.items():
+                    z = (1 - t) * latents[method][name_a] + t * latents[method][name_b]
+                    image = tonemap(render_linear(model.decode(z)[0], edit_scene))
+                    edits[method].append({"a": name_a, "b": name_b, "t": t, **image_metrics(truth_image, image)})
+                    bar.update()
+
+    summary = {}
+    for method in models:
+        rows = per_material[method]
+        summary[method] = {
+            "rmse_x100": 100 * np.mean([r["rmse"] for r in rows]),
+            "psnr": np.mean([r["psnr"] for r in rows]),
+            "ssim_x10": 10 * np.mean([r["ssim"] for r in rows]),
+            "lfre_x1000": 1000 * np.mean([r["lfre"] for r in rows]),
+            "edit_psnr": np.mean([r["psnr"] for r in edits[method]]) if edits[method] else float("nan"),
+            "edit_ssim_x10": 10 * np.mean([r["ssim"] for r in edits[method]]) if edits[method] else float("nan"),
+        }
+        summary[method] = {k: float(v) for k, v in summary[method].items()}
+    report = {"data": str(data_dir), "runs": [str(r) for r in runs], "test_materials": names,
+              "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(config).items()},
+              "summary": summary, "reconstruction": per_material, "editing": edits,
+              "seconds": time.perf_counter() - start}
+    save_json(out / "evaluation.json", report)
+    (out / "evaluation.md").write_text(markdown_table(summary, len(names), sum(len(e) for e in edits.values())
+                                                      // max(1, len(models))))
+    _figures(out, names, renders, per_material, models, latents, pairs, edit_truth_linear, config)
+    return report
+
+
+def markdown_table(summary: dict, n_materials: int, n_edits: int) -> str:
+    """The reconstruction and editing table, methods side by side, with the paper's numbers."""
+    methods = list(summary)
+    header = "| | " + " | ".join(methods) + " | " + " | ".join(f"paper: {m}" for m in PAPER) + " |"
+    lines = [f"Reconstruction on {n_materials} test materials; editing over {n_edits} interpolations.", "",
+             header, "|---" * (1 + len(methods) + len(PAPER)) + "|"]
+    for key, label in ROWS:
+        ours = " | ".join(f"{summary[m][key]:.3g}" for m in methods)
+        paper = " | ".join(f"{PAPER[m][key]}" for m in PAPER)
+        lines.append(f"| {label} | {ours} | {paper} |")
+    return "\n".join(lines) + "\n"
+
+
+def _figures(out: Path, names, renders, per_material, models, latents, pairs, edit_truth_linear, config) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = list(models)
+    # Histograms per method and metric, with the mean (solid) and ± one standard deviation (dashed).
+    figure, axes = plt.subplots(len(methods), 3, figsize=(12, 3 * len(methods)), squeeze=False)
+    for row, method in enumerate(methods):
+        for col, metric in enumerate(("rmse", "psnr", "ssim")):
+            values = np.array([r[metric] for r in per_material[method]])
+            values = values[np.isfinite(values)]
+            axis = axes[row, col]
+            axis.hist(values, bins=20, color="#4c72b0", alpha=0.8)
+            if len(values):
+                mean, std = values.mean(), values.std()
+                axis.axvline(mean, color="k", linestyle="-")
+                for edge in (mean - std, mean + std):
+                    axis.axvline(edge, color="k", linestyle="--")
+            axis.set_title(f"{method}: {metric.upper()}")
+    figure.tight_layout()
+    _save_figure(figure, out / "histograms.png")
+    plt.close(figure)
+
+    # A grid of renders: truth | each method, for up to 8 materials.
+    shown = names[:8]
+    figure, axes = plt.subplots(len(shown), 1 + len(methods), figsize=(2 * (1 + len(methods)), 2 * len(shown)),
+                                squeeze=False)
+    for row, name in enumerate(shown):
+        for col, key in enumerate(["truth", *methods]):
+            axes[row, col].imshow(renders[name][key])
+            axes[row, col].set_xticks([])
+            axes[row, col].set_yticks([])
+            if row == 0:
+                axes[row, col].set_title(key, fontsize=9)
+        axes[row, 0].set_ylabel(name, fontsize=7)
+    figure.tight_layout()
+    _save_figure(figure, out / "renders.png")
+    plt.close(figure)
+
+    # Interpolation strips for the first pair: truth row, then each method.
+    if pairs:
+        a, b = names[pairs[0][0]], names[pairs[0][1]]
+        scene = Scene(resolution=config.edit_resolution)
+        figure, axes = plt.subplots(1 + len(methods), len(config.weights),
+                                    figsize=(1.6 * len(config.weights), 1.7 * (1 + len(methods))), squeeze=False)
+        for col, t in enumerate(config.weights):
+            axes[0, col].imshow(tonemap((1 - t) * edit_truth_linear[a] + t * edit_truth_linear[b]))
+            axes[0, col].set_title(f"t = {t:.1f}", fontsize=9)
+            for row, method in enumerate(methods, start=1):
+                z = (1 - t) * latents[method][a] + t * latents[method][b]
+                axes[row, col].imshow(tonemap(render_linear(models[method].decode(z)[0], scene)))
+        for row, label in enumerate(["truth", *methods]):
+            axes[row, 0].set_ylabel(label, fontsize=9)
+        for axis in axes.flat:
+            axis.set_xticks([])
+            axis.set_yticks([])
+        figure.suptitle(f"{a} → {b}", fontsize=9)
+        figure.tight_layout()
+        _save_figure(figure, out / "interpolation.png")
+        plt.close(figure)
+
+
+def _save_figure(figure, path: Path) -> None:
+    temporary = path.with_name(f".{path.name}.tmp.png")
+    figure.savefig(temporary, dpi=100)
+    temporary.replace(path)
