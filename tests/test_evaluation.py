@@ -60,7 +60,7 @@ def test_evaluate_refuses_runs_of_different_splits(tiny_runs, toy_materials, tmp
 
 def test_cli_evaluate_and_render(tiny_runs, toy_materials, tmp_path, capsys):
     assert cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "eval"), "--samples", "200",
-                     "--edits", "6", "--quick", "--quiet"]) == 0
+                     "--edits", "6", "--resolution", "32", "--quick", "--quiet"]) == 0
     assert "Recon RMSE" in capsys.readouterr().out
     material = sorted(toy_materials.glob("*.binary"))[0]
     assert cli.main(["render", str(material), "--out", str(tmp_path / "m.png"), "--resolution", "32"]) == 0

@@ -101,7 +101,8 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
 def _evaluate(args: argparse.Namespace) -> int:
     from .evaluation import EvaluateConfig, evaluate_runs
 
-    config = EvaluateConfig(samples=args.samples, edits=args.edits, progress=not args.quiet)
+    config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
+                            progress=not args.quiet)
     if args.quick:
         config.edits, config.edit_resolution = min(args.edits, 120), 96
     report = evaluate_runs(args.runs, args.out, data=args.data, config=config)
@@ -191,6 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--data", help="folder of MERL files (default: the one the runs were trained on)")
     evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")
     evaluate.add_argument("--edits", type=int, default=2000, help="interpolations for editing (default 2000)")
+    evaluate.add_argument("--resolution", type=int, default=256, help="render size of the reconstruction table")
     evaluate.add_argument("--quick", action="store_true", help="at most 120 interpolations, 96² editing renders")
     evaluate.add_argument("--json", action="store_true", help="also print the summary as JSON")
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars")
