@@ -19,7 +19,7 @@ from .evaluation import EvaluateConfig, evaluate_runs
 from .training import METHODS, config_for, train
 
 #: Overrides of each method's preset for the demo (everything else: the preset).
-DEMO_TRAINING = {"epochs": 60, "batch_materials": 8, "context_samples": 2000, "query_samples": 2000}
+DEMO_TRAINING = {"epochs": 100, "batch_materials": 8, "context_samples": 2000, "query_samples": 2000}
 #: Evaluation settings of the demo: the full reconstruction table, a shorter editing table.
 DEMO_EVALUATION = EvaluateConfig(samples=4000, edits=120, edit_resolution=96)
 
