@@ -24,7 +24,16 @@ from frenbrdf.fitting import save_nbrdf
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig
 from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
 
-HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None and importlib.util.find_spec("drjit") is not None
+
+
+def _installed(name: str) -> bool:
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):  # ValueError: blocked in sys.modules
+        return False
+
+
+HAVE_MITSUBA = _installed("mitsuba") and _installed("drjit")
 needs_mitsuba = pytest.mark.skipif(not HAVE_MITSUBA, reason="mitsuba is not installed (pip install mitsuba)")
 
 
@@ -94,19 +103,27 @@ def assert_close(got: np.ndarray, expected: np.ndarray, rtol: float = 1e-4):
     """Relative agreement, with an absolute floor far below the material's values."""
     floor = 1e-5 * np.abs(expected).max()
     error = np.abs(got - expected) / (np.abs(expected) + floor)
-    assert error.max() < rtol, f"max relative error {error.max():.2e} at {np.unravel_index(error.argmax(), error.shape)}"
+    worst = np.unravel_index(error.argmax(), error.shape)
+    assert error.max() < rtol, f"max relative error {error.max():.2e} at {worst}"
 
 
-def assert_nbrdf_close(got: np.ndarray, expected: np.ndarray, wi: np.ndarray, wo: np.ndarray):
-    """1e-4 relative, except within 0.01 rad of θ_h = 0.
+def assert_nbrdf_close(got: np.ndarray, expected: np.ndarray, wi: np.ndarray, wo: np.ndarray, per_bin: bool = False):
+    """1e-4 relative, except within 0.01 rad of θ_h = 0 and, with a per-bin reference, at its steps.
 
-    There H's azimuth, and with it D's, is ill-conditioned: float32 arithmetic on
+    Near θ_h = 0 H's azimuth, and with it D's, is ill-conditioned: float32 arithmetic on
     ω_i + ω_o moves it by ~1e-4 rad at θ_h = 1e-4, and an NBRDF with random weights
-    (unlike a physical BRDF) depends on φ_d at θ_h = 0. Those pairs get 1e-2.
+    (unlike a physical BRDF) depends on φ_d at θ_h = 0. Those pairs get 1e-2. A per-bin
+    reference steps from 0 to its value over one bin where MERL's missing bins begin, so
+    float32 bin coordinates (~3e-5 bins off) cost up to ~1e-3 on the few pairs there.
     """
     near_pole = frenbrdf.directions_to_rusinkiewicz(wi, wo)[:, 0] < 0.01
     assert near_pole.sum() < 0.01 * len(wi)
-    assert_close(got[~near_pole], expected[~near_pole])
+    if per_bin:
+        floor = 1e-5 * np.abs(expected).max()
+        error = (np.abs(got - expected) / (np.abs(expected) + floor))[~near_pole]
+        assert np.quantile(error, 0.999) < 1e-4 and error.max() < 1e-3, (np.quantile(error, 0.999), error.max())
+    else:
+        assert_close(got[~near_pole], expected[~near_pole])
     if near_pole.any():
         assert_close(got[near_pole], expected[near_pole], rtol=1e-2)
 
@@ -120,9 +137,9 @@ def test_nbrdf_eval_equals_numpy(mi, plastic_table, per_bin):
     bsdf = mi.load_dict(fm.bsdf_dict(nbrdf))
     rng = np.random.default_rng(1)
     wi, wo = upper_hemisphere(rng, 20000), upper_hemisphere(rng, 20000)
-    expected = nbrdf(*fm.canonical_pairs(wi, wo)) * wo[:, 2:3]
+    expected = nbrdf(wi, wo) * wo[:, 2:3]
     assert expected.max() > 0 and np.mean(expected > 0) > 0.5
-    assert_nbrdf_close(mitsuba_eval(mi, bsdf, wi, wo), expected, wi, wo)
+    assert_nbrdf_close(mitsuba_eval(mi, bsdf, wi, wo), expected, wi, wo, per_bin)
 
 
 def test_nbrdf_eval_uses_the_training_convention_phi_h_zero(mi):
@@ -329,7 +346,7 @@ def test_scalar_fallback_when_llvm_is_unusable(tmp_path):
             wi, wo = np.array(wi) / np.linalg.norm(wi), np.array(wo) / np.linalg.norm(wo)
             si.wi = mi.ScalarVector3f(*wi)
             got = np.array(bsdf.eval(mi.BSDFContext(), si, mi.ScalarVector3f(*wo)))
-            expected = nbrdf(*fm.canonical_pairs(wi, wo)) * wo[2]
+            expected = nbrdf(wi, wo) * wo[2]
             assert np.allclose(got, expected, rtol=1e-4), (got, expected)
         image = fm.render_material(nbrdf, spp=1, resolution=4)
         assert np.all(np.isfinite(image)) and image.max() > 0

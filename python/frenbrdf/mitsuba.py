@@ -22,7 +22,8 @@ The plugin
   :func:`frenbrdf.fitting.save_nbrdf`, or a published Keras NBRDF ``.h5``; or
 - ``material``: a handle from :func:`material_handle` for a material held in memory (an
   :class:`frenbrdf.NBRDF`, a MERL table array): Mitsuba's properties hold only numbers,
-  strings and Mitsuba objects, so Python objects travel by name;
+  strings and Mitsuba objects, so Python objects travel by name (a handle keeps its
+  material in memory until :func:`release_handle`);
 - ``lookup`` (MERL only): ``"trilinear"`` (default) or ``"nearest"``, as in
   :func:`frenbrdf.merl_lookup`;
 - ``sampling``: ``"fitted"`` (default) or ``"cosine"`` (cosine-weighted hemisphere only,
@@ -33,13 +34,13 @@ The plugin
 Conventions
 -----------
 Mitsuba's ``si.wi`` is the NBRDF's ``wi`` and the queried ``wo`` its ``wo`` (both in the
-local shading frame, normal +z), so ``eval`` returns ``f(wi, wo) · cos θ_o``. For a table
-``f`` is :func:`frenbrdf.merl_lookup_directions` clamped to ≥ 0. For an NBRDF it is
-:meth:`frenbrdf.NBRDF.__call__` at the pair rotated about the normal so that φ_h = 0
-(:func:`canonical_pairs`): every NBRDF here is trained on H = (sin θ_h, 0, cos θ_h), and
-feeding it a half vector with another azimuth asks it to extrapolate (published fits
-then return values up to 1e180 near grazing). The surface is one-sided: zero when either
-direction is below the horizon.
+local shading frame, normal +z), so ``eval`` returns ``f(wi, wo) · cos θ_o``, with ``f``
+exactly :meth:`frenbrdf.NBRDF.__call__` (network input H = (sin θ_h, 0, cos θ_h) and D,
+as :func:`frenbrdf.models.nbrdf.nbrdf_coordinates`: the networks are trained with
+φ_h = 0, and a half vector with another azimuth would ask them to extrapolate, to values
+up to 1e180 near grazing for the published fits) or, for a table,
+:func:`frenbrdf.merl_lookup_directions` clamped to ≥ 0. The surface is one-sided: zero
+when either direction is below the horizon.
 
 Evaluation is written in Dr.Jit and runs inside Mitsuba's kernels, never calling back
 into numpy or torch: the NBRDF's matrix products are unrolled over its layers (weights
@@ -50,22 +51,26 @@ left out and the others renormalised; no measured corner gives 0).
 
 Importance sampling
 -------------------
-Once per material (in numpy, a few tenths of a second) the BRDF along θ_h at small θ_d
+Once per material (in numpy, well under a second) the BRDF along θ_h at small θ_d
 is fitted by ``a + Σ_k b_k · D_αk(θ_h) · V_αk(θ_i, θ_o)`` (Lambert plus up to two GGX
 microfacet lobes with height-correlated Smith visibility, non-negative weights, α on a
 log grid). ``sample`` draws from the mixture of a cosine-weighted hemisphere (weight
 ≥ 0.1, so no direction is starved) and visible-normal sampling of each fitted GGX lobe
 (weights ∝ the fitted lobe energies ``π a`` and ``b_k``); ``pdf`` is the exact mixture
-density and the sample weight is ``f · cos θ_o / pdf``.
+density and the sample weight is ``f · cos θ_o / pdf``. Lobe samples reflected below the
+horizon are failed samples (weight 0), so ``pdf`` integrates over the hemisphere to the
+share of samples that succeed, 0.98–0.99 for a GGX α = 0.1 metal.
 
 Variants
 --------
 Python BSDFs are practical only in Mitsuba's JIT variants: :func:`set_variant` picks
 ``llvm_ad_rgb`` when Dr.Jit's LLVM backend works and otherwise falls back to
-``scalar_rgb`` (about 200× slower) with a warning. The LLVM backend needs LLVM ≥ 15;
-Debian's ``libllvm19`` works (``apt-get install -y libllvm19``); with an older
-``libLLVM`` Dr.Jit aborts the process, which is why the backend is probed once in a
-subprocess before it is used here.
+``scalar_rgb`` with a warning; there the Python BSDF runs once per ray, about 8,000
+samples per second on one core against millions (a 256×256, 64 spp sphere takes about
+9 minutes instead of a second). Debian's ``libllvm19`` works
+(``apt-get install -y libllvm19``); LLVM 14 is refused and LLVM 15 aborts the process
+on the first kernel with a minimum or an arc tangent, which is why the backend is probed
+once in a subprocess (:func:`llvm_available`) before it is used here.
 """
 
 from __future__ import annotations
@@ -105,11 +110,20 @@ def _import_mitsuba():
 # --------------------------------------------------------------------------- variants
 
 
+# Every kind of operation the plugin compiles (LLVM 15 loads, then aborts on min/max and
+# atan2), and a small render with a built-in BSDF.
 _PROBE = """
 import drjit as dr, mitsuba as mi
 mi.set_variant("llvm_ad_rgb")
-x = dr.arange(mi.Float, 16) * 2.0 + 1.0
-assert dr.sum(x)[0] == 256.0
+x = dr.opaque(mi.Float, 0.5) * dr.arange(mi.Float, 16)
+y = dr.maximum(dr.minimum(x, 3.0), 1.0) + dr.atan2(x, x + 1) + dr.exp(-x) + dr.sqrt(x) + dr.floor(x)
+y += dr.gather(mi.Float, x, mi.UInt32(dr.round(x)) % 16)
+dr.eval(y)
+assert dr.all(dr.isfinite(y))
+scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "shape": {"type": "sphere"},
+                      "light": {"type": "constant"},
+                      "sensor": {"type": "perspective", "film": {"type": "hdrfilm", "width": 4, "height": 4}}})
+assert dr.all(dr.isfinite(mi.render(scene, spp=2).array))
 """
 
 
@@ -117,9 +131,10 @@ assert dr.sum(x)[0] == 256.0
 def llvm_available() -> bool:
     """Whether Mitsuba's ``llvm_ad_rgb`` variant works on this machine.
 
-    Probed in a subprocess (about a second, once per process) because Dr.Jit aborts the
-    whole process, rather than raising, when it loads an unsupported ``libLLVM``.
-    ``DRJIT_LIBLLVM_PATH`` is honoured, as Dr.Jit honours it.
+    Probed in a subprocess (a second or two, once per process) because Dr.Jit aborts the
+    whole process, rather than raising, with an unsupported ``libLLVM``: it refuses LLVM
+    14 cleanly, but LLVM 15 loads and then aborts when a kernel uses ``dr.minimum`` or
+    ``dr.atan2``. ``DRJIT_LIBLLVM_PATH`` is honoured, as Dr.Jit honours it.
     """
     _import_mitsuba()
     try:
@@ -154,9 +169,9 @@ def set_variant(variant: str | None = None) -> str:
         if llvm_available():
             variant = PREFERRED_VARIANT
         else:
-            warnings.warn(f"Mitsuba's {PREFERRED_VARIANT} variant is not usable here (Dr.Jit's LLVM backend needs "
-                          f"libLLVM ≥ 15, e.g. apt-get install -y libllvm19); falling back to {FALLBACK_VARIANT}, "
-                          "which evaluates the Python BSDF one ray at a time (~200× slower)",
+            warnings.warn(f"Mitsuba's {PREFERRED_VARIANT} variant is not usable here (Dr.Jit's LLVM backend needs a "
+                          f"recent libLLVM: apt-get install -y libllvm19); falling back to {FALLBACK_VARIANT}, "
+                          "which evaluates the Python BSDF one ray at a time (hundreds of times slower)",
                           RuntimeWarning, stacklevel=2)
             variant = FALLBACK_VARIANT
     if variant not in mi.variants():
@@ -176,7 +191,7 @@ def register() -> str:
     Selects a variant first (:func:`set_variant`) if none is set. Registration is per
     variant: call again after switching variants. Calling twice is harmless.
     """
-    mi, dr = _import_mitsuba()
+    mi, _ = _import_mitsuba()
     variant = set_variant()
     if variant not in _REGISTERED:
         cls = _bsdf_class(variant)
@@ -247,7 +262,7 @@ class Material:
     def brdf(self, wi, wo) -> np.ndarray:
         """Reference (numpy) evaluation: reflectance at direction pairs ``(..., 3)`` → ``(..., 3)``, ≥ 0."""
         if self.kind == "nbrdf":
-            return self.nbrdf(*canonical_pairs(wi, wo))
+            return self.nbrdf(wi, wo)
         from .merl import merl_lookup_directions
 
         return np.maximum(merl_lookup_directions(self.table, wi, wo, method="trilinear"), 0.0)
@@ -262,25 +277,6 @@ class Material:
         """The table (MERL) or the reference table (NBRDF) as float32 ``(N_BINS, 3)``."""
         source = self.table if self.kind == "merl" else self.reference
         return np.ascontiguousarray(source.reshape(3, -1).T, dtype=np.float32)
-
-
-def canonical_pairs(wi, wo) -> tuple[np.ndarray, np.ndarray]:
-    """Rotates direction pairs about the normal so that their half vector has φ_h = 0.
-
-    An isotropic NBRDF is trained on (H, D) with φ_h = 0, H = (sin θ_h, 0, cos θ_h)
-    (:func:`frenbrdf.data.bin_geometry`); this is the pair at which to evaluate it.
-    """
-    wi, wo = np.broadcast_arrays(np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64))
-    wi = wi / np.linalg.norm(wi, axis=-1, keepdims=True)
-    wo = wo / np.linalg.norm(wo, axis=-1, keepdims=True)
-    s = wi + wo
-    phi = np.arctan2(s[..., 1], s[..., 0])
-    c, n = np.cos(phi)[..., None], np.sin(phi)[..., None]
-
-    def rotate(v):
-        return np.concatenate([c * v[..., :1] + n * v[..., 1:2], -n * v[..., :1] + c * v[..., 1:2], v[..., 2:]], axis=-1)
-
-    return rotate(wi), rotate(wo)
 
 
 def material_from_nbrdf(nbrdf, name: str = "nbrdf") -> Material:
@@ -603,7 +599,8 @@ class _Kernels:
     def mlp(self, h, d):
         """The NBRDF's network at (H, D) with φ_h = 0: mapped RGB (three floats)."""
         dr = self.dr
-        # The network was trained on H = (sin θ_h, 0, cos θ_h): drop H's azimuth (isotropy).
+        # The network was trained on H = (sin θ_h, 0, cos θ_h): drop H's azimuth (isotropy),
+        # as frenbrdf.models.nbrdf.nbrdf_coordinates does.
         x = [dr.sqrt(dr.fma(h.x, h.x, h.y * h.y)), None, h.z, d.x, d.y, d.z]
         last = len(self.layers) - 1
         for index, (weight, bias) in enumerate(self.layers):
@@ -712,7 +709,7 @@ def _bsdf_class(variant: str):
             active &= cos_o > 0
             pdf = self._pdf(wi, wo, active)
             active &= pdf > 0
-            value = self.kernels(wi, wo, active)
+            value = self.kernels(wi, wo, active) * cos_o
             bs = dr.zeros(mi.BSDFSample3f)
             bs.wo = wo
             bs.pdf = pdf
