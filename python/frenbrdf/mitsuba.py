@@ -86,6 +86,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .render import save_png, tonemap  # one tone mapping for both renderers
+
 #: The plugin's type name in Mitsuba scenes.
 PLUGIN_NAME = "frenbrdf"
 #: The variant used when it works.
@@ -830,23 +832,5 @@ def render_material(material, out_path: str | os.PathLike | None = None, spp: in
         if not known:
             release_handle(handle)
     if out_path is not None:
-        save_png(out_path, image, exposure)
+        save_png(out_path, tonemap(image, exposure))
     return image
-
-
-def tonemap(radiance: np.ndarray, exposure: float = 1.0) -> np.ndarray:
-    """Linear radiance → display values in [0, 1]: exposure → clamp → gamma 2.2."""
-    return np.clip(np.asarray(radiance, dtype=np.float64) * exposure, 0.0, 1.0) ** (1 / 2.2)
-
-
-def save_png(path: str | os.PathLike, radiance: np.ndarray, exposure: float = 1.0) -> None:
-    """Writes linear radiance ``(H, W, 3)`` as an 8-bit PNG (:func:`tonemap`), atomically."""
-    mi, _ = _import_mitsuba()
-    path = Path(path)
-    pixels = np.round(tonemap(radiance, exposure) * 255).astype(np.uint8)
-    temporary = path.with_name(f".{path.name}.tmp.png")
-    try:
-        mi.Bitmap(np.ascontiguousarray(pixels), mi.Bitmap.PixelFormat.RGB).write(str(temporary))
-        os.replace(temporary, path)
-    finally:
-        temporary.unlink(missing_ok=True)
