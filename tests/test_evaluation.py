@@ -65,3 +65,17 @@ def test_cli_evaluate_and_render(tiny_runs, toy_materials, tmp_path, capsys):
     material = sorted(toy_materials.glob("*.binary"))[0]
     assert cli.main(["render", str(material), "--out", str(tmp_path / "m.png"), "--resolution", "32"]) == 0
     assert (tmp_path / "m.png").exists()
+
+
+def test_demo_on_a_data_folder_writes_a_report(toy_materials, tmp_path, monkeypatch):
+    from frenbrdf import demo
+
+    monkeypatch.setattr(demo, "DEMO_EVALUATION", EvaluateConfig(samples=500, edits=6, resolution=48,
+                                                                 edit_resolution=24, progress=False))
+    assert cli.main(["demo", "--out", str(tmp_path / "report"), "--data", str(toy_materials), "--epochs", "1",
+                     "--quiet"]) == 0
+    readme = (tmp_path / "report" / "README.md").read_text()
+    assert "## What was run" in readme and "Recon PSNR" in readme and "| total |" in readme
+    for method in ("frenbrdf", "nbrdf", "hyperbrdf"):
+        assert (tmp_path / "report" / "runs" / method / "best.pt").exists()
+    assert (tmp_path / "report" / "evaluation" / "renders.png").exists()

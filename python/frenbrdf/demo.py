@@ -7,6 +7,7 @@ whole job fits in about 15 minutes on 2 CPU cores; the report says what was run.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import platform
 import time
@@ -43,13 +44,14 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
         begin = time.perf_counter()
         overrides = {**DEMO_TRAINING, **({"epochs": epochs} if epochs else {})}
         cfg = config_for(method, data=str(data), out=str(out / "runs" / method), progress=progress, **overrides)
+        cfg.cache_dir = str(out / "cache")  # the report folder holds everything the demo made
         if method == "hyperbrdf":
             cfg.lr = 5e-4  # the preset's 5e-5 is tuned for thousands of epochs, not a 15-minute demo
         train(cfg)
         runs.append(out / "runs" / method)
         timings[f"train {method}"] = time.perf_counter() - begin
     begin = time.perf_counter()
-    report = evaluate_runs(runs, out / "evaluation", config=DEMO_EVALUATION)
+    report = evaluate_runs(runs, out / "evaluation", config=dataclasses.replace(DEMO_EVALUATION, progress=progress))
     timings["evaluate"] = time.perf_counter() - begin
     timings["total"] = time.perf_counter() - start
     _write_readme(out, data, runs, report, timings)
