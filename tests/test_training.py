@@ -82,6 +82,14 @@ def test_nan_loss_stops_with_the_step_and_term_and_keeps_the_checkpoint(toy_mate
     assert all(torch.isfinite(t).all() for t in checkpoint["model"].values())
 
 
+def test_a_huge_eta_trains_without_nan(toy_materials, tmp_path):
+    """Adam is invariant to the scale of the loss: η = 1e12 lets L_fre dominate but stays finite."""
+    cfg = tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=2)
+    cfg.loss.eta = 1e12
+    result = train(cfg)
+    assert all(all(map(lambda v: v == v and abs(v) < float("inf"), epoch.values())) for epoch in result.history)
+
+
 def test_bad_configs_fail_before_any_work(toy_materials, tmp_path):
     with pytest.raises(ValueError, match="method must be one of"):
         config_for("gan")

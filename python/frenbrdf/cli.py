@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 from pathlib import Path
@@ -74,9 +75,10 @@ def _train(args: argparse.Namespace) -> int:
     result = train(cfg, resume=args.resume)
     summary = {"run_dir": str(result.run_dir), "method": cfg.method, "best_epoch": result.best_epoch,
                "best_val_rec": result.best_val, "seconds": round(result.seconds, 1)}
-    print(json.dumps(summary, indent=2) if args.json else
-          f"{cfg.method}: best validation L_rec {result.best_val:.4g} at epoch {result.best_epoch}; "
-          f"{result.seconds:.0f} s; run folder {result.run_dir}")
+    if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
+        print(json.dumps(summary, indent=2) if args.json else
+              f"{cfg.method}: best validation L_rec {result.best_val:.4g} at epoch {result.best_epoch}; "
+              f"{result.seconds:.0f} s; run folder {result.run_dir}")
     return 0
 
 
