@@ -87,6 +87,7 @@ from pathlib import Path
 import numpy as np
 
 from .render import save_png, tonemap  # one tone mapping for both renderers
+from .synth import ggx_d, ggx_visibility
 
 #: The plugin's type name in Mitsuba scenes.
 PLUGIN_NAME = "frenbrdf"
@@ -416,18 +417,6 @@ def bsdf_dict(material, *, lookup: str = "trilinear", sampling: str = "fitted") 
 # --------------------------------------------------------------------------- sampling fit
 
 
-def _ggx_d(cos_h: np.ndarray, alpha: float) -> np.ndarray:
-    a2 = alpha * alpha
-    t = 1.0 + cos_h * cos_h * (a2 - 1.0)
-    return a2 / (np.pi * t * t)
-
-
-def _ggx_visibility(cos_i: np.ndarray, cos_o: np.ndarray, alpha: float) -> np.ndarray:
-    """Height-correlated Smith G₂ / (4 μ_i μ_o)."""
-    a2 = alpha * alpha
-    return 0.5 / (cos_o * np.sqrt(a2 + cos_i * cos_i * (1 - a2)) + cos_i * np.sqrt(a2 + cos_o * cos_o * (1 - a2)))
-
-
 def _nonnegative_least_squares(basis: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float]:
     """min ‖basis · c − target‖² over c ≥ 0 for a few columns, by trying every active set."""
     n = basis.shape[1]
@@ -475,7 +464,7 @@ def fit_sampling(brdf, max_lobes: int = 2) -> SamplingMixture:
     # Relative errors, floored so that the tails far below the peak do not dominate.
     scale = 1.0 / (values + 1e-3 * values.max())
     target = values * scale
-    lobes = {alpha: _ggx_d(cos_h, alpha) * _ggx_visibility(wi[:, 2], wo[:, 2], alpha) for alpha in ALPHA_GRID}
+    lobes = {alpha: ggx_d(cos_h, alpha) * ggx_visibility(wi[:, 2], wo[:, 2], alpha) for alpha in ALPHA_GRID}
     constant = np.ones_like(values)
 
     def fit(alphas):

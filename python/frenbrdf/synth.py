@@ -294,14 +294,14 @@ def _fresnel(cos: np.ndarray, n, k) -> np.ndarray:
     return 0.5 * (r_s + r_p)
 
 
-def _ggx_d(cos_h: np.ndarray, alpha: float) -> np.ndarray:
+def ggx_d(cos_h: np.ndarray, alpha: float) -> np.ndarray:
     """GGX (Trowbridge–Reitz) normal distribution D(θ_h)."""
     a2 = alpha * alpha
     t = 1.0 + cos_h * cos_h * (a2 - 1.0)
     return a2 / (np.pi * t * t)
 
 
-def _ggx_visibility(cos_i: np.ndarray, cos_o: np.ndarray, alpha: float) -> np.ndarray:
+def ggx_visibility(cos_i: np.ndarray, cos_o: np.ndarray, alpha: float) -> np.ndarray:
     """Height-correlated Smith G₂ / (4 μ_i μ_o) for GGX."""
     a2 = alpha * alpha
     masking_i = cos_o * np.sqrt(a2 + cos_i * cos_i * (1.0 - a2))  # μ_i μ_o (1 + 2 Λ(μ_i))
@@ -311,7 +311,7 @@ def _ggx_visibility(cos_i: np.ndarray, cos_o: np.ndarray, alpha: float) -> np.nd
 
 def _ggx_lobe(g: _Geometry, alpha: float, n, k) -> np.ndarray:
     """F · D · G₂ / (4 μ_i μ_o) for a GGX interface of index ``n + i k``."""
-    return _fresnel(g.cos_d, n, k) * _ggx_d(g.cos_h, alpha) * _ggx_visibility(g.cos_i, g.cos_o, alpha)
+    return _fresnel(g.cos_d, n, k) * ggx_d(g.cos_h, alpha) * ggx_visibility(g.cos_i, g.cos_o, alpha)
 
 
 def _sheen_lobe(g: _Geometry, r: float) -> np.ndarray:
@@ -393,7 +393,7 @@ def _directional_albedo(lobe: Callable[[_Geometry], np.ndarray], alpha: float | 
         wo = 2.0 * i_dot_h * h - wi
         # f μ_o dω_o = f μ_o · 4 (ω_i·h) dω_h and dω_h = du dφ / (2π D μ_h); the half
         # vector must face ω_i, or the sample belongs to another half vector.
-        pdf_h = _ggx_d(h[..., 2:], alpha) * h[..., 2:]
+        pdf_h = ggx_d(h[..., 2:], alpha) * h[..., 2:]
         integrand_weight = np.where(i_dot_h > 0, 4.0 * i_dot_h * wo[..., 2:] / pdf_h, 0.0)
     g = _geometry(np.broadcast_to(wi, wo.shape), wo)
     f = np.where(g.above, lobe(g), 0.0) * integrand_weight
