@@ -26,7 +26,7 @@ from .data import N_BINS, list_materials, save_json
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from .merl import merl_bin_grid, read_merl
 from .models.autoencoder import Model
-from .render import Scene, render_linear, save_png, tonemap
+from .render import Scene, render_linear, tonemap
 
 #: The paper's numbers (MERL, their protocol), DESIGN §7.
 PAPER = {

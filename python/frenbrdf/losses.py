@@ -29,7 +29,6 @@ import numpy as np
 import torch
 from torch import nn
 
-from .data import BinGeometry, save_json  # noqa: F401  (BinGeometry documents the bin order)
 from .knn import KnnInterpolator
 from .merl import SHAPE, merl_bin_angles
 from .models.nbrdf import nbrdf_forward
