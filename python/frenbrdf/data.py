@@ -30,8 +30,8 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .coords import rusinkiewicz_to_directions, half_diff_vectors
-from .merl import SHAPE, merl_bin_grid, merl_lookup_directions, read_merl
+from .coords import half_diff_vectors
+from .merl import SHAPE, merl_bin_directions, merl_lookup_directions, read_merl
 
 #: Number of bins per channel of a MERL table.
 N_BINS = SHAPE[1] * SHAPE[2] * SHAPE[3]
@@ -209,9 +209,7 @@ class BinGeometry:
 
 @functools.cache
 def bin_geometry() -> BinGeometry:
-    grid = merl_bin_grid().reshape(-1, 3)
-    angles = np.stack([grid[:, 0], np.zeros(len(grid)), grid[:, 1], grid[:, 2]], axis=-1)
-    wi, wo = rusinkiewicz_to_directions(angles)
+    wi, wo = (d.reshape(-1, 3) for d in merl_bin_directions())
     h, d = half_diff_vectors(wi, wo)
     return BinGeometry(torch.from_numpy(np.concatenate([h, d], axis=-1).astype(np.float32)),
                        torch.from_numpy(np.clip(wi[:, 2], 0.0, 1.0).astype(np.float32)))

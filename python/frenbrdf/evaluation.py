@@ -24,7 +24,7 @@ from tqdm.auto import tqdm
 
 from .data import N_BINS, list_materials, save_json
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
-from .merl import merl_bin_grid, read_merl
+from .merl import merl_bin_rusinkiewicz, read_merl
 from .models.autoencoder import Model
 from .render import Scene, render_linear, tonemap
 
@@ -72,10 +72,10 @@ class EvaluateConfig:
 
 
 def _bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(ω_i, ω_o) of flat bin indices, each ``(len(bins), 3)``."""
     from .coords import rusinkiewicz_to_directions
 
-    angles = merl_bin_grid().reshape(-1, 3)[bins]
-    return rusinkiewicz_to_directions(np.stack([angles[:, 0], np.zeros(len(bins)), angles[:, 1], angles[:, 2]], -1))
+    return rusinkiewicz_to_directions(merl_bin_rusinkiewicz().reshape(-1, 4)[bins])
 
 
 class _FrequencyMetric:

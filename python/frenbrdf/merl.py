@@ -117,17 +117,26 @@ def merl_bin_grid() -> np.ndarray:
     return np.stack(np.meshgrid(theta_h, theta_d, phi_d, indexing="ij"), axis=-1)
 
 
+def merl_bin_rusinkiewicz() -> np.ndarray:
+    """Rusinkiewicz angles (θ_h, φ_h = 0, θ_d, φ_d) of every bin: float64 ``(90, 90, 180, 4)``."""
+    grid = merl_bin_grid()
+    return np.stack([grid[..., 0], np.zeros(grid.shape[:-1]), grid[..., 1], grid[..., 2]], axis=-1)
+
+
+def merl_bin_directions() -> tuple[np.ndarray, np.ndarray]:
+    """Unit directions (ω_i, ω_o) of every bin (φ_h = 0), each ``(90, 90, 180, 3)``."""
+    from .coords import rusinkiewicz_to_directions
+
+    return rusinkiewicz_to_directions(merl_bin_rusinkiewicz())
+
+
 def merl_above_horizon() -> np.ndarray:
     """Bins whose directions (with φ_h = 0) both lie strictly above the surface.
 
     A measured MERL file has data exactly here; elsewhere it stores negative
     "missing" markers. Returns bool ``(90, 90, 180)``.
     """
-    from .coords import rusinkiewicz_to_directions
-
-    grid = merl_bin_grid()
-    angles = np.stack([grid[..., 0], np.zeros(grid.shape[:-1]), grid[..., 1], grid[..., 2]], axis=-1)
-    wi, wo = rusinkiewicz_to_directions(angles)
+    wi, wo = merl_bin_directions()
     return (wi[..., 2] > 0) & (wo[..., 2] > 0)
 
 

@@ -50,7 +50,7 @@ import numpy as np
 from tqdm import tqdm
 
 from .coords import rusinkiewicz_to_half_diff
-from .merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_grid, write_merl
+from .merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_rusinkiewicz, write_merl
 
 #: One Dense layer: kernel ``(in, out)`` and bias ``(out,)``, float64.
 Layer = tuple[np.ndarray, np.ndarray]
@@ -196,9 +196,7 @@ def _merl_bin_inputs() -> tuple[np.ndarray, np.ndarray]:
     The same for every material, so computed once (about 55 MB) and kept read-only.
     """
     above = merl_above_horizon()
-    grid = merl_bin_grid()[above]
-    angles = np.stack([grid[:, 0], np.zeros(len(grid)), grid[:, 1], grid[:, 2]], axis=-1)
-    h, d = rusinkiewicz_to_half_diff(angles)
+    h, d = rusinkiewicz_to_half_diff(merl_bin_rusinkiewicz()[above])
     inputs = np.concatenate([h, d], axis=-1)
     above.flags.writeable = False
     inputs.flags.writeable = False

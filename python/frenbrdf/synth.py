@@ -108,8 +108,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .coords import rusinkiewicz_to_directions
-from .merl import CHANNEL_SCALES, merl_bin_grid, write_merl
+from .merl import CHANNEL_SCALES, merl_bin_directions, merl_bin_grid, write_merl
 
 #: The kinds of material in a bank, and the share of each.
 KIND_SHARES = {"plastic": 0.35, "metal": 0.25, "coated": 0.20, "fabric": 0.10, "diffuse": 0.10}
@@ -269,8 +268,7 @@ def _merl_geometry() -> _Geometry:
     values rather than 1.458M. Only μ_i and μ_o are full ``(90, 90, 180, 1)`` arrays.
     """
     grid = merl_bin_grid()
-    angles = np.stack([grid[..., 0], np.zeros(grid.shape[:-1]), grid[..., 1], grid[..., 2]], axis=-1)
-    wi, wo = rusinkiewicz_to_directions(angles)
+    wi, wo = merl_bin_directions()
     cos_i, cos_o = wi[..., 2:].copy(), wo[..., 2:].copy()
     theta_h, theta_d = grid[:, 0, 0, 0], grid[0, :, 0, 1]
     return _Geometry(cos_i=_clamped(cos_i), cos_o=_clamped(cos_o),
