@@ -77,49 +77,11 @@ impl Recurrence {
     }
 
     /// λ_lm for l = m..=lmax (rows) at many rings (columns), row-major into `out`;
-    /// `start` holds λ_mm per ring. Runs across rings, so it vectorises.
+    /// `start` holds λ_mm per ring.
     pub fn rows(&self, m: usize, cos_theta: &[f64], start: &[Scaled], out: &mut [f64]) {
-        let rings = cos_theta.len();
-        let a = &self.a[self.offset[m]..][..self.lmax + 1 - m];
-        let inverse_previous = &self.inverse_previous[self.offset[m]..];
-        let mut previous = vec![0.0; rings];
-        let mut current: Vec<f64> = start.iter().map(|s| s.mantissa).collect();
-        let mut scale: Vec<i32> = start.iter().map(|s| s.scale).collect();
-        let mut any_scaled = scale.iter().any(|&s| s < 0);
-        let write_row = |row: &mut [f64], current: &[f64], scale: &[i32], any_scaled: bool| {
-            if any_scaled {
-                for ((value, &mantissa), &scale) in row.iter_mut().zip(current).zip(scale) {
-                    *value = Scaled { mantissa, scale }.value();
-                }
-            } else {
-                row.copy_from_slice(current);
-            }
-        };
-        let mut out_rows = out.chunks_exact_mut(rings);
-        write_row(
-            out_rows.next().expect("at least one degree"),
-            &current,
-            &scale,
-            any_scaled,
-        );
-        for (i, row) in out_rows.enumerate().map(|(i, row)| (i + 1, row)) {
-            let (a_i, b_i) = (a[i], inverse_previous[i]);
-            for ((p, c), &x) in previous.iter_mut().zip(current.iter_mut()).zip(cos_theta) {
-                let next = a_i * (x * *c - *p * b_i);
-                *p = *c;
-                *c = next;
-            }
-            if any_scaled {
-                for ((p, c), s) in previous.iter_mut().zip(current.iter_mut()).zip(scale.iter_mut()) {
-                    if *s < 0 && c.abs() > BIG {
-                        *c *= SMALL;
-                        *p *= SMALL;
-                        *s += 1;
-                    }
-                }
-                any_scaled = scale.iter().any(|&s| s < 0);
-            }
-            write_row(row, &current, &scale, any_scaled);
+        let mut rows = RowCursor::new(self, m, cos_theta, start);
+        for row in out.chunks_exact_mut(cos_theta.len()) {
+            rows.next_row(row);
         }
     }
 
@@ -163,6 +125,78 @@ impl Recurrence {
             }
             .value();
         }
+    }
+}
+
+/// λ_lm of one order at many rings, one degree l = m, m + 1, … per call, for callers
+/// that use each row at once (the on-the-fly Legendre step) or store them all
+/// ([`Recurrence::rows`]). Runs across rings, so it vectorises.
+pub struct RowCursor<'a> {
+    a: &'a [f64],
+    inverse_previous: &'a [f64],
+    cos_theta: &'a [f64],
+    /// Degree index l − m of the next row.
+    next: usize,
+    previous: Vec<f64>,
+    current: Vec<f64>,
+    scale: Vec<i32>,
+    /// Rings at and beyond this index carry no scaling (scale 0).
+    scaled_end: usize,
+}
+
+impl<'a> RowCursor<'a> {
+    pub fn new(recurrence: &'a Recurrence, m: usize, cos_theta: &'a [f64], start: &[Scaled]) -> Self {
+        let scale: Vec<i32> = start.iter().map(|s| s.scale).collect();
+        RowCursor {
+            a: &recurrence.a[recurrence.offset[m]..][..recurrence.lmax + 1 - m],
+            inverse_previous: &recurrence.inverse_previous[recurrence.offset[m]..][..recurrence.lmax + 1 - m],
+            cos_theta,
+            next: 0,
+            previous: vec![0.0; cos_theta.len()],
+            current: start.iter().map(|s| s.mantissa).collect(),
+            scaled_end: scale.iter().rposition(|&s| s < 0).map_or(0, |p| p + 1),
+            scale,
+        }
+    }
+
+    /// Writes the next degree's λ_lm at every ring into `row`.
+    ///
+    /// # Panics
+    /// Past l = lmax.
+    #[inline(always)]
+    pub fn next_row(&mut self, row: &mut [f64]) {
+        let i = self.next;
+        assert!(i < self.a.len(), "past lmax");
+        if i > 0 {
+            let (a_i, b_i) = (self.a[i], self.inverse_previous[i]);
+            for ((p, c), &x) in self.previous.iter_mut().zip(self.current.iter_mut()).zip(self.cos_theta) {
+                let next = a_i * (x * *c - *p * b_i);
+                *p = *c;
+                *c = next;
+            }
+            // Scaled values that have grown representable again lose one scale step.
+            let end = self.scaled_end;
+            for ((p, c), s) in self.previous[..end]
+                .iter_mut()
+                .zip(&mut self.current[..end])
+                .zip(&mut self.scale[..end])
+            {
+                if *s < 0 && c.abs() > BIG {
+                    *c *= SMALL;
+                    *p *= SMALL;
+                    *s += 1;
+                }
+            }
+            while self.scaled_end > 0 && self.scale[self.scaled_end - 1] == 0 {
+                self.scaled_end -= 1;
+            }
+        }
+        self.next += 1;
+        let end = self.scaled_end;
+        for ((value, &mantissa), &scale) in row[..end].iter_mut().zip(&self.current).zip(&self.scale) {
+            *value = Scaled { mantissa, scale }.value();
+        }
+        row[end..].copy_from_slice(&self.current[end..]);
     }
 }
 

@@ -35,7 +35,7 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
 use crate::error::{invalid_argument, Result};
 use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
-use legendre::{Recurrence, Scaled};
+use legendre::{Recurrence, RowCursor, Scaled};
 
 /// Floating-point types the transform runs in.
 pub trait Real: realfft::FftNum + realfft::num_traits::Float + Default {
@@ -51,6 +51,10 @@ impl Real for f64 {
         value
     }
 }
+
+/// Chunks of at most this many maps are analysed with λ computed on the fly
+/// ([`LegendreTable::analysis_on_the_fly`]) rather than by a matrix product.
+const ON_THE_FLY_BATCH: usize = 1;
 
 /// Largest Legendre table a plan keeps (per node set); larger ones are recomputed.
 pub const LEGENDRE_CACHE_BYTES: usize = 256 << 20;
@@ -144,6 +148,41 @@ impl<T: Real> LegendreTable<T> {
                     row_stride: 1,
                     col_stride: 2 * half,
                 });
+            }
+        }
+    }
+
+    /// Order m's analysis with λ computed on the fly, row by row, each row used at once:
+    /// `block[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · spectra[(l − m) % 2][c · half + p].
+    /// For tables too large to keep and for single maps, where packing λ for a matrix
+    /// product costs more than the product.
+    fn analysis_on_the_fly(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
+                // SAFETY: the CPU supports the features the function is compiled for.
+                return unsafe { self.analysis_on_the_fly_avx512(m, spectra, width, block) };
+            }
+        }
+        self.analysis_on_the_fly_inline(m, spectra, width, block)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,fma")]
+    fn analysis_on_the_fly_avx512(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
+        self.analysis_on_the_fly_inline(m, spectra, width, block)
+    }
+
+    #[inline(always)]
+    fn analysis_on_the_fly_inline(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
+        let half = self.half_rings();
+        let start: Vec<Scaled> = (0..half).map(|p| self.sectoral[p * (self.lmax + 1) + m]).collect();
+        let mut rows = RowCursor::new(&self.recurrence, m, &self.cos_theta, &start);
+        let mut row = vec![0.0; half];
+        for (i, out) in block.chunks_exact_mut(width).enumerate() {
+            rows.next_row(&mut row);
+            for (value, spectrum) in out.iter_mut().zip(spectra[i % 2].chunks_exact(half)) {
+                *value = T::of(dot(&row, spectrum));
             }
         }
     }
@@ -540,6 +579,14 @@ impl<T: Real> Sht<T> {
                     // Maps in blocks, so that each (m, part) run written below is a whole line.
                     for b0 in (0..batch).step_by(MAP_BLOCK) {
                         let block = MAP_BLOCK.min(batch - b0);
+                        // The next pair of rings: fetched while this one is transformed
+                        // (its rings lie a whole map apart, beyond the hardware prefetcher).
+                        if p + 1 < mirror {
+                            for i in 0..block {
+                                prefetch(ring(b0 + i, p + 1));
+                                prefetch(ring(b0 + i, mirror - 1));
+                            }
+                        }
                         for i in 0..block {
                             input.copy_from_slice(ring(b0 + i, p));
                             self.forward
@@ -623,11 +670,27 @@ impl<T: Real> Sht<T> {
         batch: usize,
     ) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
+        let on_the_fly = table.cached.is_none() || batch <= ON_THE_FLY_BATCH;
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
         self.split_orders(&mut orders, batch)
             .into_par_iter()
             .enumerate()
             .for_each_init(OrderPanels::default, |scratch, (m, block)| {
+                if on_the_fly {
+                    // Order m's folded spectra, one column of rings per (part, map), in f64.
+                    let columns = |source: &[T]| {
+                        let mut columns = vec![0.0; width * half];
+                        for p in 0..half {
+                            let ring = &source[m * layout.order_stride + p * layout.ring_stride..][..width];
+                            for (c, value) in ring.iter().enumerate() {
+                                columns[c * half + p] = value.to_f64().unwrap_or(f64::NAN);
+                            }
+                        }
+                        columns
+                    };
+                    table.analysis_on_the_fly(m, [&columns(sym), &columns(anti)], width, block);
+                    return;
+                }
                 let panels = table.panels(m, scratch, Orientation::Analysis);
                 let degrees = self.degrees(m);
                 for parity in 0..2 {
@@ -745,18 +808,24 @@ impl<T: Real> Sht<T> {
     /// Per-order blocks `[m][l − m][part][batch]` → `(batch, (lmax+1)²)`, applying the √2
     /// of m > 0.
     fn scatter(&self, orders: &[T], batch: usize, coefficients: &mut [T]) {
-        let n = self.n_coefficients();
-        let starts = self.order_starts(batch);
-        coefficients.par_chunks_mut(n).enumerate().for_each(|(b, out)| {
-            for m in 0..=self.lmax {
-                let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-                for part in 0..if m == 0 { 1 } else { 2 } {
-                    let source = orders[starts[m] + part * batch + b..].iter().step_by(2 * batch);
-                    let destination = &mut out[self.offsets[m] + part * degrees..][..degrees];
-                    destination.iter_mut().zip(source).for_each(|(d, s)| *d = scale * *s);
+        let mut items: Vec<&mut [T]> = coefficients.chunks_exact_mut(self.n_coefficients()).collect();
+        // Rows of `orders` are read once, in order; each writes one value per item.
+        let mut rows = orders.chunks_exact(batch);
+        for m in 0..=self.lmax {
+            let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
+            for i in 0..degrees {
+                for part in 0..2 {
+                    let row = rows.next().expect("orders hold every (m, l, part)");
+                    if m == 0 && part == 1 {
+                        continue; // m = 0 has no sine part
+                    }
+                    let position = self.offsets[m] + part * degrees + i;
+                    for (item, value) in items.iter_mut().zip(row) {
+                        item[position] = scale * *value;
+                    }
                 }
             }
-        });
+        }
     }
 
     /// Inverse of [`Sht::scatter`]'s layout change (with the same √2 factors).
@@ -799,6 +868,48 @@ impl Grid {
         match self {
             Grid::GaussLegendre => "Gauss–Legendre",
             Grid::Equiangular => "equiangular",
+        }
+    }
+}
+
+/// Σ a_i b_i with independent partial sums: four vectors' worth, so that the adds of
+/// one do not wait on another's latency.
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    const WIDE: usize = 32;
+    let mut partial = [0.0; WIDE];
+    let (a_chunks, b_chunks) = (a.chunks_exact(WIDE), b.chunks_exact(WIDE));
+    let (a_tail, b_tail) = (a_chunks.remainder(), b_chunks.remainder());
+    for (x, y) in a_chunks.zip(b_chunks) {
+        for j in 0..WIDE {
+            partial[j] = x[j].mul_add(y[j], partial[j]);
+        }
+    }
+    for (i, (x, y)) in a_tail.iter().zip(b_tail).enumerate() {
+        partial[i] = x.mul_add(*y, partial[i]);
+    }
+    // Pairwise, halving: short dependency chains (a plain running sum of 32 values
+    // costs as much as the products of a few hundred rings).
+    let mut width = WIDE;
+    while width > 1 {
+        width /= 2;
+        for j in 0..width {
+            partial[j] += partial[j + width];
+        }
+    }
+    partial[0]
+}
+
+/// Asks the cache to fetch `values` ahead of use.
+#[inline]
+fn prefetch<T>(values: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let start = values.as_ptr().cast::<i8>();
+        for offset in (0..std::mem::size_of_val(values)).step_by(64) {
+            // SAFETY: prefetching has no effect on memory; the address is within `values`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.add(offset)) };
         }
     }
 }
