@@ -136,3 +136,56 @@ def test_merl_sized_problem_matches_brute_force_on_a_sample():
     out = frenbrdf.knn_interpolate(src, values, dst, k=8, sigma=0.002)
     rows = rng.choice(20_000, 20, replace=False)
     np.testing.assert_allclose(out[rows], brute_force(src, values, dst[rows], 8, 0.002)[0], rtol=1e-10)
+
+
+def merl_slice_directions() -> np.ndarray:
+    """The bins of one MERL θ_h slice as directions (θ_d, φ_d), with their reciprocal
+    copies φ_d + π, as the frequency-loss truth builds them: 90 × 360 unit vectors.
+
+    360 of them are exactly the pole, and the first rings around it are 1° apart in θ_d
+    but only 3·10⁻⁴ apart along the ring: a heavily clustered source set.
+    """
+    _, theta_d, phi_d = frenbrdf.merl_bin_angles()
+    theta, phi = np.meshgrid(theta_d, np.concatenate([phi_d, phi_d + np.pi]), indexing="ij")
+    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1).reshape(-1, 3)
+
+
+def test_heavily_clustered_sources_match_brute_force():
+    """MERL's slice grid plus one exact and three 10⁻⁹-jittered copies of its 2,160 bins
+    within 5.5° of the pole: 720 exact copies of the pole, 1,080 more within 10⁻⁹ of it,
+    and 8,640 extra points in all around it, in rings whose points share their z exactly.
+
+    Values are a smooth function of position, so choosing one of several equally near
+    duplicates changes the result by at most the jitter; queries avoid exact symmetric ties
+    (other than the pole itself, whose duplicates carry the same value).
+    """
+    rng = np.random.default_rng(6)
+    grid = merl_slice_directions()
+    near_pole = grid[grid[:, 2] > np.cos(np.radians(5.5))]
+    jittered = np.repeat(near_pole, 3, axis=0) + rng.normal(scale=1e-9, size=(3 * len(near_pole), 3))
+    jittered /= np.linalg.norm(jittered, axis=1, keepdims=True)
+    src = np.concatenate([grid, near_pole, jittered])
+    assert np.sum(np.all(src == [0.0, 0.0, 1.0], axis=1)) == 2 * 360
+    values = np.stack([src[:, 0] + 2 * src[:, 1], np.exp(src[:, 2]) * src[:, 0], np.cos(3 * src[:, 1])], axis=-1)
+
+    theta = np.radians(rng.uniform(0, 3, 150))  # within the clusters near the pole
+    phi = rng.uniform(0, 2 * np.pi, 150)
+    near = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
+    on_bins = grid[rng.choice(len(grid), 50, replace=False)] + rng.normal(scale=1e-6, size=(50, 3))
+    dst = np.concatenate([[[0.0, 0.0, 1.0]], near, on_bins, unit_vectors(rng, 150)])
+    dst /= np.linalg.norm(dst, axis=1, keepdims=True)
+
+    k, sigma = 16, 0.01
+    op = frenbrdf.KnnInterpolator(src, dst, k, sigma)
+    expected, nearest, _ = brute_force(src, values, dst, k, sigma)
+    # The same neighbour distances (ties among duplicates may name other, equally near, indices).
+    def squared_distances(indices):
+        return ((dst[:, None, :] - src[indices]) ** 2).sum(-1)
+
+    np.testing.assert_allclose(squared_distances(op.indices), squared_distances(nearest), rtol=1e-12, atol=1e-30)
+    assert np.isfinite(op.weights).all()
+    np.testing.assert_allclose(op.weights.sum(axis=1), 1.0, rtol=1e-14)
+    np.testing.assert_allclose(op.apply(values), expected, rtol=1e-8, atol=1e-8)
+    # At the pole every neighbour is an exact or near duplicate of it, equally weighted.
+    assert np.all(src[op.indices[0], 2] > 1 - 1e-15)
+    np.testing.assert_allclose(op.weights[0], np.full(k, 1 / k), rtol=1e-12)

@@ -198,6 +198,12 @@ def merl_lookup_directions(table, wi, wo, *, method: str = "trilinear") -> np.nd
 
     Returns RGB ``(..., 3)``; negative where either direction is below the horizon or no
     measurement is available.
+
+    A direction exactly on the horizon (z = 0, θ = 90°) counts as above it; any z < 0 is
+    below. For a table measured wherever :func:`merl_above_horizon` holds (as MERL's files
+    are), ``"trilinear"`` finds measured corners for every pair above the horizon, grazing
+    ones included, so it never returns the missing marker there; ``"nearest"`` may land
+    in an unmeasured bin near grazing and return it.
     """
     wi_rows, leading = rows("wi", wi, 3)
     wo_rows, _ = rows("wo", wo, 3)
