@@ -140,22 +140,26 @@ pub struct RowCursor<'a> {
     previous: Vec<f64>,
     current: Vec<f64>,
     scale: Vec<i32>,
+    /// The plain value of a mantissa per ring: 1, 2^−600 or 0, by its scale
+    /// (as [`Scaled::value`]), so that rows are written by one multiplication.
+    factor: Vec<f64>,
     /// Rings at and beyond this index carry no scaling (scale 0).
     scaled_end: usize,
 }
 
 impl<'a> RowCursor<'a> {
     pub fn new(recurrence: &'a Recurrence, m: usize, cos_theta: &'a [f64], start: &[Scaled]) -> Self {
-        let scale: Vec<i32> = start.iter().map(|s| s.scale).collect();
+        let degrees = recurrence.lmax + 1 - m;
         RowCursor {
-            a: &recurrence.a[recurrence.offset[m]..][..recurrence.lmax + 1 - m],
-            inverse_previous: &recurrence.inverse_previous[recurrence.offset[m]..][..recurrence.lmax + 1 - m],
+            a: &recurrence.a[recurrence.offset[m]..][..degrees],
+            inverse_previous: &recurrence.inverse_previous[recurrence.offset[m]..][..degrees],
             cos_theta,
             next: 0,
             previous: vec![0.0; cos_theta.len()],
             current: start.iter().map(|s| s.mantissa).collect(),
-            scaled_end: scale.iter().rposition(|&s| s < 0).map_or(0, |p| p + 1),
-            scale,
+            scale: start.iter().map(|s| s.scale).collect(),
+            factor: start.iter().map(|s| Scaled { mantissa: 1.0, scale: s.scale }.value()).collect(),
+            scaled_end: start.iter().rposition(|s| s.scale < 0).map_or(0, |p| p + 1),
         }
     }
 
@@ -174,29 +178,38 @@ impl<'a> RowCursor<'a> {
                 *p = *c;
                 *c = next;
             }
-            // Scaled values that have grown representable again lose one scale step.
+            // Scaled values that have grown past 2^600 lose one scale step. A branch-free
+            // scan finds whether any has; the rescaling itself is rare.
             let end = self.scaled_end;
-            for ((p, c), s) in self.previous[..end]
-                .iter_mut()
-                .zip(&mut self.current[..end])
-                .zip(&mut self.scale[..end])
-            {
-                if *s < 0 && c.abs() > BIG {
-                    *c *= SMALL;
-                    *p *= SMALL;
-                    *s += 1;
-                }
-            }
-            while self.scaled_end > 0 && self.scale[self.scaled_end - 1] == 0 {
-                self.scaled_end -= 1;
+            let largest = self.current[..end]
+                .iter()
+                .fold(0.0f64, |largest, c| if c.abs() > largest { c.abs() } else { largest });
+            if largest > BIG {
+                self.rescale();
             }
         }
         self.next += 1;
         let end = self.scaled_end;
-        for ((value, &mantissa), &scale) in row[..end].iter_mut().zip(&self.current).zip(&self.scale) {
-            *value = Scaled { mantissa, scale }.value();
+        for ((value, &mantissa), &factor) in row[..end].iter_mut().zip(&self.current).zip(&self.factor) {
+            *value = mantissa * factor;
         }
         row[end..].copy_from_slice(&self.current[end..]);
+    }
+
+    #[cold]
+    fn rescale(&mut self) {
+        let end = self.scaled_end;
+        for p in 0..end {
+            if self.scale[p] < 0 && self.current[p].abs() > BIG {
+                self.current[p] *= SMALL;
+                self.previous[p] *= SMALL;
+                self.scale[p] += 1;
+                self.factor[p] = Scaled { mantissa: 1.0, scale: self.scale[p] }.value();
+            }
+        }
+        while self.scaled_end > 0 && self.scale[self.scaled_end - 1] == 0 {
+            self.scaled_end -= 1;
+        }
     }
 }
 

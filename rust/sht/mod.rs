@@ -52,10 +52,6 @@ impl Real for f64 {
     }
 }
 
-/// Chunks of at most this many maps are analysed with λ computed on the fly
-/// ([`LegendreTable::analysis_on_the_fly`]) rather than by a matrix product.
-const ON_THE_FLY_BATCH: usize = 1;
-
 /// Largest Legendre table a plan keeps (per node set); larger ones are recomputed.
 pub const LEGENDRE_CACHE_BYTES: usize = 256 << 20;
 
@@ -85,7 +81,7 @@ struct OrderPanels<T> {
 }
 
 impl<T: Real> LegendreTable<T> {
-    fn new(recurrence: Arc<Recurrence>, theta: &[f64]) -> Self {
+    fn new(recurrence: Arc<Recurrence>, theta: &[f64], cache_bytes: usize) -> Self {
         let lmax = recurrence.lmax();
         let half = &theta[..theta.len().div_ceil(2)];
         let mut sectoral = vec![Scaled::ZERO; half.len() * (lmax + 1)];
@@ -102,7 +98,7 @@ impl<T: Real> LegendreTable<T> {
         };
         // Two packed copies of every value.
         let bytes = 2 * (lmax + 1) * (lmax + 2) / 2 * half.len() * std::mem::size_of::<T>();
-        if bytes <= LEGENDRE_CACHE_BYTES {
+        if bytes <= cache_bytes {
             let panels = (0..=lmax)
                 .into_par_iter()
                 .map(|m| {
@@ -154,8 +150,8 @@ impl<T: Real> LegendreTable<T> {
 
     /// Order m's analysis with λ computed on the fly, row by row, each row used at once:
     /// `block[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · spectra[(l − m) % 2][c · half + p].
-    /// For tables too large to keep and for single maps, where packing λ for a matrix
-    /// product costs more than the product.
+    /// For tables too large to keep: packing λ for a matrix product then costs more
+    /// than the product.
     fn analysis_on_the_fly(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
         #[cfg(target_arch = "x86_64")]
         {
@@ -164,17 +160,25 @@ impl<T: Real> LegendreTable<T> {
                 return unsafe { self.analysis_on_the_fly_avx512(m, spectra, width, block) };
             }
         }
-        self.analysis_on_the_fly_inline(m, spectra, width, block)
+        self.analysis_on_the_fly_inline(m, spectra, width, block, dot)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,fma")]
     fn analysis_on_the_fly_avx512(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
-        self.analysis_on_the_fly_inline(m, spectra, width, block)
+        // SAFETY: this function only runs where the CPU has AVX-512.
+        self.analysis_on_the_fly_inline(m, spectra, width, block, |a, b| unsafe { dot_avx512(a, b) })
     }
 
     #[inline(always)]
-    fn analysis_on_the_fly_inline(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
+    fn analysis_on_the_fly_inline(
+        &self,
+        m: usize,
+        spectra: [&[f64]; 2],
+        width: usize,
+        block: &mut [T],
+        dot: impl Fn(&[f64], &[f64]) -> f64,
+    ) {
         let half = self.half_rings();
         let start: Vec<Scaled> = (0..half).map(|p| self.sectoral[p * (self.lmax + 1) + m]).collect();
         let mut rows = RowCursor::new(&self.recurrence, m, &self.cos_theta, &start);
@@ -296,6 +300,12 @@ struct Layout {
 
 impl<T: Real> Sht<T> {
     pub fn new(nlat: usize, nlon: usize, lmax: usize, grid: Grid) -> Result<Self> {
+        Self::with_cache_limit(nlat, nlon, lmax, grid, LEGENDRE_CACHE_BYTES)
+    }
+
+    /// A plan that keeps Legendre tables up to `cache_bytes` (tests use 0 to exercise the
+    /// on-the-fly path on small grids).
+    pub(crate) fn with_cache_limit(nlat: usize, nlon: usize, lmax: usize, grid: Grid, cache_bytes: usize) -> Result<Self> {
         let min_rings = match grid {
             Grid::GaussLegendre => lmax + 1,
             Grid::Equiangular => (lmax + 2).max(2),
@@ -320,7 +330,7 @@ impl<T: Real> Sht<T> {
         let gauss = (grid == Grid::Equiangular).then(|| {
             let (gauss_theta, gauss_weights) = grid::gauss_legendre(lmax + 1);
             let resampling = fold_resampling(&grid::equiangular_to_gauss(&theta, &gauss_theta), nlat, &gauss_weights);
-            (LegendreTable::new(recurrence.clone(), &gauss_theta), resampling)
+            (LegendreTable::new(recurrence.clone(), &gauss_theta, cache_bytes), resampling)
         });
         let mut planner = RealFftPlanner::<T>::new();
         let mut offsets = Vec::with_capacity(lmax + 1);
@@ -334,7 +344,7 @@ impl<T: Real> Sht<T> {
             nlon,
             lmax,
             grid,
-            at_grid: LegendreTable::new(recurrence, &theta),
+            at_grid: LegendreTable::new(recurrence, &theta, cache_bytes),
             theta,
             weights,
             forward: planner.plan_fft_forward(nlon),
@@ -670,7 +680,7 @@ impl<T: Real> Sht<T> {
         batch: usize,
     ) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
-        let on_the_fly = table.cached.is_none() || batch <= ON_THE_FLY_BATCH;
+        let on_the_fly = table.cached.is_none();
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
         self.split_orders(&mut orders, batch)
             .into_par_iter()
@@ -872,32 +882,47 @@ impl Grid {
     }
 }
 
-/// Σ a_i b_i with independent partial sums: four vectors' worth, so that the adds of
-/// one do not wait on another's latency.
-#[inline(always)]
+/// Σ a_i b_i with independent partial sums.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    const WIDE: usize = 32;
-    let mut partial = [0.0; WIDE];
-    let (a_chunks, b_chunks) = (a.chunks_exact(WIDE), b.chunks_exact(WIDE));
-    let (a_tail, b_tail) = (a_chunks.remainder(), b_chunks.remainder());
+    let mut sums = [0.0f64; 4];
+    let (a_chunks, b_chunks) = (a.chunks_exact(4), b.chunks_exact(4));
+    let rest: f64 = a_chunks.remainder().iter().zip(b_chunks.remainder()).map(|(x, y)| x * y).sum();
     for (x, y) in a_chunks.zip(b_chunks) {
-        for j in 0..WIDE {
-            partial[j] = x[j].mul_add(y[j], partial[j]);
+        for j in 0..4 {
+            sums[j] = x[j].mul_add(y[j], sums[j]);
         }
     }
-    for (i, (x, y)) in a_tail.iter().zip(b_tail).enumerate() {
-        partial[i] = x.mul_add(*y, partial[i]);
-    }
-    // Pairwise, halving: short dependency chains (a plain running sum of 32 values
-    // costs as much as the products of a few hundred rings).
-    let mut width = WIDE;
-    while width > 1 {
-        width /= 2;
-        for j in 0..width {
-            partial[j] += partial[j + width];
+    (sums[0] + sums[1]) + (sums[2] + sums[3]) + rest
+}
+
+/// [`dot`] with AVX-512: four vectors of partial sums, so that each add does not wait on
+/// the previous one's latency (the compiler does not find this form on its own).
+///
+/// # Safety
+/// The CPU must support AVX-512F and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,fma")]
+unsafe fn dot_avx512(a: &[f64], b: &[f64]) -> f64 {
+    use std::arch::x86_64::*;
+    let n = a.len().min(b.len());
+    let (pa, pb) = (a.as_ptr(), b.as_ptr());
+    let mut sums = [_mm512_setzero_pd(); 4];
+    let mut i = 0;
+    // SAFETY (all loads): i + 8 ≤ n ≤ the length of both slices.
+    while i + 32 <= n {
+        for (k, sum) in sums.iter_mut().enumerate() {
+            let (x, y) = (_mm512_loadu_pd(pa.add(i + 8 * k)), _mm512_loadu_pd(pb.add(i + 8 * k)));
+            *sum = _mm512_fmadd_pd(x, y, *sum);
         }
+        i += 32;
     }
-    partial[0]
+    while i + 8 <= n {
+        sums[0] = _mm512_fmadd_pd(_mm512_loadu_pd(pa.add(i)), _mm512_loadu_pd(pb.add(i)), sums[0]);
+        i += 8;
+    }
+    let total = _mm512_add_pd(_mm512_add_pd(sums[0], sums[1]), _mm512_add_pd(sums[2], sums[3]));
+    let rest: f64 = a[i..n].iter().zip(&b[i..n]).map(|(x, y)| x * y).sum();
+    _mm512_reduce_add_pd(total) + rest
 }
 
 /// Asks the cache to fetch `values` ahead of use.
