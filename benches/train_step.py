@@ -12,72 +12,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import tempfile
-import time
 from pathlib import Path
 
 import torch
 
-from frenbrdf.data import list_materials, split_materials
-from frenbrdf.losses import FrequencyLoss
-from frenbrdf.models import AutoEncoder
-from frenbrdf.training import _Distributed, _prepare, config_for, loss_terms
-
-
-def median_seconds(functions: dict, steps: int, device: torch.device) -> dict[str, float]:
-    """Median time of each function, calls interleaved so that drift affects all alike."""
-    times: dict[str, list[float]] = {name: [] for name in functions}
-    for i in range(steps + 3):  # 3 warm-up rounds
-        for name, function in functions.items():
-            if device.type == "cuda":
-                torch.cuda.synchronize()
-            start = time.perf_counter()
-            function()
-            if device.type == "cuda":
-                torch.cuda.synchronize()
-            if i >= 3:
-                times[name].append(time.perf_counter() - start)
-    return {name: statistics.median(values) for name, values in times.items()}
+from frenbrdf.sweep import time_training_step
+from frenbrdf.training import config_for
 
 
 def time_method(method: str, data: Path, steps: int, device: torch.device, slices=None) -> dict:
+    """One method's preset, timed by :func:`frenbrdf.sweep.time_training_step` (shared with chart 2)."""
     cfg = config_for(method, data=str(data), out="", progress=False, cache_dir=str(data / ".cache"))
     if slices is not None:
         cfg.loss.frequency.slices = slices
-    files = {path.stem: path for path in list_materials(data)}
-    split = split_materials(files, seed=0)
-    _, bank, truth = _prepare(cfg, split, files, _Distributed())
-    torch.manual_seed(0)
-    network = AutoEncoder(cfg.model).to(device)
-    frequency = FrequencyLoss(cfg.loss.frequency).to(device)
-    optimizer = torch.optim.Adam(network.parameters(), lr=cfg.lr)
-    generator = torch.Generator().manual_seed(0)
-    batch = list(range(min(cfg.batch_materials, len(split.train))))
-    context = bank.sample(batch, cfg.context_samples, generator).to(device)
-    query = bank.sample(batch, cfg.query_samples, generator).to(device)
-    true = truth[batch].to(device) if truth is not None else None
-
-    def step(with_frequency: bool):
-        terms = loss_terms(network, frequency if with_frequency else None, cfg.loss, context, query,
-                           true if with_frequency else None)
-        optimizer.zero_grad(set_to_none=True)
-        terms.total.backward()
-        optimizer.step()
-
-    result = {"method": method, "nbrdf_hidden": list(cfg.model.nbrdf.hidden), "batch_materials": len(batch),
-              "samples": [cfg.context_samples, cfg.query_samples], "eta": cfg.loss.eta}
-    if cfg.loss.eta == 0:
-        result["step_s"] = median_seconds({"step": lambda: step(False)}, steps, device)["step"]
-        return result
-    params = [p.detach().requires_grad_() for p in network(context.encoder_input())[1]]
-    timed = median_seconds({"step": lambda: step(True), "without": lambda: step(False),
-                            "nbrdf_eval": lambda: frequency.predicted_maps(params),
-                            "fre": lambda: frequency(params, true).backward()}, steps, device)
-    result.update(step_s=timed["step"], step_without_fre_s=timed["without"],
-                  fre_added_share=timed["step"] / timed["without"] - 1,
-                  fre_nbrdf_eval_s=timed["nbrdf_eval"], fre_forward_backward_s=timed["fre"])
-    return result
+    return time_training_step(cfg, steps, device)
 
 
 def main():

@@ -95,6 +95,21 @@ def test_model_encode_decode_and_input_errors():
         model.decode(np.full(4, np.nan))
 
 
+def test_model_encode_in_chunks_equals_the_whole_set(monkeypatch):
+    """Sets larger than ENCODE_CHUNK go through the encoder in chunks: the same mean."""
+    from frenbrdf.models import autoencoder
+
+    config = ModelConfig(nbrdf=NBRDFConfig((8,)), encoder=EncoderConfig((16,), 4), decoder=DecoderConfig((16,)))
+    model = Model(AutoEncoder(config), LogRelativeMapping(np.full(3, 0.1)), config)
+    rng = np.random.default_rng(2)
+    wi, wo = unit_vectors(rng, 230), unit_vectors(rng, 230)
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    values = rng.uniform(0, 1, (230, 3))
+    whole = model.encode(values, (wi, wo))
+    monkeypatch.setattr(autoencoder, "ENCODE_CHUNK", 50)  # 4 chunks of 50 and one of 30
+    np.testing.assert_allclose(model.encode(values, (wi, wo)), whole, rtol=1e-5, atol=1e-6)
+
+
 def test_interpolate_endpoints_and_range():
     z_a, z_b = np.zeros(3), np.arange(3.0)
     np.testing.assert_array_equal(interpolate(z_a, z_b, 0), z_a)

@@ -136,6 +136,37 @@ def _load_material(path: Path):
     return load_nbrdf(path) if path.suffix == ".pt" else read_merl(path)
 
 
+def _select(args: argparse.Namespace) -> int:
+    from .sweep import base_config, select_config
+    from .training import load_config
+
+    if args.front and (args.config or args.epochs is not None):
+        raise ValueError("--config and --epochs set the training of candidates; with --front nothing is trained")
+    base = None
+    if args.config:
+        base = load_config(args.config, data=args.data, epochs=args.epochs)
+    elif args.epochs is not None:
+        base = base_config(args.data, epochs=args.epochs)
+    selection = select_config(args.data, args.target_psnr, args.out, front=args.front, base=base,
+                              progress=not args.quiet)
+    summary = json.loads((Path(args.out) / "selection.json").read_text())
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    elif selection.reached:
+        chosen = selection.chosen
+        print(f"{chosen['name']}: NBRDF 6→{'→'.join(map(str, chosen['hidden']))}→3 "
+              f"({chosen['bytes_per_material']} bytes per material), latent {chosen['latent']}, validation PSNR "
+              f"{chosen['psnr']:.2f} dB ≥ {selection.target_psnr:g} dB; config {selection.config_path}; "
+              f"report {selection.report_path}")
+    if not selection.reached:
+        best = selection.best
+        print(f"frenbrdf select: no configuration reaches {selection.target_psnr:g} dB validation PSNR"
+              + (f"; the best is {best['name']} at {best['psnr']:.2f} dB" if best else "")
+              + f" (report {selection.report_path})", file=sys.stderr)
+        return 1
+    return 0
+
+
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
@@ -207,6 +238,21 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--mitsuba", action="store_true", help="path-trace with Mitsuba 3 instead")
     render.add_argument("--spp", type=int, default=64, help="samples per pixel (--mitsuba)")
     render.set_defaults(run=_render)
+
+    select = commands.add_parser("select", help="the smallest NBRDF/latent configuration (chart 3) whose "
+                                 "validation render PSNR reaches a target")
+    select.add_argument("--data", required=True, help="folder of MERL files")
+    select.add_argument("--target-psnr", required=True, type=float, metavar="DB",
+                        help="validation render PSNR to reach, in dB")
+    select.add_argument("--out", required=True, help="folder for config.json and the selection report (created)")
+    select.add_argument("--front", help="a chart-3 JSON (docs/charts/chart3_capacity.json): choose from its "
+                        "measurements, train nothing")
+    select.add_argument("--config", help="without --front: JSON training config of the candidates "
+                        "(default: FreNBRDF with the sweeps' short training)")
+    select.add_argument("--epochs", type=int, help="without --front: training epochs per candidate")
+    select.add_argument("--json", action="store_true", help="print the selection as JSON")
+    select.add_argument("--quiet", action="store_true", help="no progress bars")
+    select.set_defaults(run=_select)
 
     demo = commands.add_parser("demo", help="the main job: synthesise data, train all methods, evaluate, report")
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")

@@ -20,7 +20,9 @@ Examples
 
 from __future__ import annotations
 
+import csv
 import functools
+import io
 import json
 import os
 from dataclasses import asdict, dataclass
@@ -298,4 +300,18 @@ def save_json(path: str | os.PathLike, data) -> None:
     path = Path(path)
     temporary = path.with_name(f".{path.name}.tmp")
     temporary.write_text(json.dumps(data, indent=2) + "\n")
+    os.replace(temporary, path)
+
+
+def save_csv(path: str | os.PathLike, rows: list[dict]) -> None:
+    """Writes rows (dicts with the same keys, in order) as CSV with a header, atomically."""
+    if not rows:
+        raise ValueError(f"{path}: no rows to write")
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    path = Path(path)
+    temporary = path.with_name(f".{path.name}.tmp")
+    temporary.write_text(buffer.getvalue())
     os.replace(temporary, path)

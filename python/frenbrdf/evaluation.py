@@ -24,9 +24,9 @@ from tqdm.auto import tqdm
 
 from .data import N_BINS, list_materials, save_json
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
-from .merl import merl_bin_rusinkiewicz, read_merl
+from .merl import SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
-from .render import Scene, render_linear, tonemap
+from .render import Scene, render_linear, save_figure, tonemap
 
 #: The paper's numbers (MERL, their protocol), DESIGN §7.
 PAPER = {
@@ -72,14 +72,24 @@ class EvaluateConfig:
 
 
 def _bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(ω_i, ω_o) of flat bin indices, each ``(len(bins), 3)``."""
+    """(ω_i, ω_o) of flat bin indices (φ_h = 0), each ``(len(bins), 3)``.
+
+    The angles of :func:`frenbrdf.merl_bin_rusinkiewicz` at those bins only (the same
+    values, without building the whole grid).
+    """
     from .coords import rusinkiewicz_to_directions
 
-    return rusinkiewicz_to_directions(merl_bin_rusinkiewicz().reshape(-1, 4)[bins])
+    theta_h, theta_d, phi_d = merl_bin_angles()
+    i, j, k = np.unravel_index(np.asarray(bins), SHAPE[1:])
+    return rusinkiewicz_to_directions(np.stack([theta_h[i], np.zeros(i.shape), theta_d[j], phi_d[k]], axis=-1))
 
 
-class _FrequencyMetric:
-    """L_fre between a true table and a decoded latent, in the model's mapped space."""
+class FrequencyMetric:
+    """L_fre between a true table and a decoded latent, in the model's mapped space.
+
+    The settings are fixed (default: :class:`FrequencyLossConfig`'s), whatever the model was
+    trained with, so that values of different models compare.
+    """
 
     def __init__(self, config: FrequencyLossConfig = FrequencyLossConfig()):
         self.truth, self.loss = FrequencyTruth(config), FrequencyLoss(config)
@@ -96,9 +106,80 @@ class _FrequencyMetric:
         return float(np.mean((predicted - true) ** 2))
 
 
-def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig()) -> dict:
-    """Evaluates runs (one per method) on their common test split; writes tables and figures to ``out_dir``."""
-    start = time.perf_counter()
+def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np.ndarray:
+    """``samples`` random valid bins (flat indices) of a MERL table, with replacement only if too few."""
+    valid_bins = np.flatnonzero(np.all(table.reshape(3, N_BINS) >= 0, axis=0))
+    return rng.choice(valid_bins, size=samples, replace=len(valid_bins) < samples)
+
+
+def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Encodes a table from the samples at ``bins``, decodes and renders it: (z, display image)."""
+    wi, wo = _bin_directions(bins)
+    z = model.encode(table.reshape(3, N_BINS)[:, bins].T, (wi, wo))
+    return z, tonemap(render_linear(model.decode(z)[0], scene))
+
+
+def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
+                        frequency_metric: FrequencyMetric | None | bool = None, progress: bool = True) -> list[dict]:
+    """Reconstruction metrics of one model on MERL files (e.g. a validation split), one row each.
+
+    Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
+    order of ``files``, as :func:`evaluate_runs` draws them), decoded, rendered and compared
+    with the render of the true table: RMSE, PSNR, SSIM and L_fre (``frequency_metric``:
+    None for the default one, an instance to reuse across calls, False for no L_fre).
+    """
+    rng = np.random.default_rng(seed)
+    scene = Scene(resolution=resolution)
+    if frequency_metric is None:
+        frequency_metric = FrequencyMetric()
+    rows = []
+    for path in tqdm(list(files), desc="reconstruction", disable=not progress, leave=False):
+        path = Path(path)
+        table = read_merl(path)
+        bins = sample_bins(table, rng, samples)
+        z, image = reconstruct(model, table, bins, scene)
+        metrics = image_metrics(tonemap(render_linear(table, scene)), image)
+        if frequency_metric is not False:
+            metrics["lfre"] = frequency_metric(model, table, z)
+        rows.append({"material": path.stem, **metrics})
+    return rows
+
+
+@dataclass
+class RunSet:
+    """Trained runs of one split and their test materials (see :func:`load_runs`)."""
+
+    runs: list[Path]
+    """The run folders, in the order given."""
+    models: dict[str, Model]
+    """Method → model; the run folder's name is added when a method repeats."""
+    data: Path
+    """The materials' folder."""
+    test: list[str]
+    """Names of the test materials, sorted (at most ``max_materials``)."""
+    files: dict[str, Path]
+    """Every material of ``data``: name → MERL file."""
+
+
+def load_runs(run_dirs, data: str | None = None, max_materials: int = 0) -> RunSet:
+    """Loads runs (one per method) trained on the same split and finds their test materials.
+
+    Parameters
+    ----------
+    run_dirs
+        Training run folders (each with ``best.pt``, ``config.json`` and ``split.json``).
+    data
+        The materials' folder; by default the one recorded in the runs' ``config.json``.
+    max_materials
+        Keep at most this many test materials (0: all).
+
+    Raises
+    ------
+    FileNotFoundError
+        A folder is not a run, or a test material is not in the data folder.
+    ValueError
+        No runs, or runs trained on different splits.
+    """
     runs = [Path(r) for r in run_dirs]
     if not runs:
         raise ValueError("give at least one run folder")
@@ -116,15 +197,23 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         raise ValueError("the runs were trained on different splits; evaluate runs of the same data and seed together")
     data_dir = Path(data) if data else Path(data_dirs.pop())
     files = {path.stem: path for path in list_materials(data_dir)}
-    names = sorted(test_sets[0])[: config.max_materials or None]
+    names = sorted(test_sets[0])[: max_materials or None]
     missing = [n for n in names if n not in files]
     if missing:
         raise FileNotFoundError(f"test materials {missing[:3]} not found in {data_dir}")
+    return RunSet(runs, models, data_dir, names, files)
+
+
+def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig()) -> dict:
+    """Evaluates runs (one per method) on their common test split; writes tables and figures to ``out_dir``."""
+    start = time.perf_counter()
+    loaded = load_runs(run_dirs, data, config.max_materials)
+    runs, models, data_dir, names, files = loaded.runs, loaded.models, loaded.data, loaded.test, loaded.files
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(config.seed)
     scene, edit_scene = Scene(resolution=config.resolution), Scene(resolution=config.edit_resolution)
-    frequency_metric = _FrequencyMetric()
+    frequency_metric = FrequencyMetric()
     show = config.progress
 
     # Reconstruction.
@@ -133,18 +222,14 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     renders = {}
     for name in tqdm(names, desc="reconstruction", disable=not show):
         table = read_merl(files[name])
-        flat = table.reshape(3, N_BINS)
-        valid_bins = np.flatnonzero(np.all(flat >= 0, axis=0))
-        bins = rng.choice(valid_bins, size=config.samples, replace=len(valid_bins) < config.samples)
-        wi, wo = _bin_directions(bins)
+        bins = sample_bins(table, rng, config.samples)
         truth_linear[name] = render_linear(table, scene)
         edit_truth_linear[name] = render_linear(table, edit_scene)
         truth_image = tonemap(truth_linear[name])
         renders[name] = {"truth": truth_image}
         for method, model in models.items():
-            z = model.encode(flat[:, bins].T, (wi, wo))
+            z, image = reconstruct(model, table, bins, scene)
             latents[method][name] = z
-            image = tonemap(render_linear(model.decode(z)[0], scene))
             renders[name][method] = image
             metrics = image_metrics(truth_image, image)
             metrics["lfre"] = frequency_metric(model, table, z)
@@ -223,7 +308,7 @@ def _figures(out: Path, names, renders, per_material, models, latents, pairs, ed
                     axis.axvline(edge, color="k", linestyle="--")
             axis.set_title(f"{method}: {metric.upper()}")
     figure.tight_layout()
-    _save_figure(figure, out / "histograms.png")
+    save_figure(figure, out / "histograms.png")
     plt.close(figure)
 
     # A grid of renders: truth | each method, for up to 8 materials.
@@ -239,7 +324,7 @@ def _figures(out: Path, names, renders, per_material, models, latents, pairs, ed
                 axes[row, col].set_title(key, fontsize=9)
         axes[row, 0].set_ylabel(name, fontsize=7)
     figure.tight_layout()
-    _save_figure(figure, out / "renders.png")
+    save_figure(figure, out / "renders.png")
     plt.close(figure)
 
     # Interpolation strips for the first pair: truth row, then each method.
@@ -261,11 +346,5 @@ def _figures(out: Path, names, renders, per_material, models, latents, pairs, ed
             axis.set_yticks([])
         figure.suptitle(f"{a} → {b}", fontsize=9)
         figure.tight_layout()
-        _save_figure(figure, out / "interpolation.png")
+        save_figure(figure, out / "interpolation.png")
         plt.close(figure)
-
-
-def _save_figure(figure, path: Path) -> None:
-    temporary = path.with_name(f".{path.name}.tmp.png")
-    figure.savefig(temporary, dpi=100)
-    temporary.replace(path)

@@ -169,3 +169,11 @@ def save_png(path: str | os.PathLike, image: np.ndarray) -> None:
     temporary = path.with_name(f".{path.name}.tmp.png")
     matplotlib.image.imsave(temporary, np.clip(image, 0, 1))
     os.replace(temporary, path)
+
+
+def save_figure(figure, path: str | os.PathLike, dpi: int = 100) -> None:
+    """Writes a matplotlib figure as a PNG, atomically (temporary file in the same folder, then rename)."""
+    path = Path(path)
+    temporary = path.with_name(f".{path.name}.tmp.png")
+    figure.savefig(temporary, dpi=dpi)
+    os.replace(temporary, path)

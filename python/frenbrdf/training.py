@@ -290,13 +290,26 @@ def _check_finite(terms: _Terms, step: int, run_dir: Path):
                                f"the last good checkpoint is kept in {run_dir} (lower lr or eta, or set grad_clip)")
 
 
-def _prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], rank_info: _Distributed):
-    """Reads the materials, builds the mapping from the training split, and the true coefficients."""
+def _prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], rank_info: _Distributed,
+             data_cache: dict | None = None):
+    """Reads the materials, builds the mapping from the training split, and the true coefficients.
+
+    With ``data_cache`` (a dict the caller keeps), the mapping and the mapped bank are kept
+    in it under the files, split and mapping settings, and later runs that share those
+    reuse them instead of reading the materials again.
+    """
     names = list(split.train) + list(split.val)
-    tables = read_tables([files[n] for n in names], progress=cfg.progress and rank_info.main)
-    mapping = LogRelativeMapping.from_tables(tables[:len(split.train)], cfg.model.mapping)
-    bank = mapped_bank(names, tables, mapping)
-    del tables
+    key = json.dumps([[str(files[n]) for n in names], len(split.train), dataclasses.asdict(cfg.model.mapping)])
+    if data_cache is not None and key in data_cache:
+        mapping, bank = data_cache[key]
+    else:
+        tables = read_tables([files[n] for n in names], progress=cfg.progress and rank_info.main)
+        mapping = LogRelativeMapping.from_tables(tables[:len(split.train)], cfg.model.mapping)
+        bank = mapped_bank(names, tables, mapping)
+        del tables
+        if data_cache is not None:
+            data_cache.clear()  # one data set at a time: a bank holds ~17 MB per material
+            data_cache[key] = mapping, bank
     truth = None
     if cfg.loss.eta > 0 or cfg.method == "frenbrdf":
         cache = Path(cfg.cache_dir or os.environ.get("FRENBRDF_CACHE") or Path.home() / ".cache" / "frenbrdf")
@@ -317,8 +330,12 @@ def _prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], rank_info: 
     return mapping, bank, truth
 
 
-def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
-    """Trains one model; see the module docstring for what the run folder holds."""
+def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = None) -> TrainResult:
+    """Trains one model; see the module docstring for what the run folder holds.
+
+    ``data_cache``: an (initially empty) dict passed to successive calls lets runs on the
+    same data, split and mapping read and map the materials once (sweeps of many runs).
+    """
     start = time.perf_counter()
     if not cfg.out:
         raise ValueError("config.out (the run folder) is empty")
@@ -349,7 +366,7 @@ def train(cfg: TrainConfig, *, resume: bool = False) -> TrainResult:
     if batch_size % rank_info.world:
         raise ValueError(f"a batch of {batch_size} materials does not split evenly across {rank_info.world} ranks; "
                          "choose batch_materials divisible by the number of ranks")
-    mapping, bank, truth = _prepare(cfg, split, files, rank_info)  # reads every file: bad data fails here
+    mapping, bank, truth = _prepare(cfg, split, files, rank_info, data_cache)  # reads every file: bad data fails here
     if rank_info.main:
         run_dir.mkdir(parents=True, exist_ok=True)
         save_json(run_dir / "config.json", to_dict(cfg))

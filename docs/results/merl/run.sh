@@ -1,9 +1,11 @@
 #!/bin/bash
 # Full protocol on the 80 MERL-derived materials (published NBRDF fits evaluated at every bin).
+# Usage: docs/results/merl/run.sh [FOLDER]   (default merl-protocol; ../shared beside the repository)
 set -e
-cd /work/protocol
+shared=$(cd "$(dirname "$0")/../../../../shared" && pwd)
+mkdir -p "${1:-merl-protocol}" && cd "${1:-merl-protocol}"
 start=$(date +%s)
-frenbrdf import-nbrdf /work/shared/data/merl-nbrdf/*.h5 merl --quiet
+frenbrdf import-nbrdf "$shared"/data/merl-nbrdf/*.h5 merl --quiet
 echo "import $(( $(date +%s) - start )) s"
 for m in frenbrdf nbrdf hyperbrdf; do
   t=$(date +%s)

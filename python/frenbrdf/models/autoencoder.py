@@ -15,6 +15,9 @@ from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates
 
+#: :meth:`Model.encode` passes larger sample sets through the encoder in chunks of this size.
+ENCODE_CHUNK = 16384
+
 
 @dataclass
 class ModelConfig:
@@ -92,8 +95,13 @@ class Model:
         if not np.all(np.isfinite(values)) or values.min() < 0:
             raise ValueError("values must be finite and ≥ 0 (leave missing samples out)")
         mapped = self.mapping.forward(values, self.mapping.reference_at(wi, wo))
-        samples = np.concatenate([mapped, nbrdf_coordinates(wi, wo)], axis=-1)[None].astype(np.float32)
-        return self.network.encoder(torch.from_numpy(samples))[0].numpy().astype(np.float64)
+        samples = torch.from_numpy(np.concatenate([mapped, nbrdf_coordinates(wi, wo)], axis=-1).astype(np.float32))
+        if len(samples) <= ENCODE_CHUNK:
+            return self.network.encoder(samples[None])[0].numpy().astype(np.float64)
+        # The encoder is a per-sample MLP and a mean: a large set (all 1.1 million bins of a
+        # table) goes through in chunks, which bounds memory and runs several times faster.
+        total = sum(len(chunk) * self.network.encoder(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK))
+        return (total / len(samples)).numpy()
 
     @torch.no_grad()
     def decode(self, z) -> NBRDF:
