@@ -43,7 +43,6 @@ docs/charts: ``python benches/sht_peers.py --out docs/charts/sht``).
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import platform
@@ -70,15 +69,6 @@ CHECK_BATCH = 2
 TOLERANCE = {"float64": 1e-9, "float32": 1e-4}
 BUSY_SHARE = 0.10  # share of all cores used by other processes above which the report warns
 THREAD_ENV = ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
-
-
-def write_csv(path: Path, rows: list[dict]) -> None:
-    """One row per dict, the union of their keys as columns (for spreadsheets and plots elsewhere)."""
-    columns = list(dict.fromkeys(key for row in rows for key in row))
-    with path.open("w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=columns)
-        writer.writeheader()
-        writer.writerows(rows)
 
 
 def log(message: str) -> None:
@@ -865,8 +855,10 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "sht_peers.md").write_text(markdown)
     (args.out / "sht_peers.json").write_text(json.dumps(data, indent=2))
-    write_csv(args.out / "sht_timings.csv", data["timings"])
-    write_csv(args.out / "sht_errors.csv", data["checks"])
+    from frenbrdf.data import save_csv
+
+    save_csv(args.out / "sht_timings.csv", data["timings"])
+    save_csv(args.out / "sht_errors.csv", data["checks"])
     charts = plot(data, args.out)
     print("\n" + markdown)
     log(f"wrote {args.out / 'sht_peers.md'}, {args.out / 'sht_peers.json'}, " + ", ".join(str(args.out / c) if c.endswith(".png") else c for c in charts))

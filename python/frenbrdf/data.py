@@ -304,11 +304,13 @@ def save_json(path: str | os.PathLike, data) -> None:
 
 
 def save_csv(path: str | os.PathLike, rows: list[dict]) -> None:
-    """Writes rows (dicts with the same keys, in order) as CSV with a header, atomically."""
+    """Writes rows (dicts) as CSV with a header, atomically; the columns are the union of
+    the rows' keys in first-seen order, and a row without a key leaves its cell empty."""
     if not rows:
         raise ValueError(f"{path}: no rows to write")
     buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
     path = Path(path)

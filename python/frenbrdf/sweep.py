@@ -34,10 +34,8 @@ two charts share the runs they have in common (the default configuration).
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import hashlib
-import io
 import json
 import math
 import os
@@ -50,11 +48,12 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .data import list_materials, save_json, split_materials
+from .data import list_materials, save_csv, save_json, split_materials
 from .evaluation import FrequencyMetric, reconstruction_rows
 from .losses import FrequencyLoss
 from .models.autoencoder import AutoEncoder, Model
 from .models.nbrdf import N_INPUTS, NBRDF
+from .render import save_figure
 from .training import TrainConfig, _Distributed, _merge, _prepare, config_for, from_dict, loss_terms, to_dict, train
 
 #: Training of every sweep run: the demo's short training (``frenbrdf.demo.DEMO_TRAINING``) with half its epochs,
@@ -413,12 +412,11 @@ def _write_text(path: Path, text: str) -> None:
     os.replace(temporary, path)
 
 
-def _csv(rows: list[dict]) -> str:
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(CSV_COLUMNS)
+def _csv_rows(rows: list[dict]) -> list[dict]:
+    """The chart rows as CSV cells: sequences joined, floats to 6 significant digits."""
+    cells = []
     for row in rows:
-        cells = []
+        cell = {}
         for column in CSV_COLUMNS:
             value = row.get(column, "")
             if isinstance(value, (list, tuple)):
@@ -426,9 +424,9 @@ def _csv(rows: list[dict]) -> str:
                 value = separator.join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in value)
             elif isinstance(value, float):
                 value = f"{value:.6g}"
-            cells.append("" if value is None else value)
-        writer.writerow(cells)
-    return buffer.getvalue()
+            cell[column] = "" if value is None else value
+        cells.append(cell)
+    return cells
 
 
 def save_chart(kind: str, runs: list[dict], out_dir: str | os.PathLike, meta: dict | None = None) -> dict[str, Path]:
@@ -450,7 +448,7 @@ def save_chart(kind: str, runs: list[dict], out_dir: str | os.PathLike, meta: di
     stem = out / CHART_NAMES[kind]
     paths = {"json": stem.with_suffix(".json"), "csv": stem.with_suffix(".csv"), "png": stem.with_suffix(".png")}
     save_json(paths["json"], {"chart": kind, **(meta or {}), "rows": rows, "runs": runs})
-    _write_text(paths["csv"], _csv(rows))
+    save_csv(paths["csv"], _csv_rows(rows))
     (_plot_frequency if kind == "frequency" else _plot_capacity)(rows, paths["png"], meta or {})
     return paths
 
@@ -462,12 +460,6 @@ def _pyplot():
     import matplotlib.pyplot as plt
 
     return plt
-
-
-def _save_png(figure, path: Path) -> None:
-    temporary = path.with_name(f".{path.name}.tmp.png")
-    figure.savefig(temporary, dpi=110)
-    os.replace(temporary, path)
 
 
 FREQUENCY_AXES = (("lmax", "lmax", "L_fre band limit lmax"), ("slices", "n_slices", "θ_h slices"),
@@ -512,7 +504,7 @@ def _plot_frequency(rows: list[dict], path: Path, meta: dict) -> None:
                     f"circled).\n{meta.get('caption', '')} Error bars: half the spread over seeds of the PSNR "
                     "difference to the default of the same seed.", fontsize=9)
     figure.tight_layout()
-    _save_png(figure, path)
+    save_figure(figure, path, dpi=110)
     plt.close(figure)
 
 
@@ -566,7 +558,7 @@ def _plot_capacity(rows: list[dict], path: Path, meta: dict) -> None:
                     f"{meta.get('caption', '')} Error bars: half the spread over seeds of the PSNR difference to the "
                     "default of the same seed.", fontsize=9)
     figure.tight_layout()
-    _save_png(figure, path)
+    save_figure(figure, path, dpi=110)
     plt.close(figure)
 
 
