@@ -27,6 +27,7 @@
 pub mod grid;
 pub mod legendre;
 
+use std::mem::MaybeUninit;
 use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
@@ -398,14 +399,19 @@ impl<T: Real> Sht<T> {
     /// Maps `(batch, nlat, nlon)` → coefficients `(batch, (lmax+1)²)`.
     pub fn analysis(&self, maps: &[T], batch: usize) -> Result<Vec<T>> {
         self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
-        let mut coefficients = vec![T::zero(); batch * self.n_coefficients()];
+        // Not zero-filled first: every value is written once, and zeroing a large output
+        // cost up to a tenth of a transform.
+        let len = batch * self.n_coefficients();
+        let mut coefficients = Vec::with_capacity(len);
         self.for_each_chunk(
             maps,
             self.nlat * self.nlon,
-            &mut coefficients,
+            &mut coefficients.spare_capacity_mut()[..len],
             self.n_coefficients(),
             |maps, out| self.analysis_chunk(maps, out),
         );
+        // SAFETY: `scatter` wrote every coefficient of every chunk.
+        unsafe { coefficients.set_len(len) };
         Ok(coefficients)
     }
 
@@ -435,13 +441,13 @@ impl<T: Real> Sht<T> {
 
     /// Runs `transform` on chunks of items in parallel. Chunks are sized so that their
     /// intermediates stay in cache; a single large item is one chunk, parallel inside.
-    fn for_each_chunk(
+    fn for_each_chunk<Out: Send>(
         &self,
         input: &[T],
         input_width: usize,
-        output: &mut [T],
+        output: &mut [Out],
         output_width: usize,
-        transform: impl Fn(&[T], &mut [T]) + Sync,
+        transform: impl Fn(&[T], &mut [Out]) + Sync,
     ) {
         // At least a block of maps per chunk: narrower products waste the kernel's tiles,
         // and each order's slice of a chunk stays small however large the grid.
@@ -467,7 +473,7 @@ impl<T: Real> Sht<T> {
         }
     }
 
-    fn analysis_chunk(&self, maps: &[T], coefficients: &mut [T]) {
+    fn analysis_chunk(&self, maps: &[T], coefficients: &mut [MaybeUninit<T>]) {
         let batch = maps.len() / (self.nlat * self.nlon);
         let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
         let orders = match &self.gauss {
@@ -817,8 +823,8 @@ impl<T: Real> Sht<T> {
 
     /// Per-order blocks `[m][l − m][part][batch]` → `(batch, (lmax+1)²)`, applying the √2
     /// of m > 0.
-    fn scatter(&self, orders: &[T], batch: usize, coefficients: &mut [T]) {
-        let mut items: Vec<&mut [T]> = coefficients.chunks_exact_mut(self.n_coefficients()).collect();
+    fn scatter(&self, orders: &[T], batch: usize, coefficients: &mut [MaybeUninit<T>]) {
+        let mut items: Vec<&mut [MaybeUninit<T>]> = coefficients.chunks_exact_mut(self.n_coefficients()).collect();
         // Rows of `orders` are read once, in order; each writes one value per item.
         let mut rows = orders.chunks_exact(batch);
         for m in 0..=self.lmax {
@@ -831,7 +837,7 @@ impl<T: Real> Sht<T> {
                     }
                     let position = self.offsets[m] + part * degrees + i;
                     for (item, value) in items.iter_mut().zip(row) {
-                        item[position] = scale * *value;
+                        item[position].write(scale * *value);
                     }
                 }
             }
