@@ -158,7 +158,16 @@ impl<'a> RowCursor<'a> {
             previous: vec![0.0; cos_theta.len()],
             current: start.iter().map(|s| s.mantissa).collect(),
             scale: start.iter().map(|s| s.scale).collect(),
-            factor: start.iter().map(|s| Scaled { mantissa: 1.0, scale: s.scale }.value()).collect(),
+            factor: start
+                .iter()
+                .map(|s| {
+                    Scaled {
+                        mantissa: 1.0,
+                        scale: s.scale,
+                    }
+                    .value()
+                })
+                .collect(),
             scaled_end: start.iter().rposition(|s| s.scale < 0).map_or(0, |p| p + 1),
         }
     }
@@ -173,7 +182,12 @@ impl<'a> RowCursor<'a> {
         assert!(i < self.a.len(), "past lmax");
         if i > 0 {
             let (a_i, b_i) = (self.a[i], self.inverse_previous[i]);
-            for ((p, c), &x) in self.previous.iter_mut().zip(self.current.iter_mut()).zip(self.cos_theta) {
+            for ((p, c), &x) in self
+                .previous
+                .iter_mut()
+                .zip(self.current.iter_mut())
+                .zip(self.cos_theta)
+            {
                 let next = a_i * (x * *c - *p * b_i);
                 *p = *c;
                 *c = next;
@@ -204,7 +218,11 @@ impl<'a> RowCursor<'a> {
                 self.current[p] *= SMALL;
                 self.previous[p] *= SMALL;
                 self.scale[p] += 1;
-                self.factor[p] = Scaled { mantissa: 1.0, scale: self.scale[p] }.value();
+                self.factor[p] = Scaled {
+                    mantissa: 1.0,
+                    scale: self.scale[p],
+                }
+                .value();
             }
         }
         while self.scaled_end > 0 && self.scale[self.scaled_end - 1] == 0 {

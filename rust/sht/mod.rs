@@ -32,7 +32,8 @@ use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use realfft::{ComplexToReal, RealFftPlanner};
+use rustfft::{Fft, FftPlanner};
 
 use crate::error::{invalid_argument, Result};
 use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
@@ -228,7 +229,8 @@ pub struct Sht<T: Real> {
     grid: Grid,
     theta: Vec<f64>,
     weights: Vec<f64>,
-    forward: Arc<dyn RealToComplex<T>>,
+    /// Complex FFT along a ring, for analysis (two real rings at once).
+    fft: Arc<dyn Fft<T>>,
     inverse: Arc<dyn ComplexToReal<T>>,
     /// λ at the grid's own rings: synthesis, and analysis on Gauss–Legendre grids.
     at_grid: LegendreTable<T>,
@@ -306,7 +308,13 @@ impl<T: Real> Sht<T> {
 
     /// A plan that keeps Legendre tables up to `cache_bytes` (tests use 0 to exercise the
     /// on-the-fly path on small grids).
-    pub(crate) fn with_cache_limit(nlat: usize, nlon: usize, lmax: usize, grid: Grid, cache_bytes: usize) -> Result<Self> {
+    pub(crate) fn with_cache_limit(
+        nlat: usize,
+        nlon: usize,
+        lmax: usize,
+        grid: Grid,
+        cache_bytes: usize,
+    ) -> Result<Self> {
         let min_rings = match grid {
             Grid::GaussLegendre => lmax + 1,
             Grid::Equiangular => (lmax + 2).max(2),
@@ -331,7 +339,10 @@ impl<T: Real> Sht<T> {
         let gauss = (grid == Grid::Equiangular).then(|| {
             let (gauss_theta, gauss_weights) = grid::gauss_legendre(lmax + 1);
             let resampling = fold_resampling(&grid::equiangular_to_gauss(&theta, &gauss_theta), nlat, &gauss_weights);
-            (LegendreTable::new(recurrence.clone(), &gauss_theta, cache_bytes), resampling)
+            (
+                LegendreTable::new(recurrence.clone(), &gauss_theta, cache_bytes),
+                resampling,
+            )
         });
         let mut planner = RealFftPlanner::<T>::new();
         let mut offsets = Vec::with_capacity(lmax + 1);
@@ -348,7 +359,7 @@ impl<T: Real> Sht<T> {
             at_grid: LegendreTable::new(recurrence, &theta, cache_bytes),
             theta,
             weights,
-            forward: planner.plan_fft_forward(nlon),
+            fft: FftPlanner::new().plan_fft_forward(nlon),
             inverse: planner.plan_fft_inverse(nlon),
             gauss,
             offsets,
@@ -575,23 +586,34 @@ impl<T: Real> Sht<T> {
     /// FFT of every ring, north and south rings folded into symmetric and antisymmetric
     /// parts scaled by `ring_factors`. Layout `[half ring][m][part][batch]`, part 0 the
     /// cosine sums Σ_k x_k cos mφ_k and part 1 the sine sums Σ_k x_k sin mφ_k.
+    ///
+    /// One complex FFT per ring pair gives both parts: with z = (n + s) + i(n − s) for the
+    /// north and south rings n and s, Z = SYM + i·ANTI, and since both are spectra of real
+    /// rings, SYM_m = (Z_m + conj Z_−m)/2 and ANTI_m = (Z_m − conj Z_−m)/2i. Measured, this
+    /// halves the FFT time of two real FFTs (realfft) at 180 points in f64, and more in f32.
     fn fold_rings(&self, maps: &[T], batch: usize, ring_factors: &[f64]) -> (Vec<T>, Vec<T>) {
-        let (nlat, orders, width) = (self.nlat, self.lmax + 1, 2 * batch);
-        let ring = |b: usize, j: usize| &maps[(b * nlat + j) * self.nlon..][..self.nlon];
+        let (nlat, nlon, orders, width) = (self.nlat, self.nlon, self.lmax + 1, 2 * batch);
+        let ring = |b: usize, j: usize| &maps[(b * nlat + j) * nlon..][..nlon];
         let slab = orders * width;
         let mut sym = self.pool.take(self.half_rings() * slab);
         let mut anti = self.pool.take(self.half_rings() * slab);
+        let zero = Complex::new(T::zero(), T::zero());
         sym.par_chunks_mut(slab)
             .zip(anti.par_chunks_mut(slab))
             .enumerate()
             .for_each_init(
                 || {
-                    let f = &self.forward;
-                    let spectra = || vec![f.make_output_vec(); MAP_BLOCK];
-                    (f.make_input_vec(), spectra(), spectra(), f.make_scratch_vec())
+                    (
+                        vec![zero; MAP_BLOCK * nlon],
+                        vec![zero; self.fft.get_inplace_scratch_len()],
+                    )
                 },
-                |(input, north, south, scratch), (p, (sym_p, anti_p))| {
-                    let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
+                |(spectra, scratch), (p, (sym_p, anti_p))| {
+                    let mirror = nlat - 1 - p;
+                    // Half of the scale: SYM and ANTI are halves of sums of Z values.
+                    let factor = T::of(0.5 * ring_factors[p]);
+                    // The equator ring has no mirror: symmetric part only.
+                    let anti_factor = if mirror == p { T::zero() } else { factor };
                     // Maps in blocks, so that each (m, part) run written below is a whole line.
                     for b0 in (0..batch).step_by(MAP_BLOCK) {
                         let block = MAP_BLOCK.min(batch - b0);
@@ -603,32 +625,29 @@ impl<T: Real> Sht<T> {
                                 prefetch(ring(b0 + i, mirror - 1));
                             }
                         }
-                        for i in 0..block {
-                            input.copy_from_slice(ring(b0 + i, p));
-                            self.forward
-                                .process_with_scratch(input, &mut north[i], scratch)
-                                .expect("buffers sized by the plan");
+                        let spectra = &mut spectra[..block * nlon];
+                        for (i, z) in spectra.chunks_exact_mut(nlon).enumerate() {
+                            let north = ring(b0 + i, p);
                             if mirror == p {
-                                south[i]
-                                    .iter_mut()
-                                    .for_each(|v| *v = Complex::new(T::zero(), T::zero()));
+                                z.iter_mut().zip(north).for_each(|(z, &n)| *z = Complex::new(n, n));
                             } else {
-                                input.copy_from_slice(ring(b0 + i, mirror));
-                                self.forward
-                                    .process_with_scratch(input, &mut south[i], scratch)
-                                    .expect("buffers sized by the plan");
+                                let south = ring(b0 + i, mirror);
+                                for ((z, &n), &s) in z.iter_mut().zip(north).zip(south) {
+                                    *z = Complex::new(n + s, n - s);
+                                }
                             }
                         }
-                        // The equator ring has no mirror: symmetric part only.
-                        let anti_factor = if mirror == p { T::zero() } else { factor };
+                        self.fft.process_with_scratch(spectra, scratch);
                         for m in 0..orders {
                             let (cosine, sine) = (m * width + b0, m * width + batch + b0);
-                            for i in 0..block {
-                                let (n, s) = (north[i][m], south[i][m]);
-                                sym_p[cosine + i] = factor * (n.re + s.re);
-                                anti_p[cosine + i] = anti_factor * (n.re - s.re);
-                                sym_p[sine + i] = -(factor * (n.im + s.im));
-                                anti_p[sine + i] = -(anti_factor * (n.im - s.im));
+                            for (i, z) in spectra.chunks_exact(nlon).enumerate() {
+                                let (a, b) = (z[m], z[(nlon - m) % nlon].conj());
+                                let (sum, difference) = (a + b, a - b);
+                                // SYM = sum/2, ANTI = −i·difference/2; the sine sums are −Im.
+                                sym_p[cosine + i] = factor * sum.re;
+                                sym_p[sine + i] = -(factor * sum.im);
+                                anti_p[cosine + i] = anti_factor * difference.im;
+                                anti_p[sine + i] = anti_factor * difference.re;
                             }
                         }
                     }
@@ -892,7 +911,12 @@ impl Grid {
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut sums = [0.0f64; 4];
     let (a_chunks, b_chunks) = (a.chunks_exact(4), b.chunks_exact(4));
-    let rest: f64 = a_chunks.remainder().iter().zip(b_chunks.remainder()).map(|(x, y)| x * y).sum();
+    let rest: f64 = a_chunks
+        .remainder()
+        .iter()
+        .zip(b_chunks.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
     for (x, y) in a_chunks.zip(b_chunks) {
         for j in 0..4 {
             sums[j] = x[j].mul_add(y[j], sums[j]);
