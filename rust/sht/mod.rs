@@ -274,19 +274,6 @@ impl<T: Real> BufferPool<T> {
     }
 }
 
-/// Below this much Legendre work (batch × coefficients × half rings) a transform runs on
-/// the calling thread: handing a small job to the thread pool and waking it costs more
-/// than the job (a single 90×180 map, ~0.2 ms, is 365 k).
-const SMALL_WORK: usize = 1 << 22;
-
-thread_local! {
-    /// A one-thread pool whose worker is this thread, for small transforms: parallel
-    /// loops inside it run inline, with no hand-off or wake-up. Built on first use
-    /// (rayon keeps such a pool's registry for the thread's lifetime).
-    static CALLER_POOL: Option<rayon::ThreadPool> =
-        rayon::ThreadPoolBuilder::new().num_threads(1).use_current_thread().build().ok();
-}
-
 /// Maps transposed together between per-ring and per-order layouts: one cache line of f64.
 const MAP_BLOCK: usize = 8;
 
@@ -464,24 +451,16 @@ impl<T: Real> Sht<T> {
         // and each order's slice of a chunk stays small however large the grid.
         let bytes_per_item = 4 * self.half_rings().max(self.lmax + 1) * (self.lmax + 1) * std::mem::size_of::<T>();
         let chunk = (CHUNK_BYTES / bytes_per_item).max(MAP_BLOCK);
-        let batch = output.len() / output_width;
-        let small = batch * self.n_coefficients() * self.half_rings() < SMALL_WORK;
         let transform = &transform;
-        let mut run = move || {
+        // Entered once, the pool runs every parallel loop of the transform from one of its
+        // workers: a caller outside the pool would otherwise hand each loop over and wait
+        // for it (twice the time of a single 90×180 map on one thread).
+        rayon::scope(|_| {
             output
                 .par_chunks_mut(chunk * output_width)
                 .zip(input.par_chunks(chunk * input_width))
                 .for_each(|(out, items)| transform(items, out))
-        };
-        // Inside a pool's worker already, loops run inline anyway.
-        if small && rayon::current_thread_index().is_none() {
-            CALLER_POOL.with(move |pool| match pool {
-                Some(pool) => pool.install(run),
-                None => run(),
-            })
-        } else {
-            run()
-        }
+        })
     }
 
     fn analysis_chunk(&self, maps: &[T], coefficients: &mut [MaybeUninit<T>]) {

@@ -140,3 +140,17 @@ fn on_the_fly_legendre_agrees_with_the_matrix_product() {
         }
     }
 }
+
+#[test]
+fn a_small_transform_leaves_the_calling_thread_outside_any_pool() {
+    // A caller made a worker of a one-thread pool would run every later parallel loop,
+    // its own and other kernels', on that one thread.
+    std::thread::spawn(|| {
+        let sht = Sht::<f64>::new(12, 24, 11, Grid::GaussLegendre).unwrap();
+        let maps = random(12 * 24, 1);
+        sht.analysis(&maps, 1).unwrap();
+        assert_eq!(rayon::current_thread_index(), None);
+    })
+    .join()
+    .unwrap();
+}
