@@ -17,11 +17,12 @@
 //! nlat ≥ lmax + 2.
 //!
 //! # How it runs
-//! A real FFT per ring (realfft), then per order m a Legendre step that is a matrix
-//! product (the `gemm` crate) over the whole batch. North and south rings are folded
-//! into symmetric and antisymmetric parts first, since λ_lm(−x) = (−1)^(l+m) λ_lm(x): each
-//! half of the degrees meets only one of them, which halves the work. Orders run in
-//! parallel with rayon. Legendre tables are built once per plan and kept while they fit
+//! An FFT along the rings, then per order m a Legendre step that is a matrix product
+//! ([`crate::linalg`]) over a chunk of maps. North and south rings are folded into
+//! symmetric and antisymmetric parts, since λ_lm(−x) = (−1)^(l+m) λ_lm(x): each half of the
+//! degrees meets only one of them, which halves the work. Analysis gets both parts of a
+//! ring pair from one complex FFT (rustfft); synthesis ends in a real inverse FFT per ring
+//! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre tables are built once per plan and kept while they fit
 //! in [`LEGENDRE_CACHE_BYTES`]; larger plans recompute them per call.
 
 pub mod grid;
