@@ -4,6 +4,8 @@
 //! without the Condon–Shortley phase: λ_mm = √((2m+1)/4π · (2m−1)!!/(2m)!!) sin^m θ ≥ 0.
 //! Upwards in l: λ_{m+1,m} = √(2m+3) cos θ λ_mm and
 //! λ_lm = a_lm (cos θ λ_{l−1,m} − λ_{l−2,m} / a_{l−1,m}), a_lm = √((4l²−1)/(l²−m²)).
+//! The recurrence runs rescaled, for two operations a step: with λ_lm = N_lm μ_lm,
+//! μ_lm = (α_lm cos θ) μ_{l−1,m} − μ_{l−2,m} (see [`Recurrence::rescaled`]).
 //!
 //! sin^m θ underflows long before λ_lm does (m = 1000 at θ = 0.5 rad gives 10^−320, yet
 //! λ_{4000,1000}(0.5) is of order 1), so values are carried as mantissa × 2^(600·scale)
@@ -38,42 +40,64 @@ impl Scaled {
     }
 }
 
+/// a_lm = √((4l²−1)/(l²−m²)), for l > m.
+fn coefficient(l: usize, m: usize) -> f64 {
+    let (l, m) = (l as f64, m as f64);
+    ((4.0 * l * l - 1.0) / (l * l - m * m)).sqrt()
+}
+
 /// Recurrence coefficients for every m ≤ lmax.
 pub struct Recurrence {
     lmax: usize,
-    /// `a[offset[m] + (l − m)]` = a_lm (unused for l = m).
-    a: Vec<f64>,
-    /// `inverse_previous[offset[m] + (l − m)]` = 1 / a_{l−1,m} (used for l ≥ m + 2).
-    inverse_previous: Vec<f64>,
+    /// α_lm and N_lm (see [`Recurrence::rescaled`]) at `offset[m] + (l − m)`.
+    alpha: Vec<f64>,
+    norm: Vec<f64>,
     offset: Vec<usize>,
 }
 
 impl Recurrence {
     pub fn new(lmax: usize) -> Self {
         let size = (lmax + 1) * (lmax + 2) / 2;
-        let (mut a, mut inverse_previous) = (Vec::with_capacity(size), Vec::with_capacity(size));
+        let (mut alpha, mut norm) = (Vec::with_capacity(size), Vec::with_capacity(size));
         let mut offset = Vec::with_capacity(lmax + 1);
-        let coefficient = |l: usize, m: usize| {
-            let (l, m) = (l as f64, m as f64);
-            ((4.0 * l * l - 1.0) / (l * l - m * m)).sqrt()
-        };
         for m in 0..=lmax {
-            offset.push(a.len());
+            offset.push(alpha.len());
+            // λ_l = a_l cos θ λ_{l−1} − (a_l / a_{l−1}) λ_{l−2}; dividing by N_l leaves μ_{l−2}
+            // alone when N_l = (a_l / a_{l−1}) N_{l−2}, and then α_l = a_l N_{l−1} / N_l.
+            let (mut before, mut last) = (1.0, 1.0); // N_{l−2}, N_{l−1}
             for l in m..=lmax {
-                a.push(if l > m { coefficient(l, m) } else { 0.0 });
-                inverse_previous.push(if l > m + 1 { 1.0 / coefficient(l - 1, m) } else { 0.0 });
+                let n = if l < m + 2 {
+                    1.0
+                } else {
+                    coefficient(l, m) / coefficient(l - 1, m) * before
+                };
+                alpha.push(if l == m { 0.0 } else { coefficient(l, m) * last / n });
+                norm.push(n);
+                (before, last) = (last, n);
             }
         }
         Recurrence {
             lmax,
-            a,
-            inverse_previous,
+            alpha,
+            norm,
             offset,
         }
     }
 
     pub fn lmax(&self) -> usize {
         self.lmax
+    }
+
+    /// Order m's recurrence, (α_lm, N_lm) for l = m..=lmax: with λ_lm = N_lm μ_lm,
+    /// μ_lm = (α_lm cos θ) μ_{l−1,m} − μ_{l−2,m} from μ_mm = λ_mm and μ_{m−1,m} = 0
+    /// (α unused at l = m). N stays within about [0.1, 1.2], so μ is as safe from
+    /// overflow and underflow as λ.
+    pub fn rescaled(&self, m: usize) -> (&[f64], &[f64]) {
+        let degrees = self.lmax + 1 - m;
+        (
+            &self.alpha[self.offset[m]..][..degrees],
+            &self.norm[self.offset[m]..][..degrees],
+        )
     }
 
     /// λ_lm for l = m..=lmax (rows) at many rings (columns), row-major into `out`;
@@ -102,16 +126,16 @@ impl Recurrence {
         }
     }
 
-    /// λ_lm(θ) for l = m..=lmax into `out[(l − m) · stride]`, starting from λ_mm: the
-    /// one-ring form of [`Recurrence::rows`], kept as the tests' reference.
+    /// λ_lm(θ) for l = m..=lmax into `out[(l − m) · stride]`, starting from λ_mm, by the
+    /// plain (not rescaled) recurrence: the tests' reference.
     #[cfg(test)]
     pub fn column(&self, m: usize, cos_theta: f64, start: Scaled, out: &mut [f64], stride: usize) {
-        let a = &self.a[self.offset[m]..];
-        let inverse_previous = &self.inverse_previous[self.offset[m]..];
         let (mut previous, mut current, mut scale) = (0.0, start.mantissa, start.scale);
         out[0] = start.value();
         for i in 1..=self.lmax - m {
-            let next = a[i] * (cos_theta * current - previous * inverse_previous[i]);
+            let l = m + i;
+            let inverse_previous = if i > 1 { 1.0 / coefficient(l - 1, m) } else { 0.0 };
+            let next = coefficient(l, m) * (cos_theta * current - previous * inverse_previous);
             previous = current;
             current = next;
             if scale < 0 && current.abs() > BIG {
@@ -132,8 +156,8 @@ impl Recurrence {
 /// that use each row at once (the on-the-fly Legendre step) or store them all
 /// ([`Recurrence::rows`]). Runs across rings, so it vectorises.
 pub struct RowCursor<'a> {
-    a: &'a [f64],
-    inverse_previous: &'a [f64],
+    alpha: &'a [f64],
+    norm: &'a [f64],
     cos_theta: &'a [f64],
     /// Degree index l − m of the next row.
     next: usize,
@@ -149,10 +173,10 @@ pub struct RowCursor<'a> {
 
 impl<'a> RowCursor<'a> {
     pub fn new(recurrence: &'a Recurrence, m: usize, cos_theta: &'a [f64], start: &[Scaled]) -> Self {
-        let degrees = recurrence.lmax + 1 - m;
+        let (alpha, norm) = recurrence.rescaled(m);
         RowCursor {
-            a: &recurrence.a[recurrence.offset[m]..][..degrees],
-            inverse_previous: &recurrence.inverse_previous[recurrence.offset[m]..][..degrees],
+            alpha,
+            norm,
             cos_theta,
             next: 0,
             previous: vec![0.0; cos_theta.len()],
@@ -179,16 +203,16 @@ impl<'a> RowCursor<'a> {
     #[inline(always)]
     pub fn next_row(&mut self, row: &mut [f64]) {
         let i = self.next;
-        assert!(i < self.a.len(), "past lmax");
+        assert!(i < self.alpha.len(), "past lmax");
         if i > 0 {
-            let (a_i, b_i) = (self.a[i], self.inverse_previous[i]);
+            let alpha = self.alpha[i];
             for ((p, c), &x) in self
                 .previous
                 .iter_mut()
                 .zip(self.current.iter_mut())
                 .zip(self.cos_theta)
             {
-                let next = a_i * (x * *c - *p * b_i);
+                let next = (alpha * x).mul_add(*c, -*p);
                 *p = *c;
                 *c = next;
             }
@@ -203,11 +227,13 @@ impl<'a> RowCursor<'a> {
             }
         }
         self.next += 1;
-        let end = self.scaled_end;
+        let (end, norm) = (self.scaled_end, self.norm[i]);
         for ((value, &mantissa), &factor) in row[..end].iter_mut().zip(&self.current).zip(&self.factor) {
-            *value = mantissa * factor;
+            *value = mantissa * factor * norm;
         }
-        row[end..].copy_from_slice(&self.current[end..]);
+        for (value, &mantissa) in row[end..].iter_mut().zip(&self.current[end..]) {
+            *value = mantissa * norm;
+        }
     }
 
     #[cold]
@@ -276,7 +302,13 @@ mod tests {
         for (p, t) in thetas.iter().enumerate() {
             let column = values(lmax, m, *t);
             for (i, v) in column.iter().enumerate() {
-                assert_eq!(rows[i * thetas.len() + p], *v, "l={} θ={t}", m + i);
+                // The rows come from the rescaled recurrence, the column from the plain one.
+                let row = rows[i * thetas.len() + p];
+                assert!(
+                    (row - v).abs() <= 1e-13 * (i + 1) as f64 * v.abs().max(1.0),
+                    "l={} θ={t}: {row} vs {v}",
+                    m + i
+                );
             }
         }
     }

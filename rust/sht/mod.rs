@@ -27,6 +27,7 @@
 
 pub mod grid;
 pub mod legendre;
+mod streamed;
 
 use std::mem::MaybeUninit;
 use std::sync::{Arc, Mutex};
@@ -38,7 +39,7 @@ use rustfft::{Fft, FftPlanner};
 
 use crate::error::{invalid_argument, Result};
 use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
-use legendre::{Recurrence, RowCursor, Scaled};
+use legendre::{Recurrence, Scaled};
 
 /// Floating-point types the transform runs in.
 pub trait Real: realfft::FftNum + realfft::num_traits::Float + Default {
@@ -69,7 +70,7 @@ struct LegendreTable<T> {
     lmax: usize,
     cos_theta: Vec<f64>,
     recurrence: Arc<Recurrence>,
-    /// λ_mm per half ring: `sectoral[p * (lmax + 1) + m]`.
+    /// λ_mm per half ring, by order: `sectoral[m * half_rings + p]`.
     sectoral: Vec<Scaled>,
     /// Per m, when within the cache budget.
     cached: Option<Vec<OrderPanels<T>>>,
@@ -87,11 +88,14 @@ impl<T: Real> LegendreTable<T> {
     fn new(recurrence: Arc<Recurrence>, theta: &[f64], cache_bytes: usize) -> Self {
         let lmax = recurrence.lmax();
         let half = &theta[..theta.len().div_ceil(2)];
-        let mut sectoral = vec![Scaled::ZERO; half.len() * (lmax + 1)];
-        sectoral
+        let mut by_ring = vec![Scaled::ZERO; half.len() * (lmax + 1)];
+        by_ring
             .par_chunks_mut(lmax + 1)
             .zip(half)
             .for_each(|(row, t)| recurrence.sectoral(t.sin(), row));
+        let sectoral = (0..=lmax)
+            .flat_map(|m| by_ring.iter().skip(m).step_by(lmax + 1).copied())
+            .collect();
         let mut table = LegendreTable {
             lmax,
             cos_theta: half.iter().map(|t| t.cos()).collect(),
@@ -100,8 +104,7 @@ impl<T: Real> LegendreTable<T> {
             cached: None,
         };
         // Two packed copies of every value.
-        let bytes = 2 * (lmax + 1) * (lmax + 2) / 2 * half.len() * std::mem::size_of::<T>();
-        if bytes <= cache_bytes {
+        if 2 * table.bytes() <= cache_bytes {
             let panels = (0..=lmax)
                 .into_par_iter()
                 .map(|m| {
@@ -119,12 +122,17 @@ impl<T: Real> LegendreTable<T> {
         self.cos_theta.len()
     }
 
+    /// Size of one packed copy of the table (analysis or synthesis).
+    fn bytes(&self) -> usize {
+        (self.lmax + 1) * (self.lmax + 2) / 2 * self.half_rings() * std::mem::size_of::<T>()
+    }
+
     /// Computes order m's λ and packs the panels `orientation` asks for.
     fn compute(&self, m: usize, panels: &mut OrderPanels<T>, orientation: Orientation) {
         let (degrees, half) = (self.lmax + 1 - m, self.half_rings());
-        let start: Vec<Scaled> = (0..half).map(|p| self.sectoral[p * (self.lmax + 1) + m]).collect();
+        let start = self.sectoral_column(m);
         let mut values = vec![0f64; degrees * half];
-        self.recurrence.rows(m, &self.cos_theta, &start, &mut values);
+        self.recurrence.rows(m, &self.cos_theta, start, &mut values);
         let lambda: Vec<T> = values.into_iter().map(T::of).collect();
         for parity in 0..2 {
             let rows = (degrees + 1 - parity) / 2;
@@ -151,47 +159,9 @@ impl<T: Real> LegendreTable<T> {
         }
     }
 
-    /// Order m's analysis with λ computed on the fly, row by row, each row used at once:
-    /// `block[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · spectra[(l − m) % 2][c · half + p].
-    /// For tables too large to keep: packing λ for a matrix product then costs more
-    /// than the product.
-    fn analysis_on_the_fly(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
-                // SAFETY: the CPU supports the features the function is compiled for.
-                return unsafe { self.analysis_on_the_fly_avx512(m, spectra, width, block) };
-            }
-        }
-        self.analysis_on_the_fly_inline(m, spectra, width, block, dot)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,fma")]
-    fn analysis_on_the_fly_avx512(&self, m: usize, spectra: [&[f64]; 2], width: usize, block: &mut [T]) {
-        // SAFETY: this function only runs where the CPU has AVX-512.
-        self.analysis_on_the_fly_inline(m, spectra, width, block, |a, b| unsafe { dot_avx512(a, b) })
-    }
-
-    #[inline(always)]
-    fn analysis_on_the_fly_inline(
-        &self,
-        m: usize,
-        spectra: [&[f64]; 2],
-        width: usize,
-        block: &mut [T],
-        dot: impl Fn(&[f64], &[f64]) -> f64,
-    ) {
-        let half = self.half_rings();
-        let start: Vec<Scaled> = (0..half).map(|p| self.sectoral[p * (self.lmax + 1) + m]).collect();
-        let mut rows = RowCursor::new(&self.recurrence, m, &self.cos_theta, &start);
-        let mut row = vec![0.0; half];
-        for (i, out) in block.chunks_exact_mut(width).enumerate() {
-            rows.next_row(&mut row);
-            for (value, spectrum) in out.iter_mut().zip(spectra[i % 2].chunks_exact(half)) {
-                *value = T::of(dot(&row, spectrum));
-            }
-        }
+    /// Order m's λ_mm at the half rings.
+    fn sectoral_column(&self, m: usize) -> &[Scaled] {
+        &self.sectoral[m * self.half_rings()..][..self.half_rings()]
     }
 
     /// Order m's panels: from the cache, or computed into `scratch` (only the
@@ -274,6 +244,15 @@ impl<T: Real> BufferPool<T> {
         }
     }
 }
+
+/// Chunks of at most this many maps whose table exceeds [`STREAMED_MIN_TABLE_BYTES`]
+/// are analysed with λ recomputed in registers ([`streamed`]) even where the table is
+/// kept: a one-map product reuses each table value only twice, so reading the table from
+/// memory costs more than recomputing it. Measured on one thread, f64: one 256×512 map
+/// 4.1 ms with the table, 1.4 ms streamed; 128×256 (8 MB table) 0.30 and 0.27 ms;
+/// 90×180 (3 MB, which stays in cache) 0.13 and 0.15 ms.
+const STREAMED_MAX_BATCH: usize = 1;
+const STREAMED_MIN_TABLE_BYTES: usize = 4 << 20;
 
 /// Maps transposed together between per-ring and per-order layouts: one cache line of f64.
 const MAP_BLOCK: usize = 8;
@@ -685,51 +664,72 @@ impl<T: Real> Sht<T> {
         batch: usize,
     ) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
-        let on_the_fly = table.cached.is_none();
+        let streamed =
+            table.cached.is_none() || (batch <= STREAMED_MAX_BATCH && table.bytes() > STREAMED_MIN_TABLE_BYTES);
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
         self.split_orders(&mut orders, batch)
             .into_par_iter()
             .enumerate()
-            .for_each_init(OrderPanels::default, |scratch, (m, block)| {
-                if on_the_fly {
-                    // Order m's folded spectra, one column of rings per (part, map), in f64.
-                    let columns = |source: &[T]| {
-                        let mut columns = vec![0.0; width * half];
-                        for p in 0..half {
-                            let ring = &source[m * layout.order_stride + p * layout.ring_stride..][..width];
-                            for (c, value) in ring.iter().enumerate() {
-                                columns[c * half + p] = value.to_f64().unwrap_or(f64::NAN);
+            .for_each_init(
+                || (OrderPanels::default(), streamed::Scratch::default()),
+                |(scratch, streamed_scratch), (m, block)| {
+                    if streamed {
+                        // Order m's folded spectra, one column of rings per (part, map), in f64,
+                        // padded with zeros to whole vectors.
+                        let stride = streamed::padded_stride(half);
+                        let columns = |source: &[T]| {
+                            let mut columns = vec![0.0; width * stride];
+                            for p in 0..half {
+                                let ring = &source[m * layout.order_stride + p * layout.ring_stride..][..width];
+                                for (c, value) in ring.iter().enumerate() {
+                                    columns[c * stride + p] = value.to_f64().unwrap_or(f64::NAN);
+                                }
                             }
-                        }
-                        columns
-                    };
-                    table.analysis_on_the_fly(m, [&columns(sym), &columns(anti)], width, block);
-                    return;
-                }
-                let panels = table.panels(m, scratch, Orientation::Analysis);
-                let degrees = self.degrees(m);
-                for parity in 0..2 {
-                    let rows = (degrees + 1 - parity) / 2;
-                    matmul_packed(
-                        MatMut {
-                            data: &mut *block,
-                            offset: parity * width,
-                            rows,
-                            cols: width,
-                            row_stride: 2 * width,
-                        },
-                        &panels.analysis[parity],
-                        MatRef {
-                            data: if parity == 0 { sym } else { anti },
-                            offset: m * layout.order_stride,
-                            rows: half,
-                            cols: width,
-                            row_stride: layout.ring_stride,
-                            col_stride: 1,
-                        },
-                    );
-                }
-            });
+                            columns
+                        };
+                        let (sym, anti) = (columns(sym), columns(anti));
+                        streamed::analysis_order(
+                            &table.recurrence,
+                            m,
+                            streamed::Rings {
+                                cos_theta: &table.cos_theta,
+                                start: table.sectoral_column(m),
+                            },
+                            streamed::Spectra {
+                                parts: [&sym, &anti],
+                                stride,
+                                width,
+                            },
+                            block,
+                            streamed_scratch,
+                        );
+                        return;
+                    }
+                    let panels = table.panels(m, scratch, Orientation::Analysis);
+                    let degrees = self.degrees(m);
+                    for parity in 0..2 {
+                        let rows = (degrees + 1 - parity) / 2;
+                        matmul_packed(
+                            MatMut {
+                                data: &mut *block,
+                                offset: parity * width,
+                                rows,
+                                cols: width,
+                                row_stride: 2 * width,
+                            },
+                            &panels.analysis[parity],
+                            MatRef {
+                                data: if parity == 0 { sym } else { anti },
+                                offset: m * layout.order_stride,
+                                rows: half,
+                                cols: width,
+                                row_stride: layout.ring_stride,
+                                col_stride: 1,
+                            },
+                        );
+                    }
+                },
+            );
         orders
     }
 
@@ -885,54 +885,6 @@ impl Grid {
             Grid::Equiangular => "equiangular",
         }
     }
-}
-
-/// Σ a_i b_i with independent partial sums.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut sums = [0.0f64; 4];
-    let (a_chunks, b_chunks) = (a.chunks_exact(4), b.chunks_exact(4));
-    let rest: f64 = a_chunks
-        .remainder()
-        .iter()
-        .zip(b_chunks.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in a_chunks.zip(b_chunks) {
-        for j in 0..4 {
-            sums[j] = x[j].mul_add(y[j], sums[j]);
-        }
-    }
-    (sums[0] + sums[1]) + (sums[2] + sums[3]) + rest
-}
-
-/// [`dot`] with AVX-512: four vectors of partial sums, so that each add does not wait on
-/// the previous one's latency (the compiler does not find this form on its own).
-///
-/// # Safety
-/// The CPU must support AVX-512F and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,fma")]
-unsafe fn dot_avx512(a: &[f64], b: &[f64]) -> f64 {
-    use std::arch::x86_64::*;
-    let n = a.len().min(b.len());
-    let (pa, pb) = (a.as_ptr(), b.as_ptr());
-    let mut sums = [_mm512_setzero_pd(); 4];
-    let mut i = 0;
-    // SAFETY (all loads): i + 8 ≤ n ≤ the length of both slices.
-    while i + 32 <= n {
-        for (k, sum) in sums.iter_mut().enumerate() {
-            let (x, y) = (_mm512_loadu_pd(pa.add(i + 8 * k)), _mm512_loadu_pd(pb.add(i + 8 * k)));
-            *sum = _mm512_fmadd_pd(x, y, *sum);
-        }
-        i += 32;
-    }
-    while i + 8 <= n {
-        sums[0] = _mm512_fmadd_pd(_mm512_loadu_pd(pa.add(i)), _mm512_loadu_pd(pb.add(i)), sums[0]);
-        i += 8;
-    }
-    let total = _mm512_add_pd(_mm512_add_pd(sums[0], sums[1]), _mm512_add_pd(sums[2], sums[3]));
-    let rest: f64 = a[i..n].iter().zip(&b[i..n]).map(|(x, y)| x * y).sum();
-    _mm512_reduce_add_pd(total) + rest
 }
 
 /// Asks the cache to fetch `values` ahead of use.
