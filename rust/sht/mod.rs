@@ -22,8 +22,11 @@
 //! symmetric and antisymmetric parts, since λ_lm(−x) = (−1)^(l+m) λ_lm(x): each half of the
 //! degrees meets only one of them, which halves the work. Analysis gets both parts of a
 //! ring pair from one complex FFT (rustfft); synthesis ends in a real inverse FFT per ring
-//! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre tables are built once per plan and kept while they fit
-//! in [`LEGENDRE_CACHE_BYTES`]; larger plans recompute them per call.
+//! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre
+//! tables are built once per plan and kept while they fit in [`LEGENDRE_CACHE_BYTES`].
+//! Analysis without a kept table, or of a single map against a table too large to stay
+//! in cache, recomputes λ in registers instead ([`streamed`]); synthesis recomputes the
+//! tables it lacks per call.
 
 pub mod grid;
 pub mod legendre;

@@ -51,7 +51,7 @@ pub(super) struct Scratch {
 /// such strides get one more vector.
 pub(super) fn padded_stride(half_rings: usize) -> usize {
     let stride = half_rings.next_multiple_of(LANES);
-    if stride % 128 == 0 {
+    if stride.is_multiple_of(128) {
         stride + LANES
     } else {
         stride
