@@ -674,34 +674,42 @@ impl<T: Real> Sht<T> {
             .into_par_iter()
             .enumerate()
             .for_each_init(
-                || (OrderPanels::default(), streamed::Scratch::default()),
-                |(scratch, streamed_scratch), (m, block)| {
+                || {
+                    (
+                        OrderPanels::default(),
+                        streamed::Scratch::default(),
+                        [Vec::new(), Vec::new()],
+                    )
+                },
+                |(scratch, streamed_scratch, columns), (m, block)| {
                     if streamed {
                         // Order m's folded spectra, one column of rings per (part, map), in f64,
-                        // padded with zeros to whole vectors.
+                        // padded with zeros to whole vectors, in buffers kept per worker.
                         let stride = streamed::padded_stride(half);
-                        let columns = |source: &[T]| {
-                            let mut columns = vec![0.0; width * stride];
+                        for (part, source) in [sym, anti].into_iter().enumerate() {
+                            let columns = &mut columns[part];
+                            columns.clear();
+                            columns.resize(width * stride, 0.0);
                             for p in 0..half {
                                 let ring = &source[m * layout.order_stride + p * layout.ring_stride..][..width];
                                 for (c, value) in ring.iter().enumerate() {
                                     columns[c * stride + p] = value.to_f64().unwrap_or(f64::NAN);
                                 }
                             }
-                            columns
-                        };
-                        let (sym, anti) = (columns(sym), columns(anti));
+                        }
                         streamed::analysis_order(
-                            &table.recurrence,
-                            m,
-                            streamed::Rings {
-                                cos_theta: &table.cos_theta,
-                                start: table.sectoral_column(m),
-                            },
-                            streamed::Spectra {
-                                parts: [&sym, &anti],
-                                stride,
-                                width,
+                            streamed::Job {
+                                recurrence: &table.recurrence,
+                                m,
+                                rings: streamed::Rings {
+                                    cos_theta: &table.cos_theta,
+                                    start: table.sectoral_column(m),
+                                },
+                                spectra: streamed::Spectra {
+                                    parts: [&columns[0], &columns[1]],
+                                    stride,
+                                    width,
+                                },
                             },
                             block,
                             streamed_scratch,

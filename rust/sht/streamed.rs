@@ -58,64 +58,50 @@ pub(super) fn padded_stride(half_rings: usize) -> usize {
     }
 }
 
+/// One order's analysis: its recurrence, rings and spectra.
+pub(super) struct Job<'a> {
+    pub recurrence: &'a Recurrence,
+    pub m: usize,
+    pub rings: Rings<'a>,
+    pub spectra: Spectra<'a>,
+}
+
 /// One order's analysis, see the module docs; `out` holds (lmax + 1 − m) × width values.
-pub(super) fn analysis_order<T: Real>(
-    recurrence: &Recurrence,
-    m: usize,
-    rings: Rings<'_>,
-    spectra: Spectra<'_>,
-    out: &mut [T],
-    scratch: &mut Scratch,
-) {
+pub(super) fn analysis_order<T: Real>(job: Job<'_>, out: &mut [T], scratch: &mut Scratch) {
     #[cfg(target_arch = "x86_64")]
     {
         if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { analysis_order_avx512(recurrence, m, rings, spectra, out, scratch) };
+            return unsafe { analysis_order_avx512(job, out, scratch) };
         }
         if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
             // SAFETY: as above.
-            return unsafe { analysis_order_avx2(recurrence, m, rings, spectra, out, scratch) };
+            return unsafe { analysis_order_avx2(job, out, scratch) };
         }
     }
-    analysis_order_inline::<T, [f64; LANES]>(recurrence, m, rings, spectra, out, scratch)
+    analysis_order_inline::<T, [f64; LANES]>(job, out, scratch)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,fma")]
-fn analysis_order_avx512<T: Real>(
-    recurrence: &Recurrence,
-    m: usize,
-    rings: Rings<'_>,
-    spectra: Spectra<'_>,
-    out: &mut [T],
-    scratch: &mut Scratch,
-) {
-    analysis_order_inline::<T, lanes::Avx512>(recurrence, m, rings, spectra, out, scratch)
+fn analysis_order_avx512<T: Real>(job: Job<'_>, out: &mut [T], scratch: &mut Scratch) {
+    analysis_order_inline::<T, lanes::Avx512>(job, out, scratch)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn analysis_order_avx2<T: Real>(
-    recurrence: &Recurrence,
-    m: usize,
-    rings: Rings<'_>,
-    spectra: Spectra<'_>,
-    out: &mut [T],
-    scratch: &mut Scratch,
-) {
-    analysis_order_inline::<T, [f64; LANES]>(recurrence, m, rings, spectra, out, scratch)
+fn analysis_order_avx2<T: Real>(job: Job<'_>, out: &mut [T], scratch: &mut Scratch) {
+    analysis_order_inline::<T, [f64; LANES]>(job, out, scratch)
 }
 
 #[inline(always)]
-fn analysis_order_inline<T: Real, V: Lanes>(
-    recurrence: &Recurrence,
-    m: usize,
-    rings: Rings<'_>,
-    spectra: Spectra<'_>,
-    out: &mut [T],
-    scratch: &mut Scratch,
-) {
+fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch: &mut Scratch) {
+    let Job {
+        recurrence,
+        m,
+        rings,
+        spectra,
+    } = job;
     let half = rings.cos_theta.len();
     assert!(rings.start.len() == half && spectra.stride >= padded_stride(half));
     assert!(spectra.parts.iter().all(|s| s.len() >= spectra.width * spectra.stride));
@@ -480,16 +466,18 @@ mod tests {
             recurrence.rows(m, &cos_theta, &start, &mut rows);
             let mut out = vec![0.0f64; degrees * width];
             analysis_order(
-                &recurrence,
-                m,
-                Rings {
-                    cos_theta: &cos_theta,
-                    start: &start,
-                },
-                Spectra {
-                    parts: [&spectra[0], &spectra[1]],
-                    stride,
-                    width,
+                Job {
+                    recurrence: &recurrence,
+                    m,
+                    rings: Rings {
+                        cos_theta: &cos_theta,
+                        start: &start,
+                    },
+                    spectra: Spectra {
+                        parts: [&spectra[0], &spectra[1]],
+                        stride,
+                        width,
+                    },
                 },
                 &mut out,
                 &mut Scratch::default(),
