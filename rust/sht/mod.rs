@@ -579,14 +579,16 @@ impl<T: Real> Sht<T> {
                     // Maps in blocks, so that each (m, part) run written below is a whole line.
                     for b0 in (0..batch).step_by(MAP_BLOCK) {
                         let block = MAP_BLOCK.min(batch - b0);
-                        // The next pair of rings: fetched while this one is transformed
-                        // (its rings lie a whole map apart, beyond the hardware prefetcher).
-                        if p + 1 < mirror {
-                            for i in 0..block {
-                                prefetch(ring(b0 + i, p + 1));
-                                prefetch(ring(b0 + i, mirror - 1));
-                            }
-                        }
+                        // The next pair's rings, fetched one at a time while this pair is
+                        // transformed: they lie a whole map apart, beyond the hardware
+                        // prefetcher, and fetching them all at once stalled on the cache's
+                        // queue of misses (twice the time of the whole fold at 192 maps).
+                        let next: Vec<&[T]> = if p + 1 < mirror {
+                            (0..block).flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)]).collect()
+                        } else {
+                            Vec::new()
+                        };
+                        let mut next = next.into_iter();
                         let spectra = &mut spectra[..block * nlon];
                         for (i, z) in spectra.chunks_exact_mut(nlon).enumerate() {
                             let north = ring(b0 + i, p);
@@ -598,9 +600,18 @@ impl<T: Real> Sht<T> {
                                     *z = Complex::new(n + s, n - s);
                                 }
                             }
+                            self.fft.process_with_scratch(z, scratch);
+                            if let Some(ring) = next.next() {
+                                prefetch(ring);
+                            }
                         }
-                        self.fft.process_with_scratch(spectra, scratch);
+                        let spacing = orders.div_ceil(next.len().max(1));
                         for m in 0..orders {
+                            if m % spacing == 0 {
+                                if let Some(ring) = next.next() {
+                                    prefetch(ring);
+                                }
+                            }
                             let (cosine, sine) = (m * width + b0, m * width + batch + b0);
                             for (i, z) in spectra.chunks_exact(nlon).enumerate() {
                                 let (a, b) = (z[m], z[(nlon - m) % nlon].conj());
@@ -834,20 +845,20 @@ impl<T: Real> Sht<T> {
     /// Per-order blocks `[m][l − m][part][batch]` → `(batch, (lmax+1)²)`, applying the √2
     /// of m > 0.
     fn scatter(&self, orders: &[T], batch: usize, coefficients: &mut [MaybeUninit<T>]) {
-        let mut items: Vec<&mut [MaybeUninit<T>]> = coefficients.chunks_exact_mut(self.n_coefficients()).collect();
-        // Rows of `orders` are read once, in order; each writes one value per item.
-        let mut rows = orders.chunks_exact(batch);
+        let n = self.n_coefficients();
+        let starts = self.order_starts(batch);
+        // Per order and item, each part's degrees are written as one contiguous run: the
+        // output streams forward, while the reads stay within the order's small block.
         for m in 0..=self.lmax {
             let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-            for i in 0..degrees {
-                for part in 0..2 {
-                    let row = rows.next().expect("orders hold every (m, l, part)");
-                    if m == 0 && part == 1 {
-                        continue; // m = 0 has no sine part
-                    }
-                    let position = self.offsets[m] + part * degrees + i;
-                    for (item, value) in items.iter_mut().zip(row) {
-                        item[position].write(scale * *value);
+            let block = &orders[starts[m]..][..degrees * 2 * batch];
+            for (b, item) in coefficients.chunks_exact_mut(n).enumerate() {
+                // m = 0 has no sine part.
+                for part in 0..if m == 0 { 1 } else { 2 } {
+                    let run = &mut item[self.offsets[m] + part * degrees..][..degrees];
+                    let values = block[part * batch + b..].iter().step_by(2 * batch);
+                    for (out, value) in run.iter_mut().zip(values) {
+                        out.write(scale * *value);
                     }
                 }
             }
