@@ -30,6 +30,7 @@
 
 pub mod grid;
 pub mod legendre;
+mod split;
 mod streamed;
 
 use std::mem::MaybeUninit;
@@ -258,7 +259,7 @@ const STREAMED_MAX_BATCH: usize = 1;
 const STREAMED_MIN_TABLE_BYTES: usize = 4 << 20;
 
 /// Maps transposed together between per-ring and per-order layouts: one cache line of f64.
-const MAP_BLOCK: usize = 8;
+const MAP_BLOCK: usize = split::BLOCK;
 
 /// Bytes of folded spectra a chunk of maps may occupy: small enough to stay in cache
 /// while a chunk goes through every stage of a transform.
@@ -606,23 +607,31 @@ impl<T: Real> Sht<T> {
                             }
                         }
                         let spacing = orders.div_ceil(next.len().max(1));
-                        for m in 0..orders {
-                            if m % spacing == 0 {
-                                if let Some(ring) = next.next() {
-                                    prefetch(ring);
+                        let mut due = 0;
+                        split::split_pair(
+                            &split::PairSpectra {
+                                spectra,
+                                nlon,
+                                sym_factor: factor,
+                                anti_factor,
+                            },
+                            &mut split::PairParts {
+                                sym: sym_p,
+                                anti: anti_p,
+                                width,
+                                half_width: batch,
+                                first: b0,
+                            },
+                            orders,
+                            &mut |m| {
+                                if m >= due {
+                                    if let Some(ring) = next.next() {
+                                        prefetch(ring);
+                                    }
+                                    due += spacing;
                                 }
-                            }
-                            let (cosine, sine) = (m * width + b0, m * width + batch + b0);
-                            for (i, z) in spectra.chunks_exact(nlon).enumerate() {
-                                let (a, b) = (z[m], z[(nlon - m) % nlon].conj());
-                                let (sum, difference) = (a + b, a - b);
-                                // SYM = sum/2, ANTI = −i·difference/2; the sine sums are −Im.
-                                sym_p[cosine + i] = factor * sum.re;
-                                sym_p[sine + i] = -(factor * sum.im);
-                                anti_p[cosine + i] = anti_factor * difference.im;
-                                anti_p[sine + i] = anti_factor * difference.re;
-                            }
-                        }
+                            },
+                        );
                     }
                 },
             );
