@@ -32,6 +32,7 @@ pub mod grid;
 pub mod legendre;
 mod split;
 mod streamed;
+mod transpose;
 
 use std::mem::MaybeUninit;
 use std::sync::{Arc, Mutex};
@@ -856,21 +857,20 @@ impl<T: Real> Sht<T> {
     fn scatter(&self, orders: &[T], batch: usize, coefficients: &mut [MaybeUninit<T>]) {
         let n = self.n_coefficients();
         let starts = self.order_starts(batch);
-        // Per order and item, each part's degrees are written as one contiguous run: the
-        // output streams forward, while the reads stay within the order's small block.
         for m in 0..=self.lmax {
-            let (degrees, scale) = (self.degrees(m), order_scale::<T>(m));
-            let block = &orders[starts[m]..][..degrees * 2 * batch];
-            for (b, item) in coefficients.chunks_exact_mut(n).enumerate() {
-                // m = 0 has no sine part.
-                for part in 0..if m == 0 { 1 } else { 2 } {
-                    let run = &mut item[self.offsets[m] + part * degrees..][..degrees];
-                    let values = block[part * batch + b..].iter().step_by(2 * batch);
-                    for (out, value) in run.iter_mut().zip(values) {
-                        out.write(scale * *value);
-                    }
-                }
-            }
+            let degrees = self.degrees(m);
+            transpose::scatter_order(
+                &transpose::OrderBlock {
+                    block: &orders[starts[m]..][..degrees * 2 * batch],
+                    batch,
+                    degrees,
+                    parts: if m == 0 { 1 } else { 2 },
+                    scale: order_scale(m),
+                    stride: n,
+                    offset: self.offsets[m],
+                },
+                coefficients,
+            );
         }
     }
 

@@ -11,6 +11,7 @@
 
 use realfft::num_complex::Complex;
 
+use super::transpose::{same_type, same_type_mut};
 use super::Real;
 
 /// One ring pair's spectra: `block` maps of `nlon` values, and the scale of each part.
@@ -78,19 +79,6 @@ pub(super) fn split_pair<T: Real>(
     }
 }
 
-/// `value` as the same type under another name (`T` checked equal to `U` by the caller).
-fn same_type<'a, A, B>(value: &'a A) -> &'a B {
-    assert_eq!(std::mem::size_of::<A>(), std::mem::size_of::<B>());
-    // SAFETY: the caller has checked that A and B are one type.
-    unsafe { &*(value as *const A as *const B) }
-}
-
-fn same_type_mut<'a, A, B>(value: &'a mut A) -> &'a mut B {
-    assert_eq!(std::mem::size_of::<A>(), std::mem::size_of::<B>());
-    // SAFETY: as in `same_type`.
-    unsafe { &mut *(value as *mut A as *mut B) }
-}
-
 fn split_scalar<T: Real>(pair: &PairSpectra<'_, T>, out: &mut PairParts<'_, T>, orders: std::ops::Range<usize>) {
     let nlon = pair.nlon;
     for m in orders {
@@ -112,6 +100,7 @@ fn split_scalar<T: Real>(pair: &PairSpectra<'_, T>, out: &mut PairParts<'_, T>, 
 mod avx2 {
     use std::arch::x86_64::*;
 
+    use super::super::transpose::avx2::{transpose_f32, transpose_f64};
     use super::{PairParts, PairSpectra, BLOCK};
 
     const _: () = assert!(BLOCK == 8, "the transpositions below are for blocks of 8 maps");
@@ -154,16 +143,9 @@ mod avx2 {
                     _mm256_mul_pd(af, _mm256_sub_pd(a_re, b_re)),
                 ];
             }
-            for part in 0..4 {
-                let [r0, r1, r2, r3] = [0, 1, 2, 3].map(|i| parts[i][part]);
-                let (t0, t1) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
-                let (t2, t3) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
-                let columns = [
-                    _mm256_permute2f128_pd::<0x20>(t0, t2),
-                    _mm256_permute2f128_pd::<0x20>(t1, t3),
-                    _mm256_permute2f128_pd::<0x31>(t0, t2),
-                    _mm256_permute2f128_pd::<0x31>(t1, t3),
-                ];
+            let by_part: [[__m256d; 4]; 4] = std::array::from_fn(|part| parts.map(|map_parts| map_parts[part]));
+            for (part, rows) in by_part.into_iter().enumerate() {
+                let columns = transpose_f64(rows);
                 let destination = if part < 2 { &mut *out.sym } else { &mut *out.anti };
                 let offset = (part % 2) * out.half_width + out.first + half * 4;
                 for (j, column) in columns.into_iter().enumerate() {
@@ -190,8 +172,9 @@ mod avx2 {
             let order = |v: __m256| _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)));
             (order(re), order(im))
         };
-        let mut parts = [[_mm256_setzero_ps(); BLOCK]; 4];
-        for i in 0..BLOCK {
+        // Per map: [SYM cos, SYM sin, ANTI cos, ANTI sin] over the 8 orders.
+        let mut parts = [[_mm256_setzero_ps(); 4]; BLOCK];
+        for (i, map_parts) in parts.iter_mut().enumerate() {
             let spectrum = z.add(2 * i * nlon);
             let (a_re, a_im) = deinterleave(
                 _mm256_loadu_ps(spectrum.add(2 * m0)),
@@ -205,31 +188,16 @@ mod avx2 {
                 _mm256_permutevar8x32_ps(b_re, reverse),
                 _mm256_permutevar8x32_ps(b_im, reverse),
             );
-            parts[0][i] = _mm256_mul_ps(f, _mm256_add_ps(a_re, b_re));
-            parts[1][i] = _mm256_mul_ps(f, _mm256_sub_ps(b_im, a_im));
-            parts[2][i] = _mm256_mul_ps(af, _mm256_add_ps(a_im, b_im));
-            parts[3][i] = _mm256_mul_ps(af, _mm256_sub_ps(a_re, b_re));
-        }
-        for (part, rows) in parts.iter().enumerate() {
-            let [r0, r1, r2, r3, r4, r5, r6, r7] = *rows;
-            let (t0, t1) = (_mm256_unpacklo_ps(r0, r1), _mm256_unpackhi_ps(r0, r1));
-            let (t2, t3) = (_mm256_unpacklo_ps(r2, r3), _mm256_unpackhi_ps(r2, r3));
-            let (t4, t5) = (_mm256_unpacklo_ps(r4, r5), _mm256_unpackhi_ps(r4, r5));
-            let (t6, t7) = (_mm256_unpacklo_ps(r6, r7), _mm256_unpackhi_ps(r6, r7));
-            let (u0, u1) = (_mm256_shuffle_ps::<0x44>(t0, t2), _mm256_shuffle_ps::<0xEE>(t0, t2));
-            let (u2, u3) = (_mm256_shuffle_ps::<0x44>(t1, t3), _mm256_shuffle_ps::<0xEE>(t1, t3));
-            let (u4, u5) = (_mm256_shuffle_ps::<0x44>(t4, t6), _mm256_shuffle_ps::<0xEE>(t4, t6));
-            let (u6, u7) = (_mm256_shuffle_ps::<0x44>(t5, t7), _mm256_shuffle_ps::<0xEE>(t5, t7));
-            let columns = [
-                _mm256_permute2f128_ps::<0x20>(u0, u4),
-                _mm256_permute2f128_ps::<0x20>(u1, u5),
-                _mm256_permute2f128_ps::<0x20>(u2, u6),
-                _mm256_permute2f128_ps::<0x20>(u3, u7),
-                _mm256_permute2f128_ps::<0x31>(u0, u4),
-                _mm256_permute2f128_ps::<0x31>(u1, u5),
-                _mm256_permute2f128_ps::<0x31>(u2, u6),
-                _mm256_permute2f128_ps::<0x31>(u3, u7),
+            *map_parts = [
+                _mm256_mul_ps(f, _mm256_add_ps(a_re, b_re)),
+                _mm256_mul_ps(f, _mm256_sub_ps(b_im, a_im)),
+                _mm256_mul_ps(af, _mm256_add_ps(a_im, b_im)),
+                _mm256_mul_ps(af, _mm256_sub_ps(a_re, b_re)),
             ];
+        }
+        let by_part: [[__m256; BLOCK]; 4] = std::array::from_fn(|part| parts.map(|map_parts| map_parts[part]));
+        for (part, rows) in by_part.into_iter().enumerate() {
+            let columns = transpose_f32(rows);
             let destination = if part < 2 { &mut *out.sym } else { &mut *out.anti };
             let offset = (part % 2) * out.half_width + out.first;
             for (j, column) in columns.into_iter().enumerate() {
