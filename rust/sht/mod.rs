@@ -21,7 +21,9 @@
 //! ([`crate::linalg`]) over a chunk of maps. North and south rings are folded into
 //! symmetric and antisymmetric parts, since λ_lm(−x) = (−1)^(l+m) λ_lm(x): each half of the
 //! degrees meets only one of them, which halves the work. Analysis gets both parts of a
-//! ring pair from one complex FFT (rustfft); synthesis ends in a real inverse FFT per ring
+//! ring pair from one complex FFT (rustfft), split into the parts and transposed to the
+//! product's layout (maps innermost) in vector registers ([`split`], [`transpose`]), while
+//! the next pair's rings are prefetched; synthesis ends in a real inverse FFT per ring
 //! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre
 //! tables are built once per plan and kept while they fit in [`LEGENDRE_CACHE_BYTES`].
 //! Analysis without a kept table, or of a single map against a table too large to stay
