@@ -588,7 +588,9 @@ impl<T: Real> Sht<T> {
                         // prefetcher, and fetching them all at once stalled on the cache's
                         // queue of misses (twice the time of the whole fold at 192 maps).
                         let next: Vec<&[T]> = if p + 1 < mirror {
-                            (0..block).flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)]).collect()
+                            (0..block)
+                                .flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)])
+                                .collect()
                         } else {
                             Vec::new()
                         };

@@ -116,7 +116,11 @@ mod avx2 {
     #[target_feature(enable = "avx2")]
     pub unsafe fn split_f64(pair: &PairSpectra<'_, f64>, out: &mut PairParts<'_, f64>, m0: usize) {
         let z = pair.spectra.as_ptr().cast::<f64>();
-        let (nlon, f, af) = (pair.nlon, _mm256_set1_pd(pair.sym_factor), _mm256_set1_pd(pair.anti_factor));
+        let (nlon, f, af) = (
+            pair.nlon,
+            _mm256_set1_pd(pair.sym_factor),
+            _mm256_set1_pd(pair.anti_factor),
+        );
         for half in 0..2 {
             // Per map of this half: [SYM cos, SYM sin, ANTI cos, ANTI sin] over the 4 orders.
             let mut parts = [[_mm256_setzero_pd(); 4]; 4];
@@ -163,7 +167,11 @@ mod avx2 {
     #[target_feature(enable = "avx2")]
     pub unsafe fn split_f32(pair: &PairSpectra<'_, f32>, out: &mut PairParts<'_, f32>, m0: usize) {
         let z = pair.spectra.as_ptr().cast::<f32>();
-        let (nlon, f, af) = (pair.nlon, _mm256_set1_ps(pair.sym_factor), _mm256_set1_ps(pair.anti_factor));
+        let (nlon, f, af) = (
+            pair.nlon,
+            _mm256_set1_ps(pair.sym_factor),
+            _mm256_set1_ps(pair.anti_factor),
+        );
         let reverse = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
         // Even and odd lanes of two vectors, in order: the real and imaginary parts.
         let deinterleave = |lo: __m256, hi: __m256| {
@@ -245,7 +253,10 @@ mod tests {
                     (sym, anti, calls)
                 };
                 let (vector, scalar) = (run(true), run(false));
-                assert!(vector.0 == scalar.0 && vector.1 == scalar.1, "nlon {nlon}, orders {orders}");
+                assert!(
+                    vector.0 == scalar.0 && vector.1 == scalar.1,
+                    "nlon {nlon}, orders {orders}"
+                );
                 assert_eq!(vector.2.first(), Some(&0));
                 assert!(vector.2.windows(2).all(|w| w[0] < w[1]) && vector.2.last() < Some(&orders));
             }

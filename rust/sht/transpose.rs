@@ -23,7 +23,15 @@ pub(super) struct OrderBlock<'a, T> {
 
 /// Writes `order`'s coefficients, times its scale, into `out`.
 pub(super) fn scatter_order<T: Real>(order: &OrderBlock<'_, T>, out: &mut [MaybeUninit<T>]) {
-    let OrderBlock { block, batch, degrees, parts, stride, offset, .. } = *order;
+    let OrderBlock {
+        block,
+        batch,
+        degrees,
+        parts,
+        stride,
+        offset,
+        ..
+    } = *order;
     assert!(block.len() >= 2 * degrees * batch && parts <= 2);
     assert!(batch == 0 || (batch - 1) * stride + offset + parts * degrees <= out.len());
     let (mut maps_done, mut degrees_done) = (0, 0);
@@ -122,7 +130,15 @@ pub(super) mod avx2 {
     /// AVX2 must be present, and `scatter_order`'s asserts must hold.
     #[target_feature(enable = "avx2")]
     pub unsafe fn scatter_f64(order: &OrderBlock<'_, f64>, out: &mut [MaybeUninit<f64>]) {
-        let OrderBlock { block, batch, degrees, parts, scale, stride, offset } = *order;
+        let OrderBlock {
+            block,
+            batch,
+            degrees,
+            parts,
+            scale,
+            stride,
+            offset,
+        } = *order;
         let scale = _mm256_set1_pd(scale);
         let (source, destination) = (block.as_ptr(), out.as_mut_ptr().cast::<f64>());
         for b0 in (0..batch / 4 * 4).step_by(4) {
@@ -144,14 +160,22 @@ pub(super) mod avx2 {
     /// As [`scatter_f64`].
     #[target_feature(enable = "avx2")]
     pub unsafe fn scatter_f32(order: &OrderBlock<'_, f32>, out: &mut [MaybeUninit<f32>]) {
-        let OrderBlock { block, batch, degrees, parts, scale, stride, offset } = *order;
+        let OrderBlock {
+            block,
+            batch,
+            degrees,
+            parts,
+            scale,
+            stride,
+            offset,
+        } = *order;
         let scale = _mm256_set1_ps(scale);
         let (source, destination) = (block.as_ptr(), out.as_mut_ptr().cast::<f32>());
         for b0 in (0..batch / 8 * 8).step_by(8) {
             for part in 0..parts {
                 for i0 in (0..degrees / 8 * 8).step_by(8) {
-                    let rows =
-                        [0, 1, 2, 3, 4, 5, 6, 7].map(|j| _mm256_loadu_ps(source.add((2 * (i0 + j) + part) * batch + b0)));
+                    let rows = [0, 1, 2, 3, 4, 5, 6, 7]
+                        .map(|j| _mm256_loadu_ps(source.add((2 * (i0 + j) + part) * batch + b0)));
                     for (b, column) in transpose_f32(rows).into_iter().enumerate() {
                         let at = (b0 + b) * stride + offset + part * degrees + i0;
                         _mm256_storeu_ps(destination.add(at), _mm256_mul_ps(scale, column));
@@ -196,7 +220,10 @@ mod tests {
                                 }
                                 _ => T::of(-1.0),
                             };
-                            assert!(value == expected, "batch {batch}, degrees {degrees}, parts {parts}, map {b}, slot {k}");
+                            assert!(
+                                value == expected,
+                                "batch {batch}, degrees {degrees}, parts {parts}, map {b}, slot {k}"
+                            );
                         }
                     }
                 }
