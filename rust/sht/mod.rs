@@ -587,14 +587,8 @@ impl<T: Real> Sht<T> {
                         // transformed: they lie a whole map apart, beyond the hardware
                         // prefetcher, and fetching them all at once stalled on the cache's
                         // queue of misses (twice the time of the whole fold at 192 maps).
-                        let next: Vec<&[T]> = if p + 1 < mirror {
-                            (0..block)
-                                .flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)])
-                                .collect()
-                        } else {
-                            Vec::new()
-                        };
-                        let mut next = next.into_iter();
+                        let next_maps = if p + 1 < mirror { block } else { 0 };
+                        let mut next = (0..next_maps).flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)]);
                         let spectra = &mut spectra[..block * nlon];
                         for (i, z) in spectra.chunks_exact_mut(nlon).enumerate() {
                             let north = ring(b0 + i, p);
@@ -611,7 +605,7 @@ impl<T: Real> Sht<T> {
                                 prefetch(ring);
                             }
                         }
-                        let spacing = orders.div_ceil(next.len().max(1));
+                        let spacing = orders.div_ceil(next_maps.max(1));
                         let mut due = 0;
                         split::split_pair(
                             &split::PairSpectra {
