@@ -1,18 +1,23 @@
 //! The Legendre step of analysis with λ_lm recomputed in registers, for one order m:
-//! `out[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · spectra[(l − m) % 2][c · stride + p].
+//! `out[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · part[(l − m) % 2][c · stride + p], the
+//! symmetric part for even l − m and the antisymmetric one for odd.
 //!
 //! Used where a stored table would cost more than recomputing it: grids whose table is
 //! too large to keep or to stream from memory for every chunk of maps, and batches too
-//! narrow for the matrix product to reuse each table value. Rings are taken in blocks of
+//! narrow for the matrix product to reuse each table value. The recurrence runs two
+//! degrees a step in cos² θ ([`Paired`]): each value serves an even degree through the
+//! symmetric part and an odd one through the antisymmetric part times cos θ, three
+//! quarters of the operations of one degree a step. Rings are taken in blocks of
 //! [`VECTORS`] × [`LANES`]; a block's recurrence state stays in registers while l runs, and
-//! each λ value meets every column of the spectra at once. Partial sums are kept per
-//! (l, column) as one vector across the block's rings and reduced once at the end.
+//! each value meets every column of the spectra at once. Partial sums are kept per
+//! (pair of degrees, part, column) as one vector across the block's rings and reduced
+//! once at the end.
 //!
 //! Near the poles λ_mm underflows for large m (see [`legendre`](super::legendre)): a
 //! block starts with careful steps that track each ring's scale and add nothing while
 //! every value is negligible, and hands over to the fast loop once all are plain doubles.
 
-use super::legendre::{Recurrence, Scaled, BIG, SMALL};
+use super::legendre::{Paired, Recurrence, Scaled, BIG, SMALL};
 use super::Real;
 use lanes::{Lanes, LANES};
 
@@ -23,11 +28,15 @@ const VECTORS: usize = 4;
 /// they change no coefficient (2^−70 × a few thousand rings is below 10^−17).
 const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
 
-/// Steps a quiet block takes between checks.
-const QUIET_RUN: usize = 4;
+/// Columns of one map (cosine and sine sums), which get their own loop.
+const NARROW: usize = 2;
 
-/// An order's folded spectra: `parts[parity][c · stride + p]` for columns c < width and
-/// half rings p, zero beyond the last ring up to `stride` (a multiple of [`LANES`]).
+/// Steps (pairs of degrees) a quiet block takes between checks.
+const QUIET_RUN: usize = 2;
+
+/// An order's folded spectra: `parts[part][c · stride + p]` for columns c < width and
+/// half rings p, zero beyond the last ring up to `stride` (a multiple of [`LANES`]); part
+/// 0 symmetric, part 1 antisymmetric **multiplied by cos θ_p**.
 pub(super) struct Spectra<'a> {
     pub parts: [&'a [f64]; 2],
     pub stride: usize,
@@ -44,6 +53,9 @@ pub(super) struct Rings<'a> {
 #[derive(Default)]
 pub(super) struct Scratch {
     sums: Vec<[f64; LANES]>,
+    paired: Paired,
+    /// The running odd-degree sums of the paired recurrence, per column.
+    odd: Vec<f64>,
 }
 
 /// Spectra padded to whole vectors: the `stride` for `half_rings` rings. Columns a power
@@ -105,111 +117,196 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
     let half = rings.cos_theta.len();
     assert!(rings.start.len() == half && spectra.stride >= padded_stride(half));
     assert!(spectra.parts.iter().all(|s| s.len() >= spectra.width * spectra.stride));
-    let sums = &mut scratch.sums;
-    let (alpha, norm) = recurrence.rescaled(m);
-    let (degrees, width) = (alpha.len(), spectra.width);
+    let Scratch { sums, paired, odd } = scratch;
+    let paired = recurrence.paired(m, paired);
+    let (degrees, pairs, width) = (recurrence.lmax() + 1 - m, paired.steps.len(), spectra.width);
     assert_eq!(out.len(), degrees * width);
     sums.clear();
-    sums.resize(degrees * width, [0.0; LANES]);
-    let order = Order { alpha, spectra, rings };
-    let vectors = half.div_ceil(LANES);
-    let mut vector = 0;
-    // Whole blocks, then the remaining vectors in narrower ones.
-    while vector + VECTORS <= vectors {
-        order.block::<V, VECTORS>(vector * LANES, sums);
-        vector += VECTORS;
+    sums.resize(pairs * 2 * width, [0.0; LANES]);
+    let order = Order {
+        steps: &paired.steps,
+        spectra,
+        rings,
+    };
+    match width {
+        NARROW => order.blocks::<V, NARROW>(half, sums),
+        _ => order.blocks::<V, 0>(half, sums),
     }
-    while vector + 2 <= vectors {
-        order.block::<V, 2>(vector * LANES, sums);
-        vector += 2;
-    }
-    if vector < vectors {
-        order.block::<V, 1>(vector * LANES, sums);
-    }
-    for ((row, sums), norm) in out
-        .chunks_exact_mut(width)
-        .zip(sums.chunks_exact(width))
-        .zip(norm.iter())
-    {
-        for (value, sum) in row.iter_mut().zip(sums) {
-            *value = T::of(norm * sum.iter().sum::<f64>());
+    // Even degrees directly, odd ones by the running sum of the paired recurrence.
+    odd.clear();
+    odd.resize(width, 0.0);
+    for (j, sums) in sums.chunks_exact(2 * width).enumerate() {
+        let (even_sums, odd_sums) = sums.split_at(width);
+        let i = 2 * j;
+        for (value, sum) in out[i * width..][..width].iter_mut().zip(even_sums) {
+            *value = T::of(paired.even_norm[j] * lane_sum(sum));
+        }
+        if i + 1 < degrees {
+            let (gain, norm) = (paired.odd_gain[j], paired.odd_norm[j]);
+            for ((value, sum), odd) in out[(i + 1) * width..][..width]
+                .iter_mut()
+                .zip(odd_sums)
+                .zip(odd.iter_mut())
+            {
+                *odd = gain * lane_sum(sum) - *odd;
+                *value = T::of(norm * *odd);
+            }
         }
     }
 }
 
-/// One order's coefficients, rings and spectra.
+/// The sum of a vector's lanes, as a tree: three additions deep instead of seven.
+#[inline(always)]
+fn lane_sum(v: &[f64; LANES]) -> f64 {
+    ((v[0] + v[4]) + (v[2] + v[6])) + ((v[1] + v[5]) + (v[3] + v[7]))
+}
+
+/// One order's paired recurrence, rings and spectra.
 struct Order<'a> {
-    alpha: &'a [f64],
+    steps: &'a [[f64; 2]],
     spectra: Spectra<'a>,
     rings: Rings<'a>,
 }
 
 impl Order<'_> {
+    /// Every block of rings; `W` columns, or any number where `W` = 0.
+    #[inline(always)]
+    fn blocks<V: Lanes, const W: usize>(&self, half_rings: usize, sums: &mut [[f64; LANES]]) {
+        let vectors = half_rings.div_ceil(LANES);
+        let mut vector = 0;
+        // Whole blocks, then the remaining vectors in narrower ones.
+        while vector + VECTORS <= vectors {
+            self.block::<V, VECTORS, W>(vector * LANES, sums);
+            vector += VECTORS;
+        }
+        while vector + 2 <= vectors {
+            self.block::<V, 2, W>(vector * LANES, sums);
+            vector += 2;
+        }
+        if vector < vectors {
+            self.block::<V, 1, W>(vector * LANES, sums);
+        }
+    }
+
     /// Adds the contribution of the `R` ring vectors from ring `first` to every sum.
     #[inline(always)]
-    fn block<V: Lanes, const R: usize>(&self, first: usize, sums: &mut [[f64; LANES]]) {
+    fn block<V: Lanes, const R: usize, const W: usize>(&self, first: usize, sums: &mut [[f64; LANES]]) {
         let Rings { cos_theta, start } = self.rings;
         // The block's rings; those past the last one (padding) have λ = 0 and meet zero
         // spectra.
         let in_block = &start[first..(first + R * LANES).min(start.len())];
-        let (mut x, mut mantissa, mut scale) = ([[0.0; LANES]; R], [[0.0; LANES]; R], [[0; LANES]; R]);
+        let (mut x2, mut mantissa, mut scale) = ([[0.0; LANES]; R], [[0.0; LANES]; R], [[0; LANES]; R]);
         for (j, (s, c)) in in_block.iter().zip(&cos_theta[first..]).enumerate() {
-            x[j / LANES][j % LANES] = *c;
+            x2[j / LANES][j % LANES] = c * c;
             mantissa[j / LANES][j % LANES] = s.mantissa;
             scale[j / LANES][j % LANES] = s.scale;
         }
-        let (mut xv, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
+        let (mut x2v, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
         for r in 0..R {
-            xv[r] = V::load(&x[r]);
+            x2v[r] = V::load(&x2[r]);
             current[r] = V::load(&mantissa[r]);
         }
-        let x = xv;
-        let mut degree = 0;
+        let x2 = x2v;
+        let mut pair = 0;
         // Most blocks start plain: no scaled value, and something to add.
         let plain = in_block.iter().all(|s| s.scale == 0) && in_block.iter().any(|s| s.mantissa.abs() >= QUIET);
         if !plain {
             let mut state = LaneState::<V, R>::new(scale, &current);
-            degree = self.careful_steps(first, &x, &mut previous, &mut current, &mut state, sums);
+            pair = self.careful_steps(first, &x2, &mut previous, &mut current, &mut state, sums);
         }
-        for i in degree..self.alpha.len() {
-            if i > 0 {
-                step(self.alpha[i], &x, &mut previous, &mut current);
+        if W == 0 {
+            for j in pair..self.steps.len() {
+                if j > 0 {
+                    step(self.steps[j], &x2, &mut previous, &mut current);
+                }
+                self.accumulate(j, first, &current, sums);
             }
-            self.accumulate(i, first, &current, sums);
+        } else {
+            self.narrow_steps::<V, R, W>(pair, first, &x2, &mut previous, &mut current, sums);
         }
     }
 
-    /// Degrees while the block is quiet (every λ negligible: nothing added) or some ring
-    /// carries a scaled value (added as mantissa × factor). One comparison per vector
-    /// (every step, or every few while quiet) finds when either may end. Returns the first degree index not yet added,
-    /// with the block plain (or the order's end).
+    /// The plain loop for exactly `W` columns: the block's spectra held in registers, no
+    /// bounds checks or column loops per step (one map has two columns; the general loop
+    /// spent more time on its own overhead than on arithmetic there).
+    #[inline(always)]
+    fn narrow_steps<V: Lanes, const R: usize, const W: usize>(
+        &self,
+        from: usize,
+        first: usize,
+        x2: &[V; R],
+        previous: &mut [V; R],
+        current: &mut [V; R],
+        sums: &mut [[f64; LANES]],
+    ) {
+        let Spectra { parts, stride, width } = self.spectra;
+        assert_eq!(width, W);
+        let spectra: [[[V; R]; W]; 2] = std::array::from_fn(|part| {
+            std::array::from_fn(|c| {
+                std::array::from_fn(|r| {
+                    V::load(
+                        parts[part][c * stride + first + r * LANES..][..LANES]
+                            .try_into()
+                            .unwrap(),
+                    )
+                })
+            })
+        });
+        let pairs = self
+            .steps
+            .iter()
+            .zip(sums.chunks_exact_mut(2 * W))
+            .enumerate()
+            .skip(from);
+        for (j, (&coefficients, sums)) in pairs {
+            if j > 0 {
+                step(coefficients, x2, previous, current);
+            }
+            // Index loops over constants: fully unrolled, so the spectra stay in registers.
+            for part in 0..2 {
+                for c in 0..W {
+                    let sum = &mut sums[part * W + c];
+                    let mut total = V::load(sum);
+                    for r in 0..R {
+                        total = current[r].mul_add(spectra[part][c][r], total);
+                    }
+                    total.store(sum);
+                }
+            }
+        }
+    }
+
+    /// Pairs of degrees while the block is quiet (every ν negligible: nothing added) or
+    /// some ring carries a scaled value (added as mantissa × factor). One comparison per
+    /// vector (every step, or every few while quiet) finds when either may end. Returns
+    /// the first pair not yet added, with the block plain (or the order's end).
     #[inline(always)]
     fn careful_steps<V: Lanes, const R: usize>(
         &self,
         first: usize,
-        x: &[V; R],
+        x2: &[V; R],
         previous: &mut [V; R],
         current: &mut [V; R],
         state: &mut LaneState<V, R>,
         sums: &mut [[f64; LANES]],
     ) -> usize {
-        let degrees = self.alpha.len();
-        let mut i = 0;
-        while i < degrees {
+        let pairs = self.steps.len();
+        let mut j = 0;
+        while j < pairs {
             // Quiet: the recurrence alone, checked once every few steps. A value that wakes
             // within the run is at most a few steps' growth above `QUIET` when found.
-            let steps = if state.awake { 1 } else { QUIET_RUN.min(degrees - i) };
-            for j in i..i + steps {
-                if j > 0 {
-                    step(self.alpha[j], x, previous, current);
+            let steps = if state.awake { 1 } else { QUIET_RUN.min(pairs - j) };
+            for k in j..j + steps {
+                if k > 0 {
+                    step(self.steps[k], x2, previous, current);
                 }
             }
-            i += steps - 1; // the degree `current` holds
+            j += steps - 1; // the pair `current` holds
             if (0..R).any(|r| current[r].any_reaches(state.threshold[r])) {
                 state.update(previous, current);
                 if state.plain() {
-                    self.accumulate(i, first, current, sums);
-                    return i + 1;
+                    self.accumulate(j, first, current, sums);
+                    return j + 1;
                 }
             }
             if state.awake {
@@ -217,35 +314,38 @@ impl Order<'_> {
                 for (value, factor) in values.iter_mut().zip(&state.factor) {
                     *value = value.mul(*factor);
                 }
-                self.accumulate(i, first, &values, sums);
+                self.accumulate(j, first, &values, sums);
             }
-            i += 1;
+            j += 1;
         }
-        degrees
+        pairs
     }
 
-    /// sums[i · width + c] += λ (per ring) × spectrum c at the block's rings.
+    /// For both parts, sums[(2 · pair + part) · width + c] += ν (per ring) × spectrum c at
+    /// the block's rings.
     #[inline(always)]
-    fn accumulate<V: Lanes, const R: usize>(&self, i: usize, first: usize, lambda: &[V; R], sums: &mut [[f64; LANES]]) {
+    fn accumulate<V: Lanes, const R: usize>(&self, pair: usize, first: usize, nu: &[V; R], sums: &mut [[f64; LANES]]) {
         let Spectra { parts, stride, width } = self.spectra;
-        let spectra = parts[i % 2];
-        for (c, sum) in sums[i * width..][..width].iter_mut().enumerate() {
-            let column = &spectra[c * stride + first..][..R * LANES];
-            let mut total = V::load(&*sum);
-            for (r, lambda) in lambda.iter().enumerate() {
-                total = lambda.mul_add(V::load(column[r * LANES..][..LANES].try_into().unwrap()), total);
+        let sums = &mut sums[2 * pair * width..][..2 * width];
+        for (sums, spectra) in sums.chunks_exact_mut(width).zip(parts) {
+            for (c, sum) in sums.iter_mut().enumerate() {
+                let column = &spectra[c * stride + first..][..R * LANES];
+                let mut total = V::load(&*sum);
+                for (r, nu) in nu.iter().enumerate() {
+                    total = nu.mul_add(V::load(column[r * LANES..][..LANES].try_into().unwrap()), total);
+                }
+                total.store(sum);
             }
-            total.store(sum);
         }
     }
 }
 
-/// One degree up: μ_l = (α_l cos θ) μ_{l−1} − μ_{l−2}.
+/// One pair of degrees up: ν_i = (a x² + b) ν_{i−2} − ν_{i−4}.
 #[inline(always)]
-fn step<V: Lanes, const R: usize>(alpha: f64, x: &[V; R], previous: &mut [V; R], current: &mut [V; R]) {
-    let alpha = V::splat(alpha);
+fn step<V: Lanes, const R: usize>([a, b]: [f64; 2], x2: &[V; R], previous: &mut [V; R], current: &mut [V; R]) {
+    let (a, b) = (V::splat(a), V::splat(b));
     for r in 0..R {
-        let next = alpha.mul(x[r]).mul_sub(current[r], previous[r]);
+        let next = a.mul_add(x2[r], b).mul_sub(current[r], previous[r]);
         previous[r] = current[r];
         current[r] = next;
     }
@@ -314,8 +414,8 @@ impl<V: Lanes, const R: usize> LaneState<V, R> {
             let now = now.to_array();
             self.awake |= (0..LANES).any(|k| (now[k] * factor[k]).abs() >= QUIET);
         }
-        for r in 0..R {
-            let threshold = std::array::from_fn(|k| match (self.awake, self.scale[r][k] < 0, factors[r][k]) {
+        for (r, factors) in factors.iter().enumerate() {
+            let threshold = std::array::from_fn(|k| match (self.awake, self.scale[r][k] < 0, factors[k]) {
                 // Awake: watch for scaled mantissas to need rescaling.
                 (true, true, _) => BIG,
                 (true, false, _) => f64::INFINITY,
@@ -325,7 +425,7 @@ impl<V: Lanes, const R: usize> LaneState<V, R> {
                 (false, _, factor) => QUIET / factor,
             });
             self.threshold[r] = V::load(&threshold);
-            self.factor[r] = V::load(&factors[r]);
+            self.factor[r] = V::load(factors);
         }
     }
 }
@@ -461,6 +561,13 @@ mod tests {
                 }
                 column
             });
+            // The kernel takes the antisymmetric part times cos θ.
+            let mut anti_times_x = spectra[1].clone();
+            for c in 0..width {
+                for (p, x) in cos_theta.iter().enumerate() {
+                    anti_times_x[c * stride + p] *= x;
+                }
+            }
             let degrees = lmax + 1 - m;
             let mut rows = vec![0.0; degrees * theta.len()];
             recurrence.rows(m, &cos_theta, &start, &mut rows);
@@ -474,7 +581,7 @@ mod tests {
                         start: &start,
                     },
                     spectra: Spectra {
-                        parts: [&spectra[0], &spectra[1]],
+                        parts: [&spectra[0], &anti_times_x],
                         stride,
                         width,
                     },
