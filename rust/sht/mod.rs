@@ -261,6 +261,12 @@ impl<T: Real> BufferPool<T> {
 const STREAMED_MAX_BATCH: usize = 1;
 const STREAMED_MIN_TABLE_BYTES: usize = 4 << 20;
 
+/// Tables larger than this (about half the last-level cache) are read from memory for
+/// every chunk of maps: beyond it every batch is analysed on the fly, a map at a time.
+/// Measured on one thread, f64, 256×512 (34 MB table): 1.38 ms a map with the table in
+/// chunks of 8, 1.20 on the fly in chunks of 8, 0.9 a map at a time.
+const STREAMED_MIN_TABLE_BYTES_ANY_BATCH: usize = 16 << 20;
+
 /// Bytes of gathered spectra a group of orders analysed on the fly may occupy (per
 /// worker, in cache).
 const STREAMED_GROUP_BYTES: usize = 256 << 10;
@@ -392,7 +398,15 @@ impl<T: Real> Sht<T> {
         // cost up to a tenth of a transform.
         let len = batch * self.n_coefficients();
         let mut coefficients = Vec::with_capacity(len);
+        // Maps one at a time where λ is recomputed anyway: a chunk's intermediates then
+        // stay in cache.
+        let chunk = if Self::streams(self.analysis_table(), usize::MAX) {
+            1
+        } else {
+            self.chunk_items()
+        };
         self.for_each_chunk(
+            chunk,
             maps,
             self.nlat * self.nlon,
             &mut coefficients.spare_capacity_mut()[..len],
@@ -419,6 +433,7 @@ impl<T: Real> Sht<T> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
         self.for_each_chunk(
+            self.chunk_items(),
             coefficients,
             self.n_coefficients(),
             &mut maps,
@@ -432,16 +447,13 @@ impl<T: Real> Sht<T> {
     /// intermediates stay in cache; a single large item is one chunk, parallel inside.
     fn for_each_chunk<Out: Send>(
         &self,
+        chunk: usize,
         input: &[T],
         input_width: usize,
         output: &mut [Out],
         output_width: usize,
         transform: impl Fn(&[T], &mut [Out]) + Sync,
     ) {
-        // At least a block of maps per chunk: narrower products waste the kernel's tiles,
-        // and each order's slice of a chunk stays small however large the grid.
-        let bytes_per_item = 4 * self.half_rings().max(self.lmax + 1) * (self.lmax + 1) * std::mem::size_of::<T>();
-        let chunk = (CHUNK_BYTES / bytes_per_item).max(MAP_BLOCK);
         let transform = &transform;
         // Entered once, the pool runs every parallel loop of the transform from one of its
         // workers: a caller outside the pool would otherwise hand each loop over and wait
@@ -452,6 +464,31 @@ impl<T: Real> Sht<T> {
                 .zip(input.par_chunks(chunk * input_width))
                 .for_each(|(out, items)| transform(items, out))
         })
+    }
+
+    /// Items per chunk of a batched transform.
+    fn chunk_items(&self) -> usize {
+        // At least a block of maps per chunk: narrower products waste the kernel's tiles,
+        // and each order's slice of a chunk stays small however large the grid.
+        let bytes_per_item = 4 * self.half_rings().max(self.lmax + 1) * (self.lmax + 1) * std::mem::size_of::<T>();
+        (CHUNK_BYTES / bytes_per_item).max(MAP_BLOCK)
+    }
+
+    /// The table analysis reads: the grid's own, or the Gauss–Legendre rings an
+    /// equiangular grid is resampled to.
+    fn analysis_table(&self) -> &LegendreTable<T> {
+        match &self.gauss {
+            Some((table, _)) => table,
+            None => &self.at_grid,
+        }
+    }
+
+    /// Whether analysis of chunks of `batch` maps recomputes λ in registers ([`streamed`])
+    /// rather than reading `table`.
+    fn streams(table: &LegendreTable<T>, batch: usize) -> bool {
+        table.cached.is_none()
+            || table.bytes() > STREAMED_MIN_TABLE_BYTES_ANY_BATCH
+            || (batch <= STREAMED_MAX_BATCH && table.bytes() > STREAMED_MIN_TABLE_BYTES)
     }
 
     fn analysis_chunk(&self, maps: &[T], coefficients: &mut [MaybeUninit<T>]) {
@@ -690,8 +727,7 @@ impl<T: Real> Sht<T> {
         batch: usize,
     ) -> Vec<T> {
         let (width, half) = (2 * batch, table.half_rings());
-        let streamed =
-            table.cached.is_none() || (batch <= STREAMED_MAX_BATCH && table.bytes() > STREAMED_MIN_TABLE_BYTES);
+        let streamed = Self::streams(table, batch);
         let mut orders = self.pool.take((self.lmax + 1) * (self.lmax + 2) / 2 * width);
         if streamed {
             self.streamed_analysis(table, [sym, anti], layout, batch, &mut orders);
@@ -730,9 +766,8 @@ impl<T: Real> Sht<T> {
 
     /// [`Sht::legendre_analysis`] with λ recomputed in registers ([`streamed`]), for groups
     /// of consecutive orders: each group's spectra are first gathered into columns of
-    /// rings, reading for every ring the group's orders at once (one order at a time read
-    /// a few values per cache line, from lines a whole ring slab apart: a fifth of the
-    /// time of one 512 × 1024 map).
+    /// rings, reading for every ring the group's orders at once (whole cache lines, where
+    /// one order at a time would read a few values from each line).
     fn streamed_analysis(
         &self,
         table: &LegendreTable<T>,

@@ -7,9 +7,9 @@
 //! narrow for the matrix product to reuse each table value. The recurrence runs two
 //! degrees a step in cos² θ ([`Paired`]): each value serves an even degree through the
 //! symmetric part and an odd one through the antisymmetric part times cos θ, three
-//! quarters of the operations of one degree a step. Rings are taken in blocks of
-//! [`VECTORS`] × [`LANES`]; a block's recurrence state stays in registers while l runs, and
-//! each value meets every column of the spectra at once. Partial sums are kept per
+//! quarters of the operations of one degree a step. Columns are taken in groups of up
+//! to four and rings in blocks of a few vectors of [`LANES`]; a block's recurrence state
+//! and its group's spectra stay in registers while l runs. Partial sums are kept per
 //! (pair of degrees, part, column) as one vector across the block's rings and reduced
 //! once at the end.
 //!
@@ -21,15 +21,9 @@ use super::legendre::{Paired, Recurrence, Scaled, BIG, SMALL};
 use super::Real;
 use lanes::{Lanes, LANES};
 
-/// Ring vectors per block: four independent recurrences hide the latency of each.
-const VECTORS: usize = 4;
-
 /// Partial sums whose λ are all below this are not added: next to values of order one
 /// they change no coefficient (2^−70 × a few thousand rings is below 10^−17).
 const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
-
-/// Columns of one map (cosine and sine sums), which get their own loop.
-const NARROW: usize = 2;
 
 /// Steps (pairs of degrees) a quiet block takes between checks.
 const QUIET_RUN: usize = 2;
@@ -119,39 +113,57 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
     assert!(spectra.parts.iter().all(|s| s.len() >= spectra.width * spectra.stride));
     let Scratch { sums, paired, odd } = scratch;
     let paired = recurrence.paired(m, paired);
-    let (degrees, pairs, width) = (recurrence.lmax() + 1 - m, paired.steps.len(), spectra.width);
+    let (degrees, pairs, width, stride) = (
+        recurrence.lmax() + 1 - m,
+        paired.steps.len(),
+        spectra.width,
+        spectra.stride,
+    );
     assert_eq!(out.len(), degrees * width);
-    sums.clear();
-    sums.resize(pairs * 2 * width, [0.0; LANES]);
-    let order = Order {
-        steps: &paired.steps,
-        spectra,
-        rings,
-    };
-    match width {
-        NARROW => order.blocks::<V, NARROW>(half, sums),
-        _ => order.blocks::<V, 0>(half, sums),
-    }
-    // Even degrees directly, odd ones by the running sum of the paired recurrence.
-    odd.clear();
-    odd.resize(width, 0.0);
-    for (j, sums) in sums.chunks_exact(2 * width).enumerate() {
-        let (even_sums, odd_sums) = sums.split_at(width);
-        let i = 2 * j;
-        for (value, sum) in out[i * width..][..width].iter_mut().zip(even_sums) {
-            *value = T::of(paired.even_norm[j] * lane_sum(sum));
+    // Columns in groups of four, two or one, each with its own loop over blocks of rings:
+    // a group's spectra stay in registers while its recurrence runs.
+    let mut first = 0;
+    while first < width {
+        let group = match width - first {
+            4.. => 4,
+            2 | 3 => 2,
+            _ => 1,
+        };
+        sums.clear();
+        sums.resize(pairs * 2 * group, [0.0; LANES]);
+        let order = Order {
+            steps: &paired.steps,
+            spectra: Spectra {
+                parts: spectra.parts.map(|part| &part[first * stride..]),
+                stride,
+                width: group,
+            },
+            rings: Rings { ..rings },
+        };
+        match group {
+            4 => order.blocks::<V, 4>(half, sums),
+            2 => order.blocks::<V, 2>(half, sums),
+            _ => order.blocks::<V, 1>(half, sums),
         }
-        if i + 1 < degrees {
-            let (gain, norm) = (paired.odd_gain[j], paired.odd_norm[j]);
-            for ((value, sum), odd) in out[(i + 1) * width..][..width]
-                .iter_mut()
-                .zip(odd_sums)
-                .zip(odd.iter_mut())
-            {
-                *odd = gain * lane_sum(sum) - *odd;
-                *value = T::of(norm * *odd);
+        // Even degrees directly, odd ones by the running sum of the paired recurrence.
+        odd.clear();
+        odd.resize(group, 0.0);
+        for (j, sums) in sums.chunks_exact(2 * group).enumerate() {
+            let (even_sums, odd_sums) = sums.split_at(group);
+            let i = 2 * j;
+            for (value, sum) in out[i * width + first..][..group].iter_mut().zip(even_sums) {
+                *value = T::of(paired.even_norm[j] * lane_sum(sum));
+            }
+            if i + 1 < degrees {
+                let (gain, norm) = (paired.odd_gain[j], paired.odd_norm[j]);
+                let values = out[(i + 1) * width + first..][..group].iter_mut();
+                for ((value, sum), odd) in values.zip(odd_sums).zip(odd.iter_mut()) {
+                    *odd = gain * lane_sum(sum) - *odd;
+                    *value = T::of(norm * *odd);
+                }
             }
         }
+        first += group;
     }
 }
 
@@ -169,15 +181,18 @@ struct Order<'a> {
 }
 
 impl Order<'_> {
-    /// Every block of rings; `W` columns, or any number where `W` = 0.
+    /// Every block of rings, for `W` columns. The spectra take 2 · `W` · R registers for R
+    /// ring vectors: four vectors a block (enough independent recurrences to hide their
+    /// latency) while that fits in AVX-512's 32, two beyond.
     #[inline(always)]
     fn blocks<V: Lanes, const W: usize>(&self, half_rings: usize, sums: &mut [[f64; LANES]]) {
         let vectors = half_rings.div_ceil(LANES);
         let mut vector = 0;
-        // Whole blocks, then the remaining vectors in narrower ones.
-        while vector + VECTORS <= vectors {
-            self.block::<V, VECTORS, W>(vector * LANES, sums);
-            vector += VECTORS;
+        if W <= 2 {
+            while vector + 4 <= vectors {
+                self.block::<V, 4, W>(vector * LANES, sums);
+                vector += 4;
+            }
         }
         while vector + 2 <= vectors {
             self.block::<V, 2, W>(vector * LANES, sums);
@@ -214,23 +229,14 @@ impl Order<'_> {
             let mut state = LaneState::<V, R>::new(scale, &current);
             pair = self.careful_steps(first, &x2, &mut previous, &mut current, &mut state, sums);
         }
-        if W == 0 {
-            for j in pair..self.steps.len() {
-                if j > 0 {
-                    step(self.steps[j], &x2, &mut previous, &mut current);
-                }
-                self.accumulate(j, first, &current, sums);
-            }
-        } else {
-            self.narrow_steps::<V, R, W>(pair, first, &x2, &mut previous, &mut current, sums);
-        }
+        self.plain_steps::<V, R, W>(pair, first, &x2, &mut previous, &mut current, sums);
     }
 
-    /// The plain loop for exactly `W` columns: the block's spectra held in registers, no
-    /// bounds checks or column loops per step (one map has two columns; the general loop
-    /// spent more time on its own overhead than on arithmetic there).
+    /// The loop once every value is a plain double, for exactly `W` columns: the block's
+    /// spectra held in registers, no bounds checks or column loops per step (a loop over
+    /// any number of columns spent more time on its own overhead than on arithmetic).
     #[inline(always)]
-    fn narrow_steps<V: Lanes, const R: usize, const W: usize>(
+    fn plain_steps<V: Lanes, const R: usize, const W: usize>(
         &self,
         from: usize,
         first: usize,
