@@ -26,8 +26,10 @@
 //! the next pair's rings are prefetched; synthesis ends in a real inverse FFT per ring
 //! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre
 //! tables are built once per plan and kept while they fit in [`LEGENDRE_CACHE_BYTES`].
-//! Analysis without a kept table, or of a single map against a table too large to stay
-//! in cache, recomputes λ in registers instead ([`streamed`]); synthesis recomputes the
+//! Analysis of single maps, and of every map where the table is not kept or is larger
+//! than the last-level cache could hold, recomputes λ in registers instead, a map at a
+//! time ([`streamed`]); on Gauss–Legendre grids each map's FFTs are then folded straight
+//! into tiles of ring blocks that the kernel reads as vectors. Synthesis recomputes the
 //! tables it lacks per call.
 
 pub mod grid;
@@ -252,14 +254,12 @@ impl<T: Real> BufferPool<T> {
     }
 }
 
-/// Chunks of at most this many maps whose table exceeds [`STREAMED_MIN_TABLE_BYTES`]
-/// are analysed with λ recomputed in registers ([`streamed`]) even where the table is
-/// kept: a one-map product reuses each table value only twice, so reading the table from
-/// memory costs more than recomputing it. Measured on one thread, f64: one 256×512 map
-/// 4.1 ms with the table, 1.4 ms streamed; 128×256 (8 MB table) 0.30 and 0.27 ms;
-/// 90×180 (3 MB, which stays in cache) 0.13 and 0.15 ms.
+/// Chunks of at most this many maps are analysed with λ recomputed in registers
+/// ([`streamed`]) even where the table is kept: a one-map product reuses each table value
+/// only twice, so reading the table costs more than recomputing it. Measured on one
+/// thread, f64 (f32), one map: 90×180 0.13 (0.12) ms with the table, 0.10 (0.10) on the
+/// fly; 128×256 0.20 (0.25) and 0.18 (0.175).
 const STREAMED_MAX_BATCH: usize = 1;
-const STREAMED_MIN_TABLE_BYTES: usize = 4 << 20;
 
 /// Tables larger than this (about half the last-level cache) are read from memory for
 /// every chunk of maps: beyond it every batch is analysed on the fly, a map at a time.
@@ -486,15 +486,20 @@ impl<T: Real> Sht<T> {
     /// Whether analysis of chunks of `batch` maps recomputes λ in registers ([`streamed`])
     /// rather than reading `table`.
     fn streams(table: &LegendreTable<T>, batch: usize) -> bool {
-        table.cached.is_none()
-            || table.bytes() > STREAMED_MIN_TABLE_BYTES_ANY_BATCH
-            || (batch <= STREAMED_MAX_BATCH && table.bytes() > STREAMED_MIN_TABLE_BYTES)
+        table.cached.is_none() || table.bytes() > STREAMED_MIN_TABLE_BYTES_ANY_BATCH || batch <= STREAMED_MAX_BATCH
     }
 
     fn analysis_chunk(&self, maps: &[T], coefficients: &mut [MaybeUninit<T>]) {
         let batch = maps.len() / (self.nlat * self.nlon);
         let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
         let orders = match &self.gauss {
+            None if batch == 1 && Self::streams(&self.at_grid, batch) => {
+                let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
+                let tiles = self.fold_ring_blocks(maps, &ring_factors);
+                let orders = self.streamed_tiles_analysis(&tiles);
+                self.pool.give(tiles);
+                orders
+            }
             None => {
                 let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
                 let (sym, anti) = self.fold_rings(maps, batch, &ring_factors);
@@ -678,6 +683,111 @@ impl<T: Real> Sht<T> {
         (sym, anti)
     }
 
+    /// One map's FFTs folded as [`Sht::fold_rings`] does, for the on-the-fly analysis:
+    /// ring pairs in blocks of [`streamed::LANES`], each block a tile `[m][part][ring]`
+    /// (cosine and sine sums, the block's rings innermost), so that every order's values
+    /// at a block's rings are one vector for the kernel, with no gathering between.
+    /// Returns the symmetric and antisymmetric tiles, `[block][m][part][ring]`.
+    fn fold_ring_blocks(&self, map: &[T], ring_factors: &[f64]) -> [Vec<T>; 2] {
+        const RINGS: usize = streamed::LANES;
+        let (nlat, nlon, orders, half) = (self.nlat, self.nlon, self.lmax + 1, self.half_rings());
+        let tile = orders * 2 * RINGS;
+        let blocks = half.div_ceil(RINGS);
+        let [mut sym, mut anti] = [0, 1].map(|_| self.pool.take(blocks * tile));
+        let zero = Complex::new(T::zero(), T::zero());
+        let ring = |j: usize| &map[j * nlon..][..nlon];
+        sym.par_chunks_mut(tile)
+            .zip(anti.par_chunks_mut(tile))
+            .enumerate()
+            .for_each_init(
+                || (vec![zero; RINGS * nlon], vec![zero; self.fft.get_inplace_scratch_len()]),
+                |(spectra, scratch), (block, (sym, anti))| {
+                    for (k, z) in spectra.chunks_exact_mut(nlon).enumerate() {
+                        let p = block * RINGS + k;
+                        let mirror = nlat - 1 - p.min(nlat - 1);
+                        let factor = T::of(ring_factors.get(p).copied().unwrap_or(0.0));
+                        if p >= half {
+                            // Past the last ring pair: zeros, which the kernel pads with.
+                            z.fill(zero);
+                            continue;
+                        } else if mirror == p {
+                            // The equator has no mirror: its antisymmetric part is zero.
+                            z.iter_mut()
+                                .zip(ring(p))
+                                .for_each(|(z, &n)| *z = Complex::new(factor * n, T::zero()));
+                        } else {
+                            for ((z, &n), &s) in z.iter_mut().zip(ring(p)).zip(ring(mirror)) {
+                                *z = Complex::new(factor * (n + s), factor * (n - s));
+                            }
+                        }
+                        self.fft.process_with_scratch(z, scratch);
+                    }
+                    // The block's rings take the place of a block of maps.
+                    split::split_pair(
+                        &split::PairSpectra {
+                            spectra,
+                            nlon,
+                            sym_factor: T::of(0.5),
+                            anti_factor: T::of(0.5),
+                        },
+                        &mut split::PairParts {
+                            sym,
+                            anti,
+                            width: 2 * RINGS,
+                            half_width: RINGS,
+                            first: 0,
+                        },
+                        orders,
+                        &mut |_| {},
+                    );
+                },
+            );
+        [sym, anti]
+    }
+
+    /// The on-the-fly Legendre step of one map from [`Sht::fold_ring_blocks`]' tiles:
+    /// coefficients `[m][l − m][part]`.
+    fn streamed_tiles_analysis(&self, [sym, anti]: &[Vec<T>; 2]) -> Vec<T> {
+        let table = &self.at_grid;
+        let orders = self.lmax + 1;
+        // The kernel reads f64: f32 tiles are widened first.
+        let widened: Vec<[Vec<f64>; 2]>;
+        let parts: [&[f64]; 2] = match [sym, anti].map(|tiles| (tiles as &dyn std::any::Any).downcast_ref::<Vec<f64>>())
+        {
+            [Some(sym), Some(anti)] => [sym, anti],
+            _ => {
+                widened = vec![[sym, anti].map(|tiles| tiles.iter().map(|v| v.to_f64().unwrap_or(f64::NAN)).collect())];
+                [&widened[0][0], &widened[0][1]]
+            }
+        };
+        let mut out = self.pool.take(orders * (orders + 1) / 2 * 2);
+        self.split_orders(&mut out, 1)
+            .into_par_iter()
+            .enumerate()
+            .for_each_init(streamed::Scratch::default, |scratch, (m, block)| {
+                let rings = streamed::LANES;
+                streamed::analysis_order(
+                    streamed::Job {
+                        recurrence: &table.recurrence,
+                        m,
+                        rings: streamed::Rings {
+                            cos_theta: &table.cos_theta,
+                            start: table.sectoral_column(m),
+                        },
+                        spectra: streamed::Spectra {
+                            parts: parts.map(|tiles| &tiles[m * 2 * rings..]),
+                            column_stride: rings,
+                            vector_stride: orders * 2 * rings,
+                            width: 2,
+                        },
+                    },
+                    block,
+                    scratch,
+                );
+            });
+        out
+    }
+
     /// Inverse of the folding: per ring, (cos, sin) sums = symmetric ± antisymmetric
     /// part, scaled by `ring_factors`, then an inverse real FFT. Input `[m][half ring][part][batch]`.
     fn unfold_rings(&self, sym: &[T], anti: &[T], batch: usize, ring_factors: &[f64], maps: &mut [T]) {
@@ -785,18 +895,16 @@ impl<T: Real> Sht<T> {
             |(scratch, columns), (g, blocks)| {
                 let first = g * group;
                 // The group's folded spectra in f64: `columns[part][(k · width + c) · stride + p]`
-                // for its k-th order, zero-padded to whole vectors, the antisymmetric part
-                // times cos θ as the kernel takes it.
+                // for its k-th order, zero-padded to whole vectors.
                 for (part, source) in parts.into_iter().enumerate() {
                     let columns = &mut columns[part];
                     columns.clear();
                     columns.resize(blocks.len() * width * stride, 0.0);
-                    for (p, x) in table.cos_theta.iter().enumerate() {
-                        let factor = if part == 0 { 1.0 } else { *x };
+                    for p in 0..half {
                         for k in 0..blocks.len() {
                             let ring = &source[(first + k) * layout.order_stride + p * layout.ring_stride..][..width];
                             for (c, value) in ring.iter().enumerate() {
-                                columns[(k * width + c) * stride + p] = factor * value.to_f64().unwrap_or(f64::NAN);
+                                columns[(k * width + c) * stride + p] = value.to_f64().unwrap_or(f64::NAN);
                             }
                         }
                     }
@@ -814,7 +922,8 @@ impl<T: Real> Sht<T> {
                             },
                             spectra: streamed::Spectra {
                                 parts: order_columns,
-                                stride,
+                                column_stride: stride,
+                                vector_stride: streamed::LANES,
                                 width,
                             },
                         },

@@ -1,6 +1,6 @@
 //! The Legendre step of analysis with λ_lm recomputed in registers, for one order m:
-//! `out[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · part[(l − m) % 2][c · stride + p], the
-//! symmetric part for even l − m and the antisymmetric one for odd.
+//! `out[(l − m) · width + c]` = Σ_p λ_lm(θ_p) · part[(l − m) % 2](c, p), the symmetric part
+//! of column c at half ring p for even l − m and the antisymmetric one for odd.
 //!
 //! Used where a stored table would cost more than recomputing it: grids whose table is
 //! too large to keep or to stream from memory for every chunk of maps, and batches too
@@ -19,7 +19,8 @@
 
 use super::legendre::{Paired, Recurrence, Scaled, BIG, SMALL};
 use super::Real;
-use lanes::{Lanes, LANES};
+use lanes::Lanes;
+pub(super) use lanes::LANES;
 
 /// Partial sums whose λ are all below this are not added: next to values of order one
 /// they change no coefficient (2^−70 × a few thousand rings is below 10^−17).
@@ -28,13 +29,28 @@ const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
 /// Steps (pairs of degrees) a quiet block takes between checks.
 const QUIET_RUN: usize = 2;
 
-/// An order's folded spectra: `parts[part][c · stride + p]` for columns c < width and
-/// half rings p, zero beyond the last ring up to `stride` (a multiple of [`LANES`]); part
-/// 0 symmetric, part 1 antisymmetric **multiplied by cos θ_p**.
+/// An order's folded spectra, part 0 symmetric and part 1 antisymmetric, in vectors of
+/// [`LANES`] rings: column c's rings `LANES · v ..` at `parts[part][c · column_stride +
+/// v · vector_stride ..][..LANES]`, zero beyond the last ring. Columns of rings
+/// (`vector_stride` = [`LANES`]) and tiles of [`LANES`] rings by columns both fit.
+#[derive(Clone, Copy)]
 pub(super) struct Spectra<'a> {
     pub parts: [&'a [f64]; 2],
-    pub stride: usize,
+    pub column_stride: usize,
+    pub vector_stride: usize,
     pub width: usize,
+}
+
+impl Spectra<'_> {
+    /// Vector `vector` of column `c` of `part`.
+    #[inline(always)]
+    fn load<V: Lanes>(&self, part: usize, c: usize, vector: usize) -> V {
+        V::load(
+            self.parts[part][c * self.column_stride + vector * self.vector_stride..][..LANES]
+                .try_into()
+                .unwrap(),
+        )
+    }
 }
 
 /// The half rings: cos θ_p and λ_mm(θ_p) of the order.
@@ -109,16 +125,10 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
         spectra,
     } = job;
     let half = rings.cos_theta.len();
-    assert!(rings.start.len() == half && spectra.stride >= padded_stride(half));
-    assert!(spectra.parts.iter().all(|s| s.len() >= spectra.width * spectra.stride));
+    assert_eq!(rings.start.len(), half);
     let Scratch { sums, paired, odd } = scratch;
     let paired = recurrence.paired(m, paired);
-    let (degrees, pairs, width, stride) = (
-        recurrence.lmax() + 1 - m,
-        paired.steps.len(),
-        spectra.width,
-        spectra.stride,
-    );
+    let (degrees, pairs, width) = (recurrence.lmax() + 1 - m, paired.steps.len(), spectra.width);
     assert_eq!(out.len(), degrees * width);
     // Columns in groups of four, two or one, each with its own loop over blocks of rings:
     // a group's spectra stay in registers while its recurrence runs.
@@ -134,9 +144,9 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
         let order = Order {
             steps: &paired.steps,
             spectra: Spectra {
-                parts: spectra.parts.map(|part| &part[first * stride..]),
-                stride,
+                parts: spectra.parts.map(|part| &part[first * spectra.column_stride..]),
                 width: group,
+                ..spectra
             },
             rings: Rings { ..rings },
         };
@@ -210,75 +220,66 @@ impl Order<'_> {
         // The block's rings; those past the last one (padding) have λ = 0 and meet zero
         // spectra.
         let in_block = &start[first..(first + R * LANES).min(start.len())];
-        let (mut x2, mut mantissa, mut scale) = ([[0.0; LANES]; R], [[0.0; LANES]; R], [[0; LANES]; R]);
+        let (mut x, mut mantissa, mut scale) = ([[0.0; LANES]; R], [[0.0; LANES]; R], [[0; LANES]; R]);
         for (j, (s, c)) in in_block.iter().zip(&cos_theta[first..]).enumerate() {
-            x2[j / LANES][j % LANES] = c * c;
+            x[j / LANES][j % LANES] = *c;
             mantissa[j / LANES][j % LANES] = s.mantissa;
             scale[j / LANES][j % LANES] = s.scale;
         }
-        let (mut x2v, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
+        // Loops, not closures, here and below: a closure does not inherit the caller's
+        // target features, so its intrinsics become calls.
+        let (mut xv, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
         for r in 0..R {
-            x2v[r] = V::load(&x2[r]);
+            xv[r] = V::load(&x[r]);
             current[r] = V::load(&mantissa[r]);
         }
-        let x2 = x2v;
+        let x = xv;
         let mut pair = 0;
         // Most blocks start plain: no scaled value, and something to add.
         let plain = in_block.iter().all(|s| s.scale == 0) && in_block.iter().any(|s| s.mantissa.abs() >= QUIET);
         if !plain {
             let mut state = LaneState::<V, R>::new(scale, &current);
-            pair = self.careful_steps(first, &x2, &mut previous, &mut current, &mut state, sums);
+            pair = self.careful_steps(first, &x, &mut previous, &mut current, &mut state, sums);
         }
-        self.plain_steps::<V, R, W>(pair, first, &x2, &mut previous, &mut current, sums);
+        self.plain_steps::<V, R, W>(pair, first, &x, previous, current, sums);
     }
 
     /// The loop once every value is a plain double, for exactly `W` columns: the block's
     /// spectra held in registers, no bounds checks or column loops per step (a loop over
     /// any number of columns spent more time on its own overhead than on arithmetic).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // index loops over constants: fully unrolled
     fn plain_steps<V: Lanes, const R: usize, const W: usize>(
         &self,
         from: usize,
         first: usize,
-        x2: &[V; R],
-        previous: &mut [V; R],
-        current: &mut [V; R],
+        x: &[V; R],
+        mut previous: [V; R],
+        mut current: [V; R],
         sums: &mut [[f64; LANES]],
     ) {
-        let Spectra { parts, stride, width } = self.spectra;
-        assert_eq!(width, W);
-        let spectra: [[[V; R]; W]; 2] = std::array::from_fn(|part| {
-            std::array::from_fn(|c| {
-                std::array::from_fn(|r| {
-                    V::load(
-                        parts[part][c * stride + first + r * LANES..][..LANES]
-                            .try_into()
-                            .unwrap(),
-                    )
-                })
-            })
-        });
-        let pairs = self
-            .steps
-            .iter()
-            .zip(sums.chunks_exact_mut(2 * W))
-            .enumerate()
-            .skip(from);
-        for (j, (&coefficients, sums)) in pairs {
-            if j > 0 {
-                step(coefficients, x2, previous, current);
+        assert_eq!(self.spectra.width, W);
+        let x2 = &squares(x);
+        // The antisymmetric part times cos θ, as the paired recurrence takes it.
+        let mut spectra = [[[V::splat(0.0); R]; W]; 2];
+        for c in 0..W {
+            for r in 0..R {
+                spectra[0][c][r] = self.spectra.load(0, c, first / LANES + r);
+                spectra[1][c][r] = self.spectra.load::<V>(1, c, first / LANES + r).mul(x[r]);
             }
-            // Index loops over constants: fully unrolled, so the spectra stay in registers.
-            for part in 0..2 {
-                for c in 0..W {
-                    let sum = &mut sums[part * W + c];
-                    let mut total = V::load(sum);
-                    for r in 0..R {
-                        total = current[r].mul_add(spectra[part][c][r], total);
-                    }
-                    total.store(sum);
-                }
+        }
+        // Sums as fixed-size arrays per pair, `[part][column]`: no bounds checks.
+        let (sums, _) = sums.as_chunks_mut::<W>();
+        let (sums, _) = sums.as_chunks_mut::<2>();
+        let mut pairs = self.steps.iter().zip(sums.iter_mut()).skip(from);
+        if from == 0 {
+            if let Some((_, sums)) = pairs.next() {
+                add_pair(&current, &spectra, sums);
             }
+        }
+        for (&coefficients, sums) in pairs {
+            step(coefficients, x2, &mut previous, &mut current);
+            add_pair(&current, &spectra, sums);
         }
     }
 
@@ -290,13 +291,14 @@ impl Order<'_> {
     fn careful_steps<V: Lanes, const R: usize>(
         &self,
         first: usize,
-        x2: &[V; R],
+        x: &[V; R],
         previous: &mut [V; R],
         current: &mut [V; R],
         state: &mut LaneState<V, R>,
         sums: &mut [[f64; LANES]],
     ) -> usize {
         let pairs = self.steps.len();
+        let x2 = &squares(x);
         let mut j = 0;
         while j < pairs {
             // Quiet: the recurrence alone, checked once every few steps. A value that wakes
@@ -311,7 +313,7 @@ impl Order<'_> {
             if (0..R).any(|r| current[r].any_reaches(state.threshold[r])) {
                 state.update(previous, current);
                 if state.plain() {
-                    self.accumulate(j, first, current, sums);
+                    self.accumulate(j, first, x, current, sums);
                     return j + 1;
                 }
             }
@@ -320,30 +322,68 @@ impl Order<'_> {
                 for (value, factor) in values.iter_mut().zip(&state.factor) {
                     *value = value.mul(*factor);
                 }
-                self.accumulate(j, first, &values, sums);
+                self.accumulate(j, first, x, &values, sums);
             }
             j += 1;
         }
         pairs
     }
 
-    /// For both parts, sums[(2 · pair + part) · width + c] += ν (per ring) × spectrum c at
-    /// the block's rings.
+    /// sums[(2 · pair + part) · width + c] += ν (per ring) × spectrum c at the block's
+    /// rings, times cos θ for the antisymmetric part.
     #[inline(always)]
-    fn accumulate<V: Lanes, const R: usize>(&self, pair: usize, first: usize, nu: &[V; R], sums: &mut [[f64; LANES]]) {
-        let Spectra { parts, stride, width } = self.spectra;
+    fn accumulate<V: Lanes, const R: usize>(
+        &self,
+        pair: usize,
+        first: usize,
+        x: &[V; R],
+        nu: &[V; R],
+        sums: &mut [[f64; LANES]],
+    ) {
+        let width = self.spectra.width;
         let sums = &mut sums[2 * pair * width..][..2 * width];
-        for (sums, spectra) in sums.chunks_exact_mut(width).zip(parts) {
+        let mut nu_x = *nu;
+        for r in 0..R {
+            nu_x[r] = nu[r].mul(x[r]);
+        }
+        for (part, (sums, nu)) in sums.chunks_exact_mut(width).zip([nu, &nu_x]).enumerate() {
             for (c, sum) in sums.iter_mut().enumerate() {
-                let column = &spectra[c * stride + first..][..R * LANES];
                 let mut total = V::load(&*sum);
                 for (r, nu) in nu.iter().enumerate() {
-                    total = nu.mul_add(V::load(column[r * LANES..][..LANES].try_into().unwrap()), total);
+                    total = nu.mul_add(self.spectra.load(part, c, first / LANES + r), total);
                 }
                 total.store(sum);
             }
         }
     }
+}
+
+/// One pair's sums += ν × each spectrum (loops over constants, fully unrolled, so the
+/// spectra stay in registers).
+#[inline(always)]
+fn add_pair<V: Lanes, const R: usize, const W: usize>(
+    nu: &[V; R],
+    spectra: &[[[V; R]; W]; 2],
+    sums: &mut [[[f64; LANES]; W]; 2],
+) {
+    for part in 0..2 {
+        for c in 0..W {
+            let mut total = V::load(&sums[part][c]);
+            for r in 0..R {
+                total = nu[r].mul_add(spectra[part][c][r], total);
+            }
+            total.store(&mut sums[part][c]);
+        }
+    }
+}
+
+#[inline(always)]
+fn squares<V: Lanes, const R: usize>(x: &[V; R]) -> [V; R] {
+    let mut squares = *x;
+    for r in 0..R {
+        squares[r] = x[r].mul(x[r]);
+    }
+    squares
 }
 
 /// One pair of degrees up: ν_i = (a x² + b) ν_{i−2} − ν_{i−4}.
@@ -567,13 +607,6 @@ mod tests {
                 }
                 column
             });
-            // The kernel takes the antisymmetric part times cos θ.
-            let mut anti_times_x = spectra[1].clone();
-            for c in 0..width {
-                for (p, x) in cos_theta.iter().enumerate() {
-                    anti_times_x[c * stride + p] *= x;
-                }
-            }
             let degrees = lmax + 1 - m;
             let mut rows = vec![0.0; degrees * theta.len()];
             recurrence.rows(m, &cos_theta, &start, &mut rows);
@@ -587,8 +620,9 @@ mod tests {
                         start: &start,
                     },
                     spectra: Spectra {
-                        parts: [&spectra[0], &anti_times_x],
-                        stride,
+                        parts: [&spectra[0], &spectra[1]],
+                        column_stride: stride,
+                        vector_stride: LANES,
                         width,
                     },
                 },
