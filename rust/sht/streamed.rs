@@ -26,6 +26,10 @@ pub(super) use lanes::LANES;
 /// they change no coefficient (2^−70 × a few thousand rings is below 10^−17).
 const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
 
+/// Pairs of degrees whose sums the plain loop of long orders runs through for every block
+/// before the next ones (one map's sums: 16 KB).
+const PAIR_CHUNK: usize = 64;
+
 /// Steps (pairs of degrees) a quiet block takes between checks.
 const QUIET_RUN: usize = 2;
 
@@ -197,6 +201,9 @@ impl Order<'_> {
     #[inline(always)]
     fn blocks<V: Lanes, const W: usize>(&self, half_rings: usize, sums: &mut [[f64; LANES]]) {
         let vectors = half_rings.div_ceil(LANES);
+        if W <= 2 && vectors.is_multiple_of(4) && self.steps.len() > PAIR_CHUNK {
+            return self.blocks_by_pair_chunks::<V, W>(vectors / 4, sums);
+        }
         let mut vector = 0;
         if W <= 2 {
             while vector + 4 <= vectors {
@@ -213,9 +220,64 @@ impl Order<'_> {
         }
     }
 
+    /// [`Order::blocks`] for many pairs of degrees: every block's careful steps first, then
+    /// the plain loop a chunk of pairs at a time for every block in turn, so that the
+    /// chunk's sums stay in the first-level cache (a whole order's did not at lmax 511).
+    #[inline(always)]
+    fn blocks_by_pair_chunks<V: Lanes, const W: usize>(&self, blocks: usize, sums: &mut [[f64; LANES]]) {
+        // Per block: the next pair, and the recurrence's two values there.
+        let mut states = Vec::with_capacity(blocks);
+        for block in 0..blocks {
+            let (pair, _, previous, current) = self.careful_start::<V, 4>(block * 4 * LANES, sums);
+            let (mut saved_previous, mut saved_current) = ([[0.0; LANES]; 4], [[0.0; LANES]; 4]);
+            for r in 0..4 {
+                previous[r].store(&mut saved_previous[r]);
+                current[r].store(&mut saved_current[r]);
+            }
+            states.push((pair, saved_previous, saved_current));
+        }
+        let pairs = self.steps.len();
+        for end in (PAIR_CHUNK..pairs + PAIR_CHUNK)
+            .step_by(PAIR_CHUNK)
+            .map(|end| end.min(pairs))
+        {
+            for (block, (pair, saved_previous, saved_current)) in states.iter_mut().enumerate() {
+                if *pair >= end {
+                    continue;
+                }
+                let first = block * 4 * LANES;
+                let (mut x, mut previous, mut current) = ([V::splat(0.0); 4], [V::splat(0.0); 4], [V::splat(0.0); 4]);
+                for r in 0..4 {
+                    x[r] = V::load(self.rings.cos_theta[first + r * LANES..][..LANES].try_into().unwrap());
+                    previous[r] = V::load(&saved_previous[r]);
+                    current[r] = V::load(&saved_current[r]);
+                }
+                (previous, current) = self.plain_steps::<V, 4, W>(*pair..end, first, &x, previous, current, sums);
+                for r in 0..4 {
+                    previous[r].store(&mut saved_previous[r]);
+                    current[r].store(&mut saved_current[r]);
+                }
+                *pair = end;
+            }
+        }
+    }
+
     /// Adds the contribution of the `R` ring vectors from ring `first` to every sum.
     #[inline(always)]
     fn block<V: Lanes, const R: usize, const W: usize>(&self, first: usize, sums: &mut [[f64; LANES]]) {
+        let (pair, x, previous, current) = self.careful_start::<V, R>(first, sums);
+        self.plain_steps::<V, R, W>(pair..self.steps.len(), first, &x, previous, current, sums);
+    }
+
+    /// A block's start: its rings' cos θ and λ_mm, and careful steps until every value is
+    /// plain. Returns the first pair not yet added, cos θ, and the recurrence's values.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn careful_start<V: Lanes, const R: usize>(
+        &self,
+        first: usize,
+        sums: &mut [[f64; LANES]],
+    ) -> (usize, [V; R], [V; R], [V; R]) {
         let Rings { cos_theta, start } = self.rings;
         // The block's rings; those past the last one (padding) have λ = 0 and meet zero
         // spectra.
@@ -241,7 +303,7 @@ impl Order<'_> {
             let mut state = LaneState::<V, R>::new(scale, &current);
             pair = self.careful_steps(first, &x, &mut previous, &mut current, &mut state, sums);
         }
-        self.plain_steps::<V, R, W>(pair, first, &x, previous, current, sums);
+        (pair, x, previous, current)
     }
 
     /// The loop once every value is a plain double, for exactly `W` columns: the block's
@@ -251,13 +313,13 @@ impl Order<'_> {
     #[allow(clippy::needless_range_loop)] // index loops over constants: fully unrolled
     fn plain_steps<V: Lanes, const R: usize, const W: usize>(
         &self,
-        from: usize,
+        pairs: std::ops::Range<usize>,
         first: usize,
         x: &[V; R],
         mut previous: [V; R],
         mut current: [V; R],
         sums: &mut [[f64; LANES]],
-    ) {
+    ) -> ([V; R], [V; R]) {
         assert_eq!(self.spectra.width, W);
         let x2 = &squares(x);
         // The antisymmetric part times cos θ, as the paired recurrence takes it.
@@ -271,7 +333,8 @@ impl Order<'_> {
         // Sums as fixed-size arrays per pair, `[part][column]`: no bounds checks.
         let (sums, _) = sums.as_chunks_mut::<W>();
         let (sums, _) = sums.as_chunks_mut::<2>();
-        let mut pairs = self.steps.iter().zip(sums.iter_mut()).skip(from);
+        let from = pairs.start;
+        let mut pairs = self.steps[..pairs.end].iter().zip(sums.iter_mut()).skip(from);
         if from == 0 {
             if let Some((_, sums)) = pairs.next() {
                 add_pair(&current, &spectra, sums);
@@ -281,6 +344,7 @@ impl Order<'_> {
             step(coefficients, x2, &mut previous, &mut current);
             add_pair(&current, &spectra, sums);
         }
+        (previous, current)
     }
 
     /// Pairs of degrees while the block is quiet (every ν negligible: nothing added) or
@@ -579,13 +643,20 @@ mod tests {
 
     #[test]
     fn agrees_with_stored_rows_where_sectorals_underflow() {
-        // Rings from the pole (λ_mm scaled or negligible at large m) to the equator, a
-        // count that leaves a partial block, and both narrow and wide spectra.
+        // Rings from the pole (λ_mm scaled or negligible at large m) to the equator: a
+        // count that leaves a partial block, and one of whole blocks of four vectors
+        // (the plain loop then runs in chunks of pairs); narrow and wide spectra.
         // At lmax 2500 scaled values grow back to plain ones within the order (e.g.
         // λ_{l,1000}(0.5) is O(1) from l ≈ 2100).
+        for rings in [45, 64] {
+            check_against_stored_rows(rings);
+        }
+    }
+
+    fn check_against_stored_rows(rings: usize) {
         let lmax = 2500;
         let recurrence = Recurrence::new(lmax);
-        let theta: Vec<f64> = (0..45).map(|p| 1e-3 + p as f64 * 0.035).collect();
+        let theta: Vec<f64> = (0..rings).map(|p| 1e-3 + p as f64 * 1.57 / rings as f64).collect();
         let cos_theta: Vec<f64> = theta.iter().map(|t| t.cos()).collect();
         let mut sectoral = vec![Scaled::ZERO; lmax + 1];
         let sectorals: Vec<Vec<Scaled>> = theta
