@@ -168,6 +168,25 @@ impl<T: Real> LegendreTable<T> {
         }
     }
 
+    /// Order m's analysis with λ recomputed in registers ([`streamed`]): `spectra` at
+    /// this table's rings → `out[(l − m) · width + c]`.
+    fn streamed_order(&self, m: usize, spectra: streamed::Spectra<'_>, out: &mut [T], scratch: &mut streamed::Scratch) {
+        let rings = streamed::Rings {
+            cos_theta: &self.cos_theta,
+            start: self.sectoral_column(m),
+        };
+        streamed::analysis_order(
+            streamed::Job {
+                recurrence: &self.recurrence,
+                m,
+                rings,
+                spectra,
+            },
+            out,
+            scratch,
+        );
+    }
+
     /// Order m's λ_mm at the half rings.
     fn sectoral_column(&self, m: usize) -> &[Scaled] {
         &self.sectoral[m * self.half_rings()..][..self.half_rings()]
@@ -263,8 +282,9 @@ const STREAMED_MAX_BATCH: usize = 1;
 
 /// Tables larger than this (about half the last-level cache) are read from memory for
 /// every chunk of maps: beyond it every batch is analysed on the fly, a map at a time.
-/// Measured on one thread, f64, 256×512 (34 MB table): 1.38 ms a map with the table in
-/// chunks of 8, 1.20 on the fly in chunks of 8, 0.9 a map at a time.
+/// Measured on one thread, f64, 256×512 (34 MB table), batches of 8 (192): 1.15 (1.32)
+/// ms a map with the table, 1.20 on the fly in chunks of 8 maps, 0.90 (1.13) a map at a
+/// time.
 const STREAMED_MIN_TABLE_BYTES_ANY_BATCH: usize = 16 << 20;
 
 /// Bytes of gathered spectra a group of orders analysed on the fly may occupy (per
@@ -766,24 +786,13 @@ impl<T: Real> Sht<T> {
             .enumerate()
             .for_each_init(streamed::Scratch::default, |scratch, (m, block)| {
                 let rings = streamed::LANES;
-                streamed::analysis_order(
-                    streamed::Job {
-                        recurrence: &table.recurrence,
-                        m,
-                        rings: streamed::Rings {
-                            cos_theta: &table.cos_theta,
-                            start: table.sectoral_column(m),
-                        },
-                        spectra: streamed::Spectra {
-                            parts: parts.map(|tiles| &tiles[m * 2 * rings..]),
-                            column_stride: rings,
-                            vector_stride: orders * 2 * rings,
-                            width: 2,
-                        },
-                    },
-                    block,
-                    scratch,
-                );
+                let spectra = streamed::Spectra {
+                    parts: parts.map(|tiles| &tiles[m * 2 * rings..]),
+                    column_stride: rings,
+                    vector_stride: orders * 2 * rings,
+                    width: 2,
+                };
+                table.streamed_order(m, spectra, block, scratch);
             });
         out
     }
@@ -912,24 +921,13 @@ impl<T: Real> Sht<T> {
                 for (k, block) in blocks.iter_mut().enumerate() {
                     let m = first + k;
                     let order_columns = [0, 1].map(|part| &columns[part][k * width * stride..][..width * stride]);
-                    streamed::analysis_order(
-                        streamed::Job {
-                            recurrence: &table.recurrence,
-                            m,
-                            rings: streamed::Rings {
-                                cos_theta: &table.cos_theta,
-                                start: table.sectoral_column(m),
-                            },
-                            spectra: streamed::Spectra {
-                                parts: order_columns,
-                                column_stride: stride,
-                                vector_stride: streamed::LANES,
-                                width,
-                            },
-                        },
-                        block,
-                        scratch,
-                    );
+                    let spectra = streamed::Spectra {
+                        parts: order_columns,
+                        column_stride: stride,
+                        vector_stride: streamed::LANES,
+                        width,
+                    };
+                    table.streamed_order(m, spectra, block, scratch);
                 }
             },
         );
