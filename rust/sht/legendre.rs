@@ -58,9 +58,10 @@ pub struct Recurrence {
     paired: Vec<Paired>,
 }
 
-/// Largest lmax whose [`Paired`] forms a [`Recurrence`] keeps (about 10 MB at 1023);
-/// beyond it the on-the-fly analysis runs on chunks of maps, so computing them per
-/// transform costs comparatively little.
+/// Largest lmax whose [`Paired`] forms a [`Recurrence`] keeps (about 10 MB at 1023, as
+/// much as its α and N); beyond it each order's form is computed again for every map,
+/// which the kept ones avoid (7 % of one 256 × 512 analysis, measured before they were
+/// kept).
 const PAIRED_KEPT_LMAX: usize = 1023;
 
 impl Recurrence {
@@ -96,6 +97,7 @@ impl Recurrence {
                 .map(|m| {
                     let mut paired = Paired::default();
                     recurrence.compute_paired(m, &mut paired);
+                    paired.gain = Vec::new(); // only needed while computing
                     paired
                 })
                 .collect();

@@ -26,8 +26,8 @@
 //! the next pair's rings are prefetched; synthesis ends in a real inverse FFT per ring
 //! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre
 //! tables are built once per plan and kept while they fit in [`LEGENDRE_CACHE_BYTES`].
-//! Analysis of single maps, and of every map where the table is not kept or is larger
-//! than the last-level cache could hold, recomputes λ in registers instead, a map at a
+//! Analysis of single maps, and of every map where the table is not kept or exceeds
+//! [`STREAMED_MIN_TABLE_BYTES_ANY_BATCH`], recomputes λ in registers instead, a map at a
 //! time ([`streamed`]); on Gauss–Legendre grids each map's FFTs are then folded straight
 //! into tiles of ring blocks that the kernel reads as vectors. Synthesis recomputes the
 //! tables it lacks per call.
@@ -463,8 +463,8 @@ impl<T: Real> Sht<T> {
         Ok(maps)
     }
 
-    /// Runs `transform` on chunks of items in parallel. Chunks are sized so that their
-    /// intermediates stay in cache; a single large item is one chunk, parallel inside.
+    /// Runs `transform` on chunks of `chunk` items in parallel (callers size chunks so that
+    /// their intermediates stay in cache); a single large item is one chunk, parallel inside.
     fn for_each_chunk<Out: Send>(
         &self,
         chunk: usize,
@@ -513,7 +513,8 @@ impl<T: Real> Sht<T> {
         let batch = maps.len() / (self.nlat * self.nlon);
         let point = 2.0 * std::f64::consts::PI / self.nlon as f64;
         let orders = match &self.gauss {
-            None if batch == 1 && Self::streams(&self.at_grid, batch) => {
+            // Single maps always take the on-the-fly path (`Sht::streams`).
+            None if batch == 1 => {
                 let ring_factors: Vec<f64> = self.weights.iter().map(|w| w * point).collect();
                 let tiles = self.fold_ring_blocks(maps, &ring_factors);
                 let orders = self.streamed_tiles_analysis(&tiles);
@@ -724,13 +725,13 @@ impl<T: Real> Sht<T> {
                 |(spectra, scratch), (block, (sym, anti))| {
                     for (k, z) in spectra.chunks_exact_mut(nlon).enumerate() {
                         let p = block * RINGS + k;
-                        let mirror = nlat - 1 - p.min(nlat - 1);
-                        let factor = T::of(ring_factors.get(p).copied().unwrap_or(0.0));
                         if p >= half {
                             // Past the last ring pair: zeros, which the kernel pads with.
                             z.fill(zero);
                             continue;
-                        } else if mirror == p {
+                        }
+                        let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
+                        if mirror == p {
                             // The equator has no mirror: its antisymmetric part is zero.
                             z.iter_mut()
                                 .zip(ring(p))
@@ -771,13 +772,13 @@ impl<T: Real> Sht<T> {
         let table = &self.at_grid;
         let orders = self.lmax + 1;
         // The kernel reads f64: f32 tiles are widened first.
-        let widened: Vec<[Vec<f64>; 2]>;
+        let widened: [Vec<f64>; 2];
         let parts: [&[f64]; 2] = match [sym, anti].map(|tiles| (tiles as &dyn std::any::Any).downcast_ref::<Vec<f64>>())
         {
             [Some(sym), Some(anti)] => [sym, anti],
             _ => {
-                widened = vec![[sym, anti].map(|tiles| tiles.iter().map(|v| v.to_f64().unwrap_or(f64::NAN)).collect())];
-                [&widened[0][0], &widened[0][1]]
+                widened = [sym, anti].map(|tiles| tiles.iter().map(|v| v.to_f64().unwrap_or(f64::NAN)).collect());
+                [&widened[0], &widened[1]]
             }
         };
         let mut out = self.pool.take(orders * (orders + 1) / 2 * 2);

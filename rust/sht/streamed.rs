@@ -6,11 +6,12 @@
 //! too large to keep or to stream from memory for every chunk of maps, and batches too
 //! narrow for the matrix product to reuse each table value. The recurrence runs two
 //! degrees a step in cos² θ ([`Paired`]): each value serves an even degree through the
-//! symmetric part and an odd one through the antisymmetric part times cos θ, three
-//! quarters of the operations of one degree a step. Columns are taken in groups of up
-//! to four and rings in blocks of a few vectors of [`LANES`]; a block's recurrence state
-//! and its group's spectra stay in registers while l runs. Partial sums are kept per
-//! (pair of degrees, part, column) as one vector across the block's rings and reduced
+//! symmetric part and an odd one through the antisymmetric part times cos θ (for one map,
+//! three quarters of the operations of one degree a step). Columns are taken in groups of
+//! up to four and rings in blocks of a few vectors of [`LANES`]; a block's recurrence
+//! state and its group's spectra stay in registers while l runs (long orders stop every
+//! [`PAIR_CHUNK`] pairs and resume block by block). Partial sums are kept per (pair of
+//! degrees, part, column) as one vector of lanes, to which every block adds, and reduced
 //! once at the end.
 //!
 //! Near the poles λ_mm underflows for large m (see [`legendre`](super::legendre)): a
@@ -58,6 +59,7 @@ impl Spectra<'_> {
 }
 
 /// The half rings: cos θ_p and λ_mm(θ_p) of the order.
+#[derive(Clone, Copy)]
 pub(super) struct Rings<'a> {
     pub cos_theta: &'a [f64],
     pub start: &'a [Scaled],
@@ -152,7 +154,7 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
                 width: group,
                 ..spectra
             },
-            rings: Rings { ..rings },
+            rings,
         };
         match group {
             4 => order.blocks::<V, 4>(half, sums),
@@ -225,37 +227,39 @@ impl Order<'_> {
     /// chunk's sums stay in the first-level cache (a whole order's did not at lmax 511).
     #[inline(always)]
     fn blocks_by_pair_chunks<V: Lanes, const W: usize>(&self, blocks: usize, sums: &mut [[f64; LANES]]) {
-        // Per block: the next pair, and the recurrence's two values there.
+        // Per block: the next pair, cos θ (zero past the last ring), and the recurrence's
+        // two values there.
         let mut states = Vec::with_capacity(blocks);
         for block in 0..blocks {
-            let (pair, _, previous, current) = self.careful_start::<V, 4>(block * 4 * LANES, sums);
-            let (mut saved_previous, mut saved_current) = ([[0.0; LANES]; 4], [[0.0; LANES]; 4]);
+            let (pair, x, previous, current) = self.careful_start::<V, 4>(block * 4 * LANES, sums);
+            let mut saved = [[[0.0; LANES]; 4]; 3];
             for r in 0..4 {
-                previous[r].store(&mut saved_previous[r]);
-                current[r].store(&mut saved_current[r]);
+                x[r].store(&mut saved[0][r]);
+                previous[r].store(&mut saved[1][r]);
+                current[r].store(&mut saved[2][r]);
             }
-            states.push((pair, saved_previous, saved_current));
+            states.push((pair, saved));
         }
         let pairs = self.steps.len();
         for end in (PAIR_CHUNK..pairs + PAIR_CHUNK)
             .step_by(PAIR_CHUNK)
             .map(|end| end.min(pairs))
         {
-            for (block, (pair, saved_previous, saved_current)) in states.iter_mut().enumerate() {
+            for (block, (pair, saved)) in states.iter_mut().enumerate() {
                 if *pair >= end {
                     continue;
                 }
-                let first = block * 4 * LANES;
                 let (mut x, mut previous, mut current) = ([V::splat(0.0); 4], [V::splat(0.0); 4], [V::splat(0.0); 4]);
                 for r in 0..4 {
-                    x[r] = V::load(self.rings.cos_theta[first + r * LANES..][..LANES].try_into().unwrap());
-                    previous[r] = V::load(&saved_previous[r]);
-                    current[r] = V::load(&saved_current[r]);
+                    x[r] = V::load(&saved[0][r]);
+                    previous[r] = V::load(&saved[1][r]);
+                    current[r] = V::load(&saved[2][r]);
                 }
-                (previous, current) = self.plain_steps::<V, 4, W>(*pair..end, first, &x, previous, current, sums);
+                (previous, current) =
+                    self.plain_steps::<V, 4, W>(*pair..end, block * 4 * LANES, &x, previous, current, sums);
                 for r in 0..4 {
-                    previous[r].store(&mut saved_previous[r]);
-                    current[r].store(&mut saved_current[r]);
+                    previous[r].store(&mut saved[1][r]);
+                    current[r].store(&mut saved[2][r]);
                 }
                 *pair = end;
             }
