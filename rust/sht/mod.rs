@@ -420,7 +420,7 @@ impl<T: Real> Sht<T> {
         let mut coefficients = Vec::with_capacity(len);
         // Maps one at a time where λ is recomputed anyway: a chunk's intermediates then
         // stay in cache.
-        let chunk = if Self::streams(self.analysis_table(), usize::MAX) {
+        let chunk = if Self::streams_every_map(self.analysis_table()) {
             1
         } else {
             self.chunk_items()
@@ -506,7 +506,13 @@ impl<T: Real> Sht<T> {
     /// Whether analysis of chunks of `batch` maps recomputes λ in registers ([`streamed`])
     /// rather than reading `table`.
     fn streams(table: &LegendreTable<T>, batch: usize) -> bool {
-        table.cached.is_none() || table.bytes() > STREAMED_MIN_TABLE_BYTES_ANY_BATCH || batch <= STREAMED_MAX_BATCH
+        Self::streams_every_map(table) || batch <= STREAMED_MAX_BATCH
+    }
+
+    /// Whether analysis recomputes λ whatever the batch: the table is not kept, or too
+    /// large to stay in cache.
+    fn streams_every_map(table: &LegendreTable<T>) -> bool {
+        table.cached.is_none() || table.bytes() > STREAMED_MIN_TABLE_BYTES_ANY_BATCH
     }
 
     fn analysis_chunk(&self, maps: &[T], coefficients: &mut [MaybeUninit<T>]) {
@@ -658,15 +664,8 @@ impl<T: Real> Sht<T> {
                         let mut next = (0..next_maps).flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)]);
                         let spectra = &mut spectra[..block * nlon];
                         for (i, z) in spectra.chunks_exact_mut(nlon).enumerate() {
-                            let north = ring(b0 + i, p);
-                            if mirror == p {
-                                z.iter_mut().zip(north).for_each(|(z, &n)| *z = Complex::new(n, n));
-                            } else {
-                                let south = ring(b0 + i, mirror);
-                                for ((z, &n), &s) in z.iter_mut().zip(north).zip(south) {
-                                    *z = Complex::new(n + s, n - s);
-                                }
-                            }
+                            let south = (mirror != p).then(|| ring(b0 + i, mirror));
+                            pack_ring_pair(z, ring(b0 + i, p), south, T::one());
                             self.fft.process_with_scratch(z, scratch);
                             if let Some(ring) = next.next() {
                                 prefetch(ring);
@@ -712,7 +711,7 @@ impl<T: Real> Sht<T> {
     fn fold_ring_blocks(&self, map: &[T], ring_factors: &[f64]) -> [Vec<T>; 2] {
         const RINGS: usize = streamed::LANES;
         let (nlat, nlon, orders, half) = (self.nlat, self.nlon, self.lmax + 1, self.half_rings());
-        let tile = orders * 2 * RINGS;
+        let tile = self.ring_block_tile();
         let blocks = half.div_ceil(RINGS);
         let [mut sym, mut anti] = [0, 1].map(|_| self.pool.take(blocks * tile));
         let zero = Complex::new(T::zero(), T::zero());
@@ -730,17 +729,10 @@ impl<T: Real> Sht<T> {
                             z.fill(zero);
                             continue;
                         }
-                        let (mirror, factor) = (nlat - 1 - p, T::of(ring_factors[p]));
-                        if mirror == p {
-                            // The equator has no mirror: its antisymmetric part is zero.
-                            z.iter_mut()
-                                .zip(ring(p))
-                                .for_each(|(z, &n)| *z = Complex::new(factor * n, T::zero()));
-                        } else {
-                            for ((z, &n), &s) in z.iter_mut().zip(ring(p)).zip(ring(mirror)) {
-                                *z = Complex::new(factor * (n + s), factor * (n - s));
-                            }
-                        }
+                        // Each ring's factor applied here: the split takes one for the block.
+                        let mirror = nlat - 1 - p;
+                        let south = (mirror != p).then(|| ring(mirror));
+                        pack_ring_pair(z, ring(p), south, T::of(ring_factors[p]));
                         self.fft.process_with_scratch(z, scratch);
                     }
                     // The block's rings take the place of a block of maps.
@@ -764,6 +756,12 @@ impl<T: Real> Sht<T> {
                 },
             );
         [sym, anti]
+    }
+
+    /// Values per tile of [`Sht::fold_ring_blocks`]: every order's two parts at a block's
+    /// rings.
+    fn ring_block_tile(&self) -> usize {
+        (self.lmax + 1) * 2 * streamed::LANES
     }
 
     /// The on-the-fly Legendre step of one map from [`Sht::fold_ring_blocks`]' tiles:
@@ -790,7 +788,7 @@ impl<T: Real> Sht<T> {
                 let spectra = streamed::Spectra {
                     parts: parts.map(|tiles| &tiles[m * 2 * rings..]),
                     column_stride: rings,
-                    vector_stride: orders * 2 * rings,
+                    vector_stride: self.ring_block_tile(),
                     width: 2,
                 };
                 table.streamed_order(m, spectra, block, scratch);
@@ -1084,6 +1082,23 @@ impl Grid {
             Grid::GaussLegendre => "Gauss–Legendre",
             Grid::Equiangular => "equiangular",
         }
+    }
+}
+
+/// One complex FFT input for a ring pair: z = scale · ((n + s) + i(n − s)) for the north
+/// and south rings, whose FFT gives both parts (see [`Sht::fold_rings`]); an equator ring,
+/// which has no mirror, gives z = scale · n, no antisymmetric part.
+fn pack_ring_pair<T: Real>(z: &mut [Complex<T>], north: &[T], south: Option<&[T]>, scale: T) {
+    match south {
+        Some(south) => {
+            for ((z, &n), &s) in z.iter_mut().zip(north).zip(south) {
+                *z = Complex::new(scale * (n + s), scale * (n - s));
+            }
+        }
+        None => z
+            .iter_mut()
+            .zip(north)
+            .for_each(|(z, &n)| *z = Complex::new(scale * n, T::zero())),
     }
 }
 
