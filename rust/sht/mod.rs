@@ -48,6 +48,7 @@ use rustfft::{Fft, FftPlanner};
 
 use crate::error::{invalid_argument, Result};
 use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
+use crate::parallel;
 use legendre::{Recurrence, Scaled};
 
 /// Floating-point types the transform runs in.
@@ -475,10 +476,7 @@ impl<T: Real> Sht<T> {
         transform: impl Fn(&[T], &mut [Out]) + Sync,
     ) {
         let transform = &transform;
-        // Entered once, the pool runs every parallel loop of the transform from one of its
-        // workers: a caller outside the pool would otherwise hand each loop over and wait
-        // for it (twice the time of a single 90×180 map on one thread).
-        rayon::scope(|_| {
+        parallel::in_pool(|| {
             output
                 .par_chunks_mut(chunk * output_width)
                 .zip(input.par_chunks(chunk * input_width))
