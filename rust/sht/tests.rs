@@ -171,7 +171,11 @@ fn a_transform_runs_on_the_calling_thread_only_where_the_global_pool_has_one_thr
         let maps = random(12 * 24, 1);
         let global_width = rayon::current_num_threads();
         let first = sht.analysis(&maps, 1).unwrap();
-        assert_eq!(rayon::current_thread_index().is_some(), global_width == 1, "global pool of {global_width}");
+        assert_eq!(
+            rayon::current_thread_index().is_some(),
+            global_width == 1,
+            "global pool of {global_width}"
+        );
         // A second call, on the adopted thread where it was adopted, gives the same numbers.
         assert_eq!(sht.analysis(&maps, 1).unwrap(), first);
     })
