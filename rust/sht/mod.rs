@@ -414,11 +414,20 @@ impl<T: Real> Sht<T> {
 
     /// Maps `(batch, nlat, nlon)` → coefficients `(batch, (lmax+1)²)`.
     pub fn analysis(&self, maps: &[T], batch: usize) -> Result<Vec<T>> {
-        self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
-        // Not zero-filled first: every value is written once, and zeroing a large output
-        // cost up to a tenth of a transform.
         let len = batch * self.n_coefficients();
         let mut coefficients = Vec::with_capacity(len);
+        self.analysis_into(maps, batch, &mut coefficients.spare_capacity_mut()[..len])?;
+        // SAFETY: `analysis_into` wrote every coefficient.
+        unsafe { coefficients.set_len(len) };
+        Ok(coefficients)
+    }
+
+    /// [`Sht::analysis`] into `coefficients`, which it fills. Not zero-filled first by the
+    /// caller: every value is written once, and zeroing a large output cost up to a tenth
+    /// of a transform.
+    pub fn analysis_into(&self, maps: &[T], batch: usize, coefficients: &mut [MaybeUninit<T>]) -> Result<()> {
+        self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
+        self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         // Maps one at a time where λ is recomputed anyway: a chunk's intermediates then
         // stay in cache.
         let chunk = if Self::streams_every_map(self.analysis_table()) {
@@ -430,38 +439,50 @@ impl<T: Real> Sht<T> {
             chunk,
             maps,
             self.nlat * self.nlon,
-            &mut coefficients.spare_capacity_mut()[..len],
+            coefficients,
             self.n_coefficients(),
             |maps, out| self.analysis_chunk(maps, out),
         );
-        // SAFETY: `scatter` wrote every coefficient of every chunk.
-        unsafe { coefficients.set_len(len) };
-        Ok(coefficients)
+        Ok(())
     }
 
     /// Coefficients `(batch, (lmax+1)²)` → maps `(batch, nlat, nlon)`.
     pub fn synthesis(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
-        self.coefficients_to_maps(coefficients, batch, false)
+        let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
+        self.synthesis_into(coefficients, batch, &mut maps)?;
+        Ok(maps)
+    }
+
+    /// [`Sht::synthesis`] into `maps`, which it overwrites.
+    pub fn synthesis_into(&self, coefficients: &[T], batch: usize, maps: &mut [T]) -> Result<()> {
+        self.coefficients_to_maps(coefficients, batch, maps, false)
     }
 
     /// The adjoint (transpose) of [`Sht::analysis`]: coefficients → maps, so that
     /// ⟨analysis(x), c⟩ = ⟨x, analysis_adjoint(c)⟩. This is the backward pass of analysis.
     pub fn analysis_adjoint(&self, coefficients: &[T], batch: usize) -> Result<Vec<T>> {
-        self.coefficients_to_maps(coefficients, batch, true)
+        let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
+        self.analysis_adjoint_into(coefficients, batch, &mut maps)?;
+        Ok(maps)
     }
 
-    fn coefficients_to_maps(&self, coefficients: &[T], batch: usize, adjoint: bool) -> Result<Vec<T>> {
+    /// [`Sht::analysis_adjoint`] into `maps`, which it overwrites.
+    pub fn analysis_adjoint_into(&self, coefficients: &[T], batch: usize, maps: &mut [T]) -> Result<()> {
+        self.coefficients_to_maps(coefficients, batch, maps, true)
+    }
+
+    fn coefficients_to_maps(&self, coefficients: &[T], batch: usize, maps: &mut [T], adjoint: bool) -> Result<()> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
-        let mut maps = vec![T::zero(); batch * self.nlat * self.nlon];
+        self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
         self.for_each_chunk(
             self.chunk_items(),
             coefficients,
             self.n_coefficients(),
-            &mut maps,
+            maps,
             self.nlat * self.nlon,
             |coefficients, out| self.synthesis_chunk(coefficients, out, adjoint),
         );
-        Ok(maps)
+        Ok(())
     }
 
     /// Runs `transform` on chunks of `chunk` items in parallel (callers size chunks so that
