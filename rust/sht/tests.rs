@@ -182,3 +182,27 @@ fn a_transform_runs_on_the_calling_thread_only_where_the_global_pool_has_one_thr
     .join()
     .unwrap();
 }
+
+#[test]
+fn transforms_into_given_outputs_overwrite_them_and_check_their_size() {
+    for grid in [Grid::GaussLegendre, Grid::Equiangular] {
+        let sht = Sht::<f64>::new(16, 32, 7, grid).unwrap();
+        let (points, n_coefficients) = (16 * 32, sht.n_coefficients());
+        let coefficients = random(2 * n_coefficients, 3);
+        // Outputs full of NaN: anything added to rather than written would show.
+        let mut maps = vec![f64::NAN; 2 * points];
+        sht.synthesis_into(&coefficients, 2, &mut maps).unwrap();
+        assert_eq!(maps, sht.synthesis(&coefficients, 2).unwrap());
+        sht.analysis_adjoint_into(&coefficients, 2, &mut maps).unwrap();
+        assert_eq!(maps, sht.analysis_adjoint(&coefficients, 2).unwrap());
+        let mut out = vec![MaybeUninit::new(f64::NAN); 2 * n_coefficients];
+        sht.analysis_into(&maps, 2, &mut out).unwrap();
+        let out: Vec<f64> = out.iter().map(|v| unsafe { v.assume_init() }).collect();
+        assert_eq!(out, sht.analysis(&maps, 2).unwrap());
+
+        assert!(sht.synthesis_into(&coefficients, 2, &mut maps[..points]).is_err());
+        assert!(sht
+            .analysis_into(&maps, 2, &mut vec![MaybeUninit::uninit(); n_coefficients])
+            .is_err());
+    }
+}
