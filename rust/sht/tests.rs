@@ -124,6 +124,22 @@ fn batches_match_single_maps() {
 }
 
 #[test]
+fn batches_of_maps_larger_than_a_cores_cache_match_single_maps() {
+    // Maps over `SHARED_MAP_BYTES` analysed on the fly are transformed one after another,
+    // each parallel inside, rather than one per worker.
+    let (nlat, nlon, lmax) = (8, 40_000, 7);
+    assert!(nlat * nlon * 8 > SHARED_MAP_BYTES);
+    let sht = Sht::<f64>::with_cache_limit(nlat, nlon, lmax, Grid::GaussLegendre, 0).unwrap();
+    let (batch, points, n) = (3, nlat * nlon, sht.n_coefficients());
+    let maps = random(batch * points, 13);
+    let analysed = sht.analysis(&maps, batch).unwrap();
+    for b in 0..batch {
+        let single = sht.analysis(&maps[b * points..][..points], 1).unwrap();
+        assert!(max_relative_error(&analysed[b * n..][..n], &single) < 1e-13, "map {b}");
+    }
+}
+
+#[test]
 fn on_the_fly_legendre_agrees_with_the_matrix_product() {
     // Without a table cache, analysis computes λ on the fly (as for large grids): Gauss–
     // Legendre maps from tiles of ring blocks, with and without an equator ring (and a
