@@ -33,9 +33,10 @@ OMP_NUM_THREADS (and MKL/OpenBLAS) set before import; ducc0 and shtns also get t
 as an argument, torch through ``torch.set_num_threads``. OMP_WAIT_POLICY is passed through
 as it is (recorded in the results): on a machine that is busy with other work, OpenMP's
 default wait policy can stall shtns for ~16 ms per call at 2 threads, and ``active`` avoids
-that. Times are the median of several repetitions after a warm-up run; the report warns
-when other processes used more than 10% of the machine's CPU while a library was measured
-(from /proc/stat, less this script's own CPU time). Results go to --out: sht_peers.md, sht_peers.json,
+that. Times are medians of samples of back-to-back calls (each at least 20 ms), after a
+warm-up run; the report warns when other processes used more than 10% of the machine's CPU
+while a library was measured (from /proc/stat, less this script's own CPU time).
+Results go to --out: sht_peers.md, sht_peers.json,
 sht_timings.csv, sht_errors.csv, sht_time_vs_lmax.png and sht_error_vs_lmax.png (chart 1 of
 docs/charts: ``python benches/sht_peers.py --out docs/charts/sht``).
 """
@@ -44,6 +45,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import statistics
@@ -67,6 +69,7 @@ BIG_BATCH = 8
 EQUIANGULAR_CHECK = {"grid": "equiangular", "nlat": 91, "nlon": 180, "lmax": 44}
 CHECK_BATCH = 2
 TOLERANCE = {"float64": 1e-9, "float32": 1e-4}
+MIN_SAMPLE_S = 0.02  # shortest timed sample: short calls are repeated within one
 BUSY_SHARE = 0.10  # share of all cores used by other processes above which the report warns
 THREAD_ENV = ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
 
@@ -76,16 +79,24 @@ def log(message: str) -> None:
 
 
 def median_seconds(function, repeats: int, budget_s: float) -> tuple[float, int]:
-    """Median wall time after a warm-up; fewer repeats (at least 3) when one run is slow."""
+    """Median time per call after a warm-up; fewer samples (at least 3) when one call is slow.
+
+    Each sample times back-to-back calls lasting at least ``MIN_SAMPLE_S``: a sample of
+    one sub-millisecond call is at the mercy of a single wake-up or preemption on a
+    shared machine (seen here: single 256 x 512 maps at 2 threads timed 0.72 ms in one
+    run, 0.42 in the next).
+    """
     start = time.perf_counter()
     function()  # warm-up: caches, thread pools, allocator, lazy initialisation
-    first = time.perf_counter() - start
-    count = max(3, min(repeats, int(budget_s / max(first, 1e-9))))
+    first = max(time.perf_counter() - start, 1e-9)
+    calls = max(1, math.ceil(MIN_SAMPLE_S / first))
+    count = max(3, min(repeats, int(budget_s / (first * calls))))
     times = []
     for _ in range(count):
         start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
+        for _ in range(calls):
+            function()
+        times.append((time.perf_counter() - start) / calls)
     return statistics.median(times), count
 
 
@@ -570,7 +581,7 @@ def build_markdown(data: dict) -> str:
     threads_list = meta["threads"]
     lines = ["# Spherical harmonic transform: frenbrdf against peers", ""]
     lines.append(f"Machine: {meta['cores']} cores, {meta['platform']}; load average (1, 5, 15 min) before / after: {meta['load_before']} / {meta['load_after']}. "
-                 f"Median of up to {meta['repeats']} runs after a warm-up. Mode: {'quick' if meta['quick'] else 'full'}. "
+                 f"Median of up to {meta['repeats']} samples after a warm-up, each at least {MIN_SAMPLE_S * 1e3:.0f} ms of back-to-back calls. Mode: {'quick' if meta['quick'] else 'full'}. "
                  f"OMP_WAIT_POLICY: {meta['omp_wait_policy'] or 'unset (OpenMP default)'}.")
     lines.append("")
     busy = {f"{r['library']} ({r['threads']} thr)": r["background_cpu"] for r in data["workers"] if (r["background_cpu"] or 0) > BUSY_SHARE}
