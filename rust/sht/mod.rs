@@ -300,11 +300,20 @@ const MAP_BLOCK: usize = split::BLOCK;
 const CHUNK_BYTES: usize = 2 << 20;
 
 /// Maps larger than this (a core's L2 cache) are analysed one after another, each parallel
-/// inside over orders, rather than one per worker: two at once evict each other's
+/// inside over orders ([`Chunks::OneAfterAnother`]), rather than one per worker: two at once evict each other's
 /// intermediates. Measured on two threads, f64 512×1024 (4 MB a map), batch of 8: 2.40 ms
 /// a map one per worker, 2.26 one after another; 256×512 (1 MB), batch of 192: 0.53 one
 /// per worker, 0.66 one after another.
 const SHARED_MAP_BYTES: usize = 2 << 20;
+
+/// How a batched transform splits its batch.
+#[derive(Clone, Copy)]
+enum Chunks {
+    /// Chunks of this many items, run in parallel.
+    Parallel(usize),
+    /// One item after another, each parallel inside: items too large to share a cache.
+    OneAfterAnother,
+}
 
 /// Where the (ring, order) blocks of a folded spectrum sit in its buffer.
 #[derive(Clone, Copy)]
@@ -437,15 +446,16 @@ impl<T: Real> Sht<T> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         // Maps one at a time where λ is recomputed anyway: a chunk's intermediates then
         // stay in cache.
-        let chunk = if Self::streams_every_map(self.analysis_table()) {
-            1
-        } else {
-            self.chunk_items()
-        };
         let map_bytes = self.nlat * self.nlon * std::mem::size_of::<T>();
+        let chunks = if !Self::streams_every_map(self.analysis_table()) {
+            Chunks::Parallel(self.chunk_items())
+        } else if map_bytes > SHARED_MAP_BYTES {
+            Chunks::OneAfterAnother
+        } else {
+            Chunks::Parallel(1)
+        };
         self.for_each_chunk(
-            chunk,
-            chunk == 1 && map_bytes > SHARED_MAP_BYTES,
+            chunks,
             maps,
             self.nlat * self.nlon,
             coefficients,
@@ -484,8 +494,7 @@ impl<T: Real> Sht<T> {
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;
         self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
         self.for_each_chunk(
-            self.chunk_items(),
-            false,
+            Chunks::Parallel(self.chunk_items()),
             coefficients,
             self.n_coefficients(),
             maps,
@@ -495,14 +504,11 @@ impl<T: Real> Sht<T> {
         Ok(())
     }
 
-    /// Runs `transform` on chunks of `chunk` items (callers size chunks so that their
-    /// intermediates stay in cache): in parallel, or `one_at_a_time` where each chunk is
-    /// parallel inside and too large to share a cache with another.
-    #[allow(clippy::too_many_arguments)]
+    /// Runs `transform` on the batch split as `chunks` says (callers size chunks so that
+    /// their intermediates stay in cache).
     fn for_each_chunk<Out: Send>(
         &self,
-        chunk: usize,
-        one_at_a_time: bool,
+        chunks: Chunks,
         input: &[T],
         input_width: usize,
         output: &mut [Out],
@@ -510,18 +516,15 @@ impl<T: Real> Sht<T> {
         transform: impl Fn(&[T], &mut [Out]) + Sync,
     ) {
         let transform = &transform;
-        parallel::in_pool(|| {
-            if one_at_a_time {
-                let outputs = output.chunks_mut(chunk * output_width);
-                outputs
-                    .zip(input.chunks(chunk * input_width))
-                    .for_each(|(out, items)| transform(items, out))
-            } else {
-                let outputs = output.par_chunks_mut(chunk * output_width);
-                outputs
-                    .zip(input.par_chunks(chunk * input_width))
-                    .for_each(|(out, items)| transform(items, out))
-            }
+        parallel::in_pool(|| match chunks {
+            Chunks::OneAfterAnother => output
+                .chunks_mut(output_width)
+                .zip(input.chunks(input_width))
+                .for_each(|(out, item)| transform(item, out)),
+            Chunks::Parallel(items) => output
+                .par_chunks_mut(items * output_width)
+                .zip(input.par_chunks(items * input_width))
+                .for_each(|(out, items)| transform(items, out)),
         })
     }
 
