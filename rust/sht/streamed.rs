@@ -15,8 +15,10 @@
 //! once at the end.
 //!
 //! Near the poles λ_mm underflows for large m (see [`legendre`](super::legendre)): a
-//! block starts with careful steps that track each ring's scale and add nothing while
-//! every value is negligible, and hands over to the fast loop once all are plain doubles.
+//! block starts with careful steps that track each ring's scale, add nothing while every
+//! value is negligible, and count scaled values as 0 (they are kept below 2^−70, so a
+//! value turns plain as soon as it may matter), and hands over to the fast loop once all
+//! are plain doubles.
 
 use super::legendre::{Paired, Recurrence, Scaled, BIG, SMALL};
 use super::Real;
@@ -30,9 +32,6 @@ const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
 /// Pairs of degrees whose sums the plain loop of long orders runs through for every block
 /// before the next ones (one map's sums: 16 KB).
 const PAIR_CHUNK: usize = 64;
-
-/// Steps (pairs of degrees) a quiet block takes between checks.
-const QUIET_RUN: usize = 2;
 
 /// An order's folded spectra, part 0 symmetric and part 1 antisymmetric, in vectors of
 /// [`LANES`] rings: column c's rings `LANES · v ..` at `parts[part][c · column_stride +
@@ -231,7 +230,7 @@ impl Order<'_> {
         // two values there.
         let mut states = Vec::with_capacity(blocks);
         for block in 0..blocks {
-            let (pair, x, previous, current) = self.careful_start::<V, 4>(block * 4 * LANES, sums);
+            let (pair, x, previous, current) = self.careful_start::<V, 4, W>(block * 4 * LANES, sums);
             let mut saved = [[[0.0; LANES]; 4]; 3];
             for r in 0..4 {
                 x[r].store(&mut saved[0][r]);
@@ -269,7 +268,7 @@ impl Order<'_> {
     /// Adds the contribution of the `R` ring vectors from ring `first` to every sum.
     #[inline(always)]
     fn block<V: Lanes, const R: usize, const W: usize>(&self, first: usize, sums: &mut [[f64; LANES]]) {
-        let (pair, x, previous, current) = self.careful_start::<V, R>(first, sums);
+        let (pair, x, previous, current) = self.careful_start::<V, R, W>(first, sums);
         self.plain_steps::<V, R, W>(pair..self.steps.len(), first, &x, previous, current, sums);
     }
 
@@ -277,7 +276,7 @@ impl Order<'_> {
     /// plain. Returns the first pair not yet added, cos θ, and the recurrence's values.
     #[inline(always)]
     #[allow(clippy::type_complexity)]
-    fn careful_start<V: Lanes, const R: usize>(
+    fn careful_start<V: Lanes, const R: usize, const W: usize>(
         &self,
         first: usize,
         sums: &mut [[f64; LANES]],
@@ -304,17 +303,35 @@ impl Order<'_> {
         // Most blocks start plain: no scaled value, and something to add.
         let plain = in_block.iter().all(|s| s.scale == 0) && in_block.iter().any(|s| s.mantissa.abs() >= QUIET);
         if !plain {
-            let mut state = LaneState::<V, R>::new(scale, &current);
-            pair = self.careful_steps(first, &x, &mut previous, &mut current, &mut state, sums);
+            let mut state = LaneState::<V, R>::new(scale, &mut previous, &mut current);
+            pair = self.careful_steps::<V, R, W>(first, &x, &mut previous, &mut current, &mut state, sums);
         }
         (pair, x, previous, current)
+    }
+
+    /// The block's spectra for `W` columns in registers, the antisymmetric part times
+    /// cos θ as the paired recurrence takes it.
+    #[inline(always)]
+    fn spectra_in_registers<V: Lanes, const R: usize, const W: usize>(
+        &self,
+        first: usize,
+        x: &[V; R],
+    ) -> [[[V; R]; W]; 2] {
+        assert_eq!(self.spectra.width, W);
+        let mut spectra = [[[V::splat(0.0); R]; W]; 2];
+        for c in 0..W {
+            for r in 0..R {
+                spectra[0][c][r] = self.spectra.load(0, c, first / LANES + r);
+                spectra[1][c][r] = self.spectra.load::<V>(1, c, first / LANES + r).mul(x[r]);
+            }
+        }
+        spectra
     }
 
     /// The loop once every value is a plain double, for exactly `W` columns: the block's
     /// spectra held in registers, no bounds checks or column loops per step (a loop over
     /// any number of columns spent more time on its own overhead than on arithmetic).
     #[inline(always)]
-    #[allow(clippy::needless_range_loop)] // index loops over constants: fully unrolled
     fn plain_steps<V: Lanes, const R: usize, const W: usize>(
         &self,
         pairs: std::ops::Range<usize>,
@@ -324,21 +341,10 @@ impl Order<'_> {
         mut current: [V; R],
         sums: &mut [[f64; LANES]],
     ) -> ([V; R], [V; R]) {
-        assert_eq!(self.spectra.width, W);
         let x2 = &squares(x);
-        // The antisymmetric part times cos θ, as the paired recurrence takes it.
-        let mut spectra = [[[V::splat(0.0); R]; W]; 2];
-        for c in 0..W {
-            for r in 0..R {
-                spectra[0][c][r] = self.spectra.load(0, c, first / LANES + r);
-                spectra[1][c][r] = self.spectra.load::<V>(1, c, first / LANES + r).mul(x[r]);
-            }
-        }
-        // Sums as fixed-size arrays per pair, `[part][column]`: no bounds checks.
-        let (sums, _) = sums.as_chunks_mut::<W>();
-        let (sums, _) = sums.as_chunks_mut::<2>();
+        let spectra = self.spectra_in_registers::<V, R, W>(first, x);
         let from = pairs.start;
-        let mut pairs = self.steps[..pairs.end].iter().zip(sums.iter_mut()).skip(from);
+        let mut pairs = self.steps[..pairs.end].iter().zip(pair_sums::<W>(sums)).skip(from);
         if from == 0 {
             if let Some((_, sums)) = pairs.next() {
                 add_pair(&current, &spectra, sums);
@@ -351,12 +357,12 @@ impl Order<'_> {
         (previous, current)
     }
 
-    /// Pairs of degrees while the block is quiet (every ν negligible: nothing added) or
-    /// some ring carries a scaled value (added as mantissa × factor). One comparison per
-    /// vector (every step, or every few while quiet) finds when either may end. Returns
-    /// the first pair not yet added, with the block plain (or the order's end).
+    /// Pairs of degrees while some ring carries a scaled value, which is negligible (see
+    /// [`WAKE`]) and adds nothing, or while every value is negligible (nothing is added at
+    /// all). One comparison per vector and step finds when either may end. Returns the
+    /// first pair not yet added, with the block plain (or the order's end).
     #[inline(always)]
-    fn careful_steps<V: Lanes, const R: usize>(
+    fn careful_steps<V: Lanes, const R: usize, const W: usize>(
         &self,
         first: usize,
         x: &[V; R],
@@ -365,65 +371,42 @@ impl Order<'_> {
         state: &mut LaneState<V, R>,
         sums: &mut [[f64; LANES]],
     ) -> usize {
-        let pairs = self.steps.len();
         let x2 = &squares(x);
-        let mut j = 0;
-        while j < pairs {
-            // Quiet: the recurrence alone, checked once every few steps. A value that wakes
-            // within the run is at most a few steps' growth above `QUIET` when found.
-            let steps = if state.awake { 1 } else { QUIET_RUN.min(pairs - j) };
-            for k in j..j + steps {
-                if k > 0 {
-                    step(self.steps[k], x2, previous, current);
-                }
+        let spectra = self.spectra_in_registers::<V, R, W>(first, x);
+        for (j, (&coefficients, sums)) in self.steps.iter().zip(pair_sums::<W>(sums)).enumerate() {
+            if j > 0 {
+                step(coefficients, x2, previous, current);
             }
-            j += steps - 1; // the pair `current` holds
-            if (0..R).any(|r| current[r].any_reaches(state.threshold[r])) {
+            let mut crossed = false;
+            for r in 0..R {
+                crossed |= current[r].any_reaches(state.threshold[r]);
+            }
+            if crossed {
                 state.update(previous, current);
                 if state.plain() {
-                    self.accumulate(j, first, x, current, sums);
+                    add_pair(current, &spectra, sums);
                     return j + 1;
                 }
             }
-            if state.awake {
-                let mut values = *current;
-                for (value, factor) in values.iter_mut().zip(&state.factor) {
-                    *value = value.mul(*factor);
+            if state.live {
+                let mut plain = *current;
+                for r in 0..R {
+                    plain[r] = plain[r].mul(state.plain_lanes[r]);
                 }
-                self.accumulate(j, first, x, &values, sums);
+                add_pair(&plain, &spectra, sums);
             }
-            j += 1;
         }
-        pairs
+        self.steps.len()
     }
+}
 
-    /// sums[(2 · pair + part) · width + c] += ν (per ring) × spectrum c at the block's
-    /// rings, times cos θ for the antisymmetric part.
-    #[inline(always)]
-    fn accumulate<V: Lanes, const R: usize>(
-        &self,
-        pair: usize,
-        first: usize,
-        x: &[V; R],
-        nu: &[V; R],
-        sums: &mut [[f64; LANES]],
-    ) {
-        let width = self.spectra.width;
-        let sums = &mut sums[2 * pair * width..][..2 * width];
-        let mut nu_x = *nu;
-        for r in 0..R {
-            nu_x[r] = nu[r].mul(x[r]);
-        }
-        for (part, (sums, nu)) in sums.chunks_exact_mut(width).zip([nu, &nu_x]).enumerate() {
-            for (c, sum) in sums.iter_mut().enumerate() {
-                let mut total = V::load(&*sum);
-                for (r, nu) in nu.iter().enumerate() {
-                    total = nu.mul_add(self.spectra.load(part, c, first / LANES + r), total);
-                }
-                total.store(sum);
-            }
-        }
-    }
+/// The sums of every pair of degrees as fixed-size arrays, `[part][column]`: no bounds
+/// checks in the loops over pairs.
+#[inline(always)]
+fn pair_sums<const W: usize>(sums: &mut [[f64; LANES]]) -> std::slice::IterMut<'_, [[[f64; LANES]; W]; 2]> {
+    let (sums, _) = sums.as_chunks_mut::<W>();
+    let (sums, _) = sums.as_chunks_mut::<2>();
+    sums.iter_mut()
 }
 
 /// One pair's sums += ν × each spectrum (loops over constants, fully unrolled, so the
@@ -465,81 +448,66 @@ fn step<V: Lanes, const R: usize>([a, b]: [f64; 2], x2: &[V; R], previous: &mut 
     }
 }
 
-/// What a block's careful steps track per ring: the scale of its value, the factor that
-/// turns a mantissa into its value, and the magnitude at which either the value stops
-/// being negligible or the mantissa must be rescaled.
+/// A scaled mantissa (value mantissa · 2^(600 · scale), scale < 0) moves one scale up
+/// once it passes this, so that every scaled value stays below 2^−70 ([`QUIET`]) and
+/// counts as 0, and a value leaves scaling as soon as it may matter.
+const WAKE: f64 = QUIET * BIG;
+
+/// What a block's careful steps track per ring: the scale of its value, whether it is
+/// plain (1) or scaled (0), and the magnitude at which the block's state may change.
 struct LaneState<V, const R: usize> {
     scale: [[i32; LANES]; R],
-    factor: [V; R],
+    plain_lanes: [V; R],
     threshold: [V; R],
     /// Whether some value in the block is no longer negligible (then every step adds).
-    awake: bool,
+    live: bool,
 }
 
 impl<V: Lanes, const R: usize> LaneState<V, R> {
     #[inline(always)]
-    fn new(scale: [[i32; LANES]; R], current: &[V; R]) -> Self {
+    fn new(scale: [[i32; LANES]; R], previous: &mut [V; R], current: &mut [V; R]) -> Self {
         let mut state = LaneState {
             scale,
-            factor: [V::splat(0.0); R],
+            plain_lanes: [V::splat(0.0); R],
             threshold: [V::splat(0.0); R],
-            awake: false,
+            live: false,
         };
-        state.refresh(current);
+        state.update(previous, current);
         state
     }
 
-    /// No scaled values and something to add: the fast loop can take over.
+    /// No scaled values and something to add: the plain loop can take over.
     #[inline(always)]
     fn plain(&self) -> bool {
-        self.awake && self.scale.iter().flatten().all(|&s| s == 0)
+        self.live && self.scale.iter().flatten().all(|&s| s == 0)
     }
 
-    /// Rescales mantissas that have grown past 2^600, and wakes the block if a value is
-    /// no longer negligible.
-    #[cold]
+    /// Moves mantissas that have passed [`WAKE`] up a scale, and makes the block live if
+    /// a plain value is no longer negligible. Inlined, rare as it is: called, it would
+    /// lose the caller's target features.
+    #[inline(always)]
     fn update(&mut self, previous: &mut [V; R], current: &mut [V; R]) {
         for r in 0..R {
             let (mut before, mut now) = (previous[r].to_array(), current[r].to_array());
             for k in 0..LANES {
-                if self.scale[r][k] < 0 && now[k].abs() > BIG {
+                while self.scale[r][k] < 0 && now[k].abs() > WAKE {
                     now[k] *= SMALL;
                     before[k] *= SMALL;
                     self.scale[r][k] += 1;
                 }
+                self.live |= self.scale[r][k] == 0 && now[k].abs() >= QUIET;
             }
             (previous[r], current[r]) = (V::load(&before), V::load(&now));
         }
-        self.refresh(current);
-    }
-
-    #[inline(always)]
-    fn refresh(&mut self, current: &[V; R]) {
-        let factors = self.scale.map(|scale| {
-            scale.map(|s| {
-                Scaled {
-                    mantissa: 1.0,
-                    scale: s,
-                }
-                .value()
-            })
-        });
-        for (now, factor) in current.iter().zip(&factors) {
-            let now = now.to_array();
-            self.awake |= (0..LANES).any(|k| (now[k] * factor[k]).abs() >= QUIET);
-        }
-        for (r, factors) in factors.iter().enumerate() {
-            let threshold = std::array::from_fn(|k| match (self.awake, self.scale[r][k] < 0, factors[k]) {
-                // Awake: watch for scaled mantissas to need rescaling.
-                (true, true, _) => BIG,
-                (true, false, _) => f64::INFINITY,
-                // Quiet: watch for a value to wake the block, or, where it counts as 0
-                // whatever the mantissa, for the mantissa to need rescaling.
-                (false, _, 0.0) => BIG,
-                (false, _, factor) => QUIET / factor,
+        for r in 0..R {
+            let plain = self.scale[r].map(|s| if s == 0 { 1.0 } else { 0.0 });
+            let threshold = std::array::from_fn(|k| match (self.scale[r][k] < 0, self.live) {
+                (true, _) => WAKE,
+                (false, false) => QUIET,
+                (false, true) => f64::INFINITY,
             });
+            self.plain_lanes[r] = V::load(&plain);
             self.threshold[r] = V::load(&threshold);
-            self.factor[r] = V::load(factors);
         }
     }
 }
