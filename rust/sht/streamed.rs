@@ -312,6 +312,7 @@ impl Order<'_> {
     /// The block's spectra for `W` columns in registers, the antisymmetric part times
     /// cos θ as the paired recurrence takes it.
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // index loops over constants: fully unrolled
     fn spectra_in_registers<V: Lanes, const R: usize, const W: usize>(
         &self,
         first: usize,
@@ -362,6 +363,7 @@ impl Order<'_> {
     /// all). One comparison per vector and step finds when either may end. Returns the
     /// first pair not yet added, with the block plain (or the order's end).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // index loops over constants: fully unrolled
     fn careful_steps<V: Lanes, const R: usize, const W: usize>(
         &self,
         first: usize,
