@@ -78,10 +78,14 @@ pub enum Grid {
 /// λ_lm at one set of rings, folded to the northern half (equator included).
 struct LegendreTable<T> {
     lmax: usize,
-    cos_theta: Vec<f64>,
+    half_rings: usize,
     recurrence: Arc<Recurrence>,
-    /// λ_mm per half ring, by order: `sectoral[m * half_rings + p]`.
-    sectoral: Vec<Scaled>,
+    /// cos θ and λ_mm per half ring, zero-padded to whole vectors of [`streamed::LANES`]
+    /// rings (`padded` of them) for the on-the-fly kernel to load directly; λ_mm by
+    /// order, as mantissas `sectoral.0[m * padded + p]` and scales `sectoral.1[..]`.
+    cos_theta: Vec<f64>,
+    sectoral: (Vec<f64>, Vec<i32>),
+    padded: usize,
     /// Per m, when within the cache budget.
     cached: Option<Vec<OrderPanels<T>>>,
 }
@@ -98,19 +102,28 @@ impl<T: Real> LegendreTable<T> {
     fn new(recurrence: Arc<Recurrence>, theta: &[f64], cache_bytes: usize) -> Self {
         let lmax = recurrence.lmax();
         let half = &theta[..theta.len().div_ceil(2)];
+        let padded = half.len().next_multiple_of(streamed::LANES);
         let mut by_ring = vec![Scaled::ZERO; half.len() * (lmax + 1)];
         by_ring
             .par_chunks_mut(lmax + 1)
             .zip(half)
             .for_each(|(row, t)| recurrence.sectoral(t.sin(), row));
-        let sectoral = (0..=lmax)
-            .flat_map(|m| by_ring.iter().skip(m).step_by(lmax + 1).copied())
-            .collect();
+        let (mut mantissas, mut scales) = (vec![0.0; (lmax + 1) * padded], vec![0; (lmax + 1) * padded]);
+        for (p, row) in by_ring.chunks_exact(lmax + 1).enumerate() {
+            for (m, value) in row.iter().enumerate() {
+                mantissas[m * padded + p] = value.mantissa;
+                scales[m * padded + p] = value.scale;
+            }
+        }
+        let mut cos_theta: Vec<f64> = half.iter().map(|t| t.cos()).collect();
+        cos_theta.resize(padded, 0.0);
         let mut table = LegendreTable {
             lmax,
-            cos_theta: half.iter().map(|t| t.cos()).collect(),
+            half_rings: half.len(),
             recurrence,
-            sectoral,
+            cos_theta,
+            sectoral: (mantissas, scales),
+            padded,
             cached: None,
         };
         // Two packed copies of every value.
@@ -129,7 +142,7 @@ impl<T: Real> LegendreTable<T> {
     }
 
     fn half_rings(&self) -> usize {
-        self.cos_theta.len()
+        self.half_rings
     }
 
     /// Size of one packed copy of the table (analysis or synthesis).
@@ -140,9 +153,13 @@ impl<T: Real> LegendreTable<T> {
     /// Computes order m's λ and packs the panels `orientation` asks for.
     fn compute(&self, m: usize, panels: &mut OrderPanels<T>, orientation: Orientation) {
         let (degrees, half) = (self.lmax + 1 - m, self.half_rings());
-        let start = self.sectoral_column(m);
+        let rings = self.rings(m);
+        let start: Vec<Scaled> = (rings.mantissa.iter().zip(rings.scale))
+            .take(half)
+            .map(|(&mantissa, &scale)| Scaled { mantissa, scale })
+            .collect();
         let mut values = vec![0f64; degrees * half];
-        self.recurrence.rows(m, &self.cos_theta, start, &mut values);
+        self.recurrence.rows(m, &self.cos_theta[..half], &start, &mut values);
         let lambda: Vec<T> = values.into_iter().map(T::of).collect();
         for parity in 0..2 {
             let rows = (degrees + 1 - parity) / 2;
@@ -172,15 +189,11 @@ impl<T: Real> LegendreTable<T> {
     /// Order m's analysis with λ recomputed in registers ([`streamed`]): `spectra` at
     /// this table's rings → `out[(l − m) · width + c]`.
     fn streamed_order(&self, m: usize, spectra: streamed::Spectra<'_>, out: &mut [T], scratch: &mut streamed::Scratch) {
-        let rings = streamed::Rings {
-            cos_theta: &self.cos_theta,
-            start: self.sectoral_column(m),
-        };
         streamed::analysis_order(
             streamed::Job {
                 recurrence: &self.recurrence,
                 m,
-                rings,
+                rings: self.rings(m),
                 spectra,
             },
             out,
@@ -188,9 +201,13 @@ impl<T: Real> LegendreTable<T> {
         );
     }
 
-    /// Order m's λ_mm at the half rings.
-    fn sectoral_column(&self, m: usize) -> &[Scaled] {
-        &self.sectoral[m * self.half_rings()..][..self.half_rings()]
+    /// The half rings' cos θ and order m's λ_mm there, padded to whole vectors.
+    fn rings(&self, m: usize) -> streamed::Rings<'_> {
+        streamed::Rings {
+            cos_theta: &self.cos_theta,
+            mantissa: &self.sectoral.0[m * self.padded..][..self.padded],
+            scale: &self.sectoral.1[m * self.padded..][..self.padded],
+        }
     }
 
     /// Order m's panels: from the cache, or computed into `scratch` (only the

@@ -20,7 +20,7 @@
 //! value turns plain as soon as it may matter), and hands over to the fast loop once all
 //! are plain doubles.
 
-use super::legendre::{Paired, Recurrence, Scaled, BIG, SMALL};
+use super::legendre::{Paired, Recurrence, BIG, SMALL};
 use super::Real;
 use lanes::Lanes;
 pub(super) use lanes::LANES;
@@ -57,11 +57,13 @@ impl Spectra<'_> {
     }
 }
 
-/// The half rings: cos θ_p and λ_mm(θ_p) of the order.
+/// The half rings: cos θ_p and λ_mm(θ_p) of the order, as mantissa · 2^(600 · scale)
+/// ([`Scaled`](super::legendre::Scaled)), zero-padded to whole vectors of [`LANES`].
 #[derive(Clone, Copy)]
 pub(super) struct Rings<'a> {
     pub cos_theta: &'a [f64],
-    pub start: &'a [Scaled],
+    pub mantissa: &'a [f64],
+    pub scale: &'a [i32],
 }
 
 /// Reusable buffers of one worker.
@@ -130,7 +132,7 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
         spectra,
     } = job;
     let half = rings.cos_theta.len();
-    assert_eq!(rings.start.len(), half);
+    assert!(half.is_multiple_of(LANES) && rings.mantissa.len() == half && rings.scale.len() == half);
     let Scratch { sums, paired, odd } = scratch;
     let paired = recurrence.paired(m, paired);
     let (degrees, pairs, width) = (recurrence.lmax() + 1 - m, paired.steps.len(), spectra.width);
@@ -281,29 +283,28 @@ impl Order<'_> {
         first: usize,
         sums: &mut [[f64; LANES]],
     ) -> (usize, [V; R], [V; R], [V; R]) {
-        let Rings { cos_theta, start } = self.rings;
-        // The block's rings; those past the last one (padding) have λ = 0 and meet zero
-        // spectra.
-        let in_block = &start[first..(first + R * LANES).min(start.len())];
-        let (mut x, mut mantissa, mut scale) = ([[0.0; LANES]; R], [[0.0; LANES]; R], [[0; LANES]; R]);
-        for (j, (s, c)) in in_block.iter().zip(&cos_theta[first..]).enumerate() {
-            x[j / LANES][j % LANES] = *c;
-            mantissa[j / LANES][j % LANES] = s.mantissa;
-            scale[j / LANES][j % LANES] = s.scale;
-        }
+        let Rings {
+            cos_theta,
+            mantissa,
+            scale,
+        } = self.rings;
+        let (mut x, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
+        let mut scales = [[0; LANES]; R];
         // Loops, not closures, here and below: a closure does not inherit the caller's
         // target features, so its intrinsics become calls.
-        let (mut xv, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
+        let (mut scaled, mut something_to_add) = (false, false);
         for r in 0..R {
-            xv[r] = V::load(&x[r]);
-            current[r] = V::load(&mantissa[r]);
+            let ring = first + r * LANES;
+            x[r] = V::load(cos_theta[ring..][..LANES].try_into().unwrap());
+            current[r] = V::load(mantissa[ring..][..LANES].try_into().unwrap());
+            scales[r] = scale[ring..][..LANES].try_into().unwrap();
+            scaled |= scales[r] != [0; LANES];
+            something_to_add |= current[r].any_reaches(V::splat(QUIET));
         }
-        let x = xv;
         let mut pair = 0;
         // Most blocks start plain: no scaled value, and something to add.
-        let plain = in_block.iter().all(|s| s.scale == 0) && in_block.iter().any(|s| s.mantissa.abs() >= QUIET);
-        if !plain {
-            let mut state = LaneState::<V, R>::new(scale, &mut previous, &mut current);
+        if scaled || !something_to_add {
+            let mut state = LaneState::<V, R>::new(scales, &mut previous, &mut current);
             pair = self.careful_steps::<V, R, W>(first, &x, &mut previous, &mut current, &mut state, sums);
         }
         (pair, x, previous, current)
@@ -614,6 +615,7 @@ mod lanes {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sht::legendre::Scaled;
 
     #[test]
     fn agrees_with_stored_rows_where_sectorals_underflow() {
@@ -643,6 +645,13 @@ mod tests {
         let stride = padded_stride(theta.len());
         for (m, width) in [(0, 2), (150, 5), (1000, 2), (1500, 16), (2490, 3)] {
             let start: Vec<Scaled> = sectorals.iter().map(|s| s[m]).collect();
+            // The kernel's rings, padded to whole vectors.
+            let padded = theta.len().next_multiple_of(LANES);
+            let pad = |values: Vec<f64>| [values, vec![0.0; padded - theta.len()]].concat();
+            let mantissa = pad(start.iter().map(|s| s.mantissa).collect());
+            let padded_cos_theta = pad(cos_theta.clone());
+            let mut scale: Vec<i32> = start.iter().map(|s| s.scale).collect();
+            scale.resize(padded, 0);
             let spectra: [Vec<f64>; 2] = [1, 2].map(|seed| {
                 let mut column = vec![0.0; width * stride];
                 for c in 0..width {
@@ -661,8 +670,9 @@ mod tests {
                     recurrence: &recurrence,
                     m,
                     rings: Rings {
-                        cos_theta: &cos_theta,
-                        start: &start,
+                        cos_theta: &padded_cos_theta,
+                        mantissa: &mantissa,
+                        scale: &scale,
                     },
                     spectra: Spectra {
                         parts: [&spectra[0], &spectra[1]],
