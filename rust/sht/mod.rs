@@ -49,7 +49,7 @@ use rustfft::{Fft, FftPlanner};
 use crate::error::{invalid_argument, Result};
 use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
 use crate::parallel;
-use legendre::{Recurrence, Scaled};
+use legendre::{Paired, Recurrence, Scaled};
 
 /// Floating-point types the transform runs in.
 pub trait Real: realfft::FftNum + realfft::num_traits::Float + Default {
@@ -86,6 +86,9 @@ struct LegendreTable<T> {
     cos_theta: Vec<f64>,
     sectoral: (Vec<f64>, Vec<i32>),
     padded: usize,
+    /// Per order, the vectors of rings from the pole whose λ stay negligible to lmax
+    /// ([`streamed::silent_vectors`]), which the on-the-fly kernel skips.
+    silent: Vec<usize>,
     /// Per m, when within the cache budget.
     cached: Option<Vec<OrderPanels<T>>>,
 }
@@ -124,8 +127,15 @@ impl<T: Real> LegendreTable<T> {
             cos_theta,
             sectoral: (mantissas, scales),
             padded,
+            silent: Vec::new(),
             cached: None,
         };
+        table.silent = (0..=lmax)
+            .into_par_iter()
+            .map_init(Paired::default, |paired, m| {
+                streamed::silent_vectors(&table.recurrence, m, table.rings(m), paired)
+            })
+            .collect();
         // Two packed copies of every value.
         if 2 * table.bytes() <= cache_bytes {
             let panels = (0..=lmax)
@@ -193,7 +203,10 @@ impl<T: Real> LegendreTable<T> {
             streamed::Job {
                 recurrence: &self.recurrence,
                 m,
-                rings: self.rings(m),
+                rings: streamed::Rings {
+                    silent: self.silent[m],
+                    ..self.rings(m)
+                },
                 spectra,
             },
             out,
@@ -201,12 +214,14 @@ impl<T: Real> LegendreTable<T> {
         );
     }
 
-    /// The half rings' cos θ and order m's λ_mm there, padded to whole vectors.
+    /// The half rings' cos θ and order m's λ_mm there, padded to whole vectors (none
+    /// counted silent).
     fn rings(&self, m: usize) -> streamed::Rings<'_> {
         streamed::Rings {
             cos_theta: &self.cos_theta,
             mantissa: &self.sectoral.0[m * self.padded..][..self.padded],
             scale: &self.sectoral.1[m * self.padded..][..self.padded],
+            silent: 0,
         }
     }
 

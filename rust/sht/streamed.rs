@@ -59,11 +59,14 @@ impl Spectra<'_> {
 
 /// The half rings: cos θ_p and λ_mm(θ_p) of the order, as mantissa · 2^(600 · scale)
 /// ([`Scaled`](super::legendre::Scaled)), zero-padded to whole vectors of [`LANES`].
+/// `silent`: how many vectors of rings from the pole stay negligible up to lmax (see
+/// [`silent_vectors`]); they add nothing, and are skipped.
 #[derive(Clone, Copy)]
 pub(super) struct Rings<'a> {
     pub cos_theta: &'a [f64],
     pub mantissa: &'a [f64],
     pub scale: &'a [i32],
+    pub silent: usize,
 }
 
 /// Reusable buffers of one worker.
@@ -121,6 +124,58 @@ fn analysis_order_avx512<T: Real>(job: Job<'_>, out: &mut [T], scratch: &mut Scr
 #[target_feature(enable = "avx2,fma")]
 fn analysis_order_avx2<T: Real>(job: Job<'_>, out: &mut [T], scratch: &mut Scratch) {
     analysis_order_inline::<T, [f64; LANES]>(job, out, scratch)
+}
+
+/// How many vectors of [`LANES`] rings of order m, counted from the pole, have every
+/// λ_lm, l ≤ lmax, negligible (below [`QUIET`]): the careful steps of a block made of them
+/// would run to lmax and add nothing. Exact: each ring's values, rescaling and wake-up
+/// follow the same steps as in [`analysis_order`], which are the same in any block. The
+/// `silent` of `rings` is ignored.
+pub(super) fn silent_vectors(recurrence: &Recurrence, m: usize, rings: Rings<'_>, paired: &mut Paired) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { silent_vectors_avx512(recurrence, m, rings, paired) };
+        }
+    }
+    silent_vectors_inline::<[f64; LANES]>(recurrence, m, rings, paired)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,fma")]
+fn silent_vectors_avx512(recurrence: &Recurrence, m: usize, rings: Rings<'_>, paired: &mut Paired) -> usize {
+    silent_vectors_inline::<lanes::Avx512>(recurrence, m, rings, paired)
+}
+
+#[inline(always)]
+fn silent_vectors_inline<V: Lanes>(recurrence: &Recurrence, m: usize, rings: Rings<'_>, paired: &mut Paired) -> usize {
+    let steps = &recurrence.paired(m, paired).steps;
+    let vectors = rings.cos_theta.len() / LANES;
+    for vector in 0..vectors {
+        let ring = vector * LANES;
+        let x = V::load(rings.cos_theta[ring..][..LANES].try_into().unwrap());
+        let (mut previous, mut current) = (
+            [V::splat(0.0)],
+            [V::load(rings.mantissa[ring..][..LANES].try_into().unwrap())],
+        );
+        let scale = rings.scale[ring..][..LANES].try_into().unwrap();
+        let mut state = LaneState::<V, 1>::new([scale], &mut previous, &mut current);
+        let x2 = [x.mul(x)];
+        for &coefficients in &steps[1..] {
+            if state.live {
+                break;
+            }
+            step(coefficients, &x2, &mut previous, &mut current);
+            if current[0].any_reaches(state.threshold[0]) {
+                state.update(&mut previous, &mut current);
+            }
+        }
+        if state.live {
+            return vector;
+        }
+    }
+    vectors
 }
 
 #[inline(always)]
@@ -201,14 +256,25 @@ impl Order<'_> {
     /// Every block of rings, for `W` columns. The spectra take 2 · `W` · R registers for R
     /// ring vectors: four vectors a block (enough independent recurrences to hide their
     /// latency) while that fits in AVX-512's 32, two beyond.
+    ///
+    /// Silent vectors are skipped; the blocks start after them, partial ones first, so
+    /// that whole blocks reach the equator.
     #[inline(always)]
     fn blocks<V: Lanes, const W: usize>(&self, half_rings: usize, sums: &mut [[f64; LANES]]) {
         let vectors = half_rings.div_ceil(LANES);
-        if W <= 2 && vectors.is_multiple_of(4) && self.steps.len() > PAIR_CHUNK {
-            return self.blocks_by_pair_chunks::<V, W>(vectors / 4, sums);
-        }
-        let mut vector = 0;
+        let mut vector = self.rings.silent.min(vectors);
         if W <= 2 {
+            if (vectors - vector) % 4 >= 2 {
+                self.block::<V, 2, W>(vector * LANES, sums);
+                vector += 2;
+            }
+            if (vectors - vector) % 2 == 1 {
+                self.block::<V, 1, W>(vector * LANES, sums);
+                vector += 1;
+            }
+            if self.steps.len() > PAIR_CHUNK {
+                return self.blocks_by_pair_chunks::<V, W>(vector, sums);
+            }
             while vector + 4 <= vectors {
                 self.block::<V, 4, W>(vector * LANES, sums);
                 vector += 4;
@@ -226,13 +292,16 @@ impl Order<'_> {
     /// [`Order::blocks`] for many pairs of degrees: every block's careful steps first, then
     /// the plain loop a chunk of pairs at a time for every block in turn, so that the
     /// chunk's sums stay in the first-level cache (a whole order's did not at lmax 511).
+    /// Blocks of four vectors from vector `from` to the last one.
     #[inline(always)]
-    fn blocks_by_pair_chunks<V: Lanes, const W: usize>(&self, blocks: usize, sums: &mut [[f64; LANES]]) {
+    fn blocks_by_pair_chunks<V: Lanes, const W: usize>(&self, from: usize, sums: &mut [[f64; LANES]]) {
+        let first_ring = |block: usize| (from + 4 * block) * LANES;
+        let blocks = (self.rings.cos_theta.len() / LANES - from) / 4;
         // Per block: the next pair, cos θ (zero past the last ring), and the recurrence's
         // two values there.
         let mut states = Vec::with_capacity(blocks);
         for block in 0..blocks {
-            let (pair, x, previous, current) = self.careful_start::<V, 4, W>(block * 4 * LANES, sums);
+            let (pair, x, previous, current) = self.careful_start::<V, 4, W>(first_ring(block), sums);
             let mut saved = [[[0.0; LANES]; 4]; 3];
             for r in 0..4 {
                 x[r].store(&mut saved[0][r]);
@@ -257,7 +326,7 @@ impl Order<'_> {
                     current[r] = V::load(&saved[2][r]);
                 }
                 (previous, current) =
-                    self.plain_steps::<V, 4, W>(*pair..end, block * 4 * LANES, &x, previous, current, sums);
+                    self.plain_steps::<V, 4, W>(*pair..end, first_ring(block), &x, previous, current, sums);
                 for r in 0..4 {
                     previous[r].store(&mut saved[1][r]);
                     current[r].store(&mut saved[2][r]);
@@ -287,6 +356,7 @@ impl Order<'_> {
             cos_theta,
             mantissa,
             scale,
+            ..
         } = self.rings;
         let (mut x, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
         let mut scales = [[0; LANES]; R];
@@ -643,6 +713,7 @@ mod tests {
             })
             .collect();
         let stride = padded_stride(theta.len());
+        let mut most_silent = 0;
         for (m, width) in [(0, 2), (150, 5), (1000, 2), (1500, 16), (2490, 3)] {
             let start: Vec<Scaled> = sectorals.iter().map(|s| s[m]).collect();
             // The kernel's rings, padded to whole vectors.
@@ -661,29 +732,40 @@ mod tests {
                 }
                 column
             });
+            let rings = Rings {
+                cos_theta: &padded_cos_theta,
+                mantissa: &mantissa,
+                scale: &scale,
+                silent: 0,
+            };
+            let silent = silent_vectors(&recurrence, m, rings, &mut Paired::default());
             let degrees = lmax + 1 - m;
             let mut rows = vec![0.0; degrees * theta.len()];
             recurrence.rows(m, &cos_theta, &start, &mut rows);
-            let mut out = vec![0.0f64; degrees * width];
-            analysis_order(
-                Job {
+            let run = |rings| {
+                let mut out = vec![0.0f64; degrees * width];
+                let spectra = Spectra {
+                    parts: [&spectra[0], &spectra[1]],
+                    column_stride: stride,
+                    vector_stride: LANES,
+                    width,
+                };
+                let job = Job {
                     recurrence: &recurrence,
                     m,
-                    rings: Rings {
-                        cos_theta: &padded_cos_theta,
-                        mantissa: &mantissa,
-                        scale: &scale,
-                    },
-                    spectra: Spectra {
-                        parts: [&spectra[0], &spectra[1]],
-                        column_stride: stride,
-                        vector_stride: LANES,
-                        width,
-                    },
-                },
-                &mut out,
-                &mut Scratch::default(),
-            );
+                    rings,
+                    spectra,
+                };
+                analysis_order(job, &mut out, &mut Scratch::default());
+                out
+            };
+            let out = run(Rings { silent, ..rings });
+            // Skipping the silent vectors changes nothing but the order of additions.
+            let largest = out.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            for (skipped, all) in out.iter().zip(run(rings)) {
+                assert!((skipped - all).abs() <= 1e-14 * largest, "m {m}: {skipped} vs {all}");
+            }
+            most_silent = most_silent.max(silent);
             for i in 0..degrees {
                 for c in 0..width {
                     let terms = (0..theta.len()).map(|p| rows[i * theta.len() + p] * spectra[i % 2][c * stride + p]);
@@ -700,5 +782,6 @@ mod tests {
                 }
             }
         }
+        assert!(most_silent > 0, "no case skips a vector");
     }
 }
