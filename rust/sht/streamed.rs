@@ -18,7 +18,8 @@
 //! block starts with careful steps that track each ring's scale, add nothing while every
 //! value is negligible, and count scaled values as 0 (they are kept below 2^−70, so a
 //! value turns plain as soon as it may matter), and hands over to the fast loop once all
-//! are plain doubles.
+//! are plain doubles. Vectors of rings next to the pole whose values stay negligible up
+//! to lmax ([`silent_vectors`], counted once per plan) are not run at all.
 
 use super::legendre::{Paired, Recurrence, BIG, SMALL};
 use super::Real;
