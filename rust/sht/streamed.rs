@@ -70,6 +70,28 @@ pub(super) struct Rings<'a> {
     pub silent: usize,
 }
 
+impl Rings<'_> {
+    /// Vectors of [`LANES`] rings.
+    fn vectors(&self) -> usize {
+        self.cos_theta.len() / LANES
+    }
+
+    /// The `R` vectors from ring `first`: cos θ, and λ_mm as mantissas and scales.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn load<V: Lanes, const R: usize>(&self, first: usize) -> ([V; R], [V; R], [[i32; LANES]; R]) {
+        let (mut x, mut mantissa, mut scale) = ([V::splat(0.0); R], [V::splat(0.0); R], [[0; LANES]; R]);
+        // A loop, not a closure: see `Order::careful_start`.
+        for r in 0..R {
+            let ring = first + r * LANES;
+            x[r] = V::load(self.cos_theta[ring..][..LANES].try_into().unwrap());
+            mantissa[r] = V::load(self.mantissa[ring..][..LANES].try_into().unwrap());
+            scale[r] = self.scale[ring..][..LANES].try_into().unwrap();
+        }
+        (x, mantissa, scale)
+    }
+}
+
 /// Reusable buffers of one worker.
 #[derive(Default)]
 pub(super) struct Scratch {
@@ -152,17 +174,11 @@ fn silent_vectors_avx512(recurrence: &Recurrence, m: usize, rings: Rings<'_>, pa
 #[inline(always)]
 fn silent_vectors_inline<V: Lanes>(recurrence: &Recurrence, m: usize, rings: Rings<'_>, paired: &mut Paired) -> usize {
     let steps = &recurrence.paired(m, paired).steps;
-    let vectors = rings.cos_theta.len() / LANES;
-    for vector in 0..vectors {
-        let ring = vector * LANES;
-        let x = V::load(rings.cos_theta[ring..][..LANES].try_into().unwrap());
-        let (mut previous, mut current) = (
-            [V::splat(0.0)],
-            [V::load(rings.mantissa[ring..][..LANES].try_into().unwrap())],
-        );
-        let scale = rings.scale[ring..][..LANES].try_into().unwrap();
-        let mut state = LaneState::<V, 1>::new([scale], &mut previous, &mut current);
-        let x2 = [x.mul(x)];
+    for vector in 0..rings.vectors() {
+        let (x, mut current, scale) = rings.load::<V, 1>(vector * LANES);
+        let mut previous = [V::splat(0.0)];
+        let mut state = LaneState::<V, 1>::new(scale, &mut previous, &mut current);
+        let x2 = squares(&x);
         for &coefficients in &steps[1..] {
             if state.live {
                 break;
@@ -176,7 +192,7 @@ fn silent_vectors_inline<V: Lanes>(recurrence: &Recurrence, m: usize, rings: Rin
             return vector;
         }
     }
-    vectors
+    rings.vectors()
 }
 
 #[inline(always)]
@@ -214,9 +230,9 @@ fn analysis_order_inline<T: Real, V: Lanes>(job: Job<'_>, out: &mut [T], scratch
             rings,
         };
         match group {
-            4 => order.blocks::<V, 4>(half, sums),
-            2 => order.blocks::<V, 2>(half, sums),
-            _ => order.blocks::<V, 1>(half, sums),
+            4 => order.blocks::<V, 4>(sums),
+            2 => order.blocks::<V, 2>(sums),
+            _ => order.blocks::<V, 1>(sums),
         }
         // Even degrees directly, odd ones by the running sum of the paired recurrence.
         odd.clear();
@@ -261,8 +277,8 @@ impl Order<'_> {
     /// Silent vectors are skipped; the blocks start after them, partial ones first, so
     /// that whole blocks reach the equator.
     #[inline(always)]
-    fn blocks<V: Lanes, const W: usize>(&self, half_rings: usize, sums: &mut [[f64; LANES]]) {
-        let vectors = half_rings.div_ceil(LANES);
+    fn blocks<V: Lanes, const W: usize>(&self, sums: &mut [[f64; LANES]]) {
+        let vectors = self.rings.vectors();
         let mut vector = self.rings.silent.min(vectors);
         if W <= 2 {
             if (vectors - vector) % 4 >= 2 {
@@ -297,7 +313,7 @@ impl Order<'_> {
     #[inline(always)]
     fn blocks_by_pair_chunks<V: Lanes, const W: usize>(&self, from: usize, sums: &mut [[f64; LANES]]) {
         let first_ring = |block: usize| (from + 4 * block) * LANES;
-        let blocks = (self.rings.cos_theta.len() / LANES - from) / 4;
+        let blocks = (self.rings.vectors() - from) / 4;
         // Per block: the next pair, cos θ (zero past the last ring), and the recurrence's
         // two values there.
         let mut states = Vec::with_capacity(blocks);
@@ -353,22 +369,12 @@ impl Order<'_> {
         first: usize,
         sums: &mut [[f64; LANES]],
     ) -> (usize, [V; R], [V; R], [V; R]) {
-        let Rings {
-            cos_theta,
-            mantissa,
-            scale,
-            ..
-        } = self.rings;
-        let (mut x, mut current, mut previous) = ([V::splat(0.0); R], [V::splat(0.0); R], [V::splat(0.0); R]);
-        let mut scales = [[0; LANES]; R];
+        let (x, mut current, scales) = self.rings.load::<V, R>(first);
+        let mut previous = [V::splat(0.0); R];
         // Loops, not closures, here and below: a closure does not inherit the caller's
         // target features, so its intrinsics become calls.
         let (mut scaled, mut something_to_add) = (false, false);
         for r in 0..R {
-            let ring = first + r * LANES;
-            x[r] = V::load(cos_theta[ring..][..LANES].try_into().unwrap());
-            current[r] = V::load(mantissa[ring..][..LANES].try_into().unwrap());
-            scales[r] = scale[ring..][..LANES].try_into().unwrap();
             scaled |= scales[r] != [0; LANES];
             something_to_add |= current[r].any_reaches(V::splat(QUIET));
         }
