@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from frenbrdf import mitsuba as fm
-from frenbrdf.data import save_csv, save_json
+from frenbrdf.atomic import save_csv, save_json
 from frenbrdf.render import save_figure
 from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
 

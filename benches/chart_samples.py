@@ -34,7 +34,7 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from frenbrdf.data import save_csv, save_json
+from frenbrdf.atomic import save_csv, save_json
 from frenbrdf.evaluation import image_metrics, load_runs, reconstruct, sample_bins
 from frenbrdf.merl import read_merl, valid_mask
 from frenbrdf.render import Scene, render_linear, save_figure, tonemap

@@ -401,7 +401,6 @@ def reference_maps(alm: np.ndarray, nlat: int, nlon: int, lmax: int, grid: str) 
         return np.asarray(maps), f"ducc0 {ducc0.__version__}"
     except ImportError:
         pass
-    import shtns
 
     plan = Shtns(os.cpu_count()).plan(nlat, nlon, lmax, grid, "float64")
     return plan.synthesis_lm(alm), "shtns"
@@ -866,7 +865,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "sht_peers.md").write_text(markdown)
     (args.out / "sht_peers.json").write_text(json.dumps(data, indent=2))
-    from frenbrdf.data import save_csv
+    from frenbrdf.atomic import save_csv
 
     save_csv(args.out / "sht_timings.csv", data["timings"])
     save_csv(args.out / "sht_errors.csv", data["checks"])

@@ -20,10 +20,7 @@ Examples
 
 from __future__ import annotations
 
-import csv
 import functools
-import io
-import json
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -293,27 +290,3 @@ def mapped_bank(names, tables: np.ndarray, mapping: LogRelativeMapping) -> Mater
         with np.errstate(invalid="ignore"):
             mapped[i] = np.nan_to_num(mapping.forward(table, reference)).T
     return MaterialBank(names, torch.from_numpy(mapped), torch.from_numpy(valid))
-
-
-def save_json(path: str | os.PathLike, data) -> None:
-    """Writes JSON atomically (temporary file in the same folder, then rename)."""
-    path = Path(path)
-    temporary = path.with_name(f".{path.name}.tmp")
-    temporary.write_text(json.dumps(data, indent=2) + "\n")
-    os.replace(temporary, path)
-
-
-def save_csv(path: str | os.PathLike, rows: list[dict]) -> None:
-    """Writes rows (dicts) as CSV with a header, atomically; the columns are the union of
-    the rows' keys in first-seen order, and a row without a key leaves its cell empty."""
-    if not rows:
-        raise ValueError(f"{path}: no rows to write")
-    buffer = io.StringIO()
-    columns = list(dict.fromkeys(key for row in rows for key in row))
-    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    path = Path(path)
-    temporary = path.with_name(f".{path.name}.tmp")
-    temporary.write_text(buffer.getvalue())
-    os.replace(temporary, path)

@@ -16,6 +16,7 @@ from pathlib import Path
 import torch
 
 from . import __version__
+from .atomic import write_text
 from .evaluation import EvaluateConfig, evaluate_runs
 from .training import METHODS, config_for, train
 
@@ -83,4 +84,4 @@ def _write_readme(out: Path, data, runs, report: dict, timings: dict) -> None:
         "## Time", "", "| step | seconds |", "|---|---|",
         *(f"| {step} | {seconds:.0f} |" for step, seconds in timings.items()), "",
     ]
-    (out / "README.md").write_text("\n".join(lines))
+    write_text(out / "README.md", "\n".join(lines))

@@ -22,7 +22,8 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .data import N_BINS, list_materials, save_json
+from .atomic import save_json, write_text
+from .data import N_BINS, list_materials
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from .merl import SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
@@ -267,7 +268,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
               "summary": summary, "reconstruction": per_material, "editing": edits,
               "seconds": time.perf_counter() - start}
     save_json(out / "evaluation.json", report)
-    (out / "evaluation.md").write_text(markdown_table(summary, len(names), sum(len(e) for e in edits.values())
+    write_text(out / "evaluation.md", markdown_table(summary, len(names), sum(len(e) for e in edits.values())
                                                       // max(1, len(models))))
     _figures(out, names, renders, per_material, models, latents, pairs, edit_truth_linear, config)
     return report

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 from tqdm.auto import tqdm
 
+from .atomic import atomic_path
 from .data import N_BINS, LogRelativeMapping, bin_geometry
 from .merl import SHAPE
 from .models.nbrdf import NBRDF, NBRDFConfig, nbrdf_forward
@@ -86,11 +86,9 @@ def _initial_params(config: NBRDFConfig) -> list[torch.Tensor]:
 
 def save_nbrdf(path: str | os.PathLike, nbrdf: NBRDF) -> None:
     """Saves one NBRDF (weights and mapping) atomically."""
-    path = Path(path)
-    temporary = path.with_name(f".{path.name}.tmp")
-    torch.save({"params": [p[0] for p in nbrdf.params], "reference": torch.from_numpy(nbrdf.mapping.reference),
-                "epsilon": nbrdf.mapping.epsilon}, temporary)
-    os.replace(temporary, path)
+    with atomic_path(path) as temporary:
+        torch.save({"params": [p[0] for p in nbrdf.params], "reference": torch.from_numpy(nbrdf.mapping.reference),
+                    "epsilon": nbrdf.mapping.epsilon}, temporary)
 
 
 def load_nbrdf(path: str | os.PathLike) -> NBRDF:

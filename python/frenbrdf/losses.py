@@ -29,6 +29,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from .atomic import atomic_path
 from .knn import KnnInterpolator
 from .merl import SHAPE, merl_bin_angles
 from .models.nbrdf import nbrdf_forward
@@ -224,8 +225,6 @@ class FrequencyTruth:
         coefficients = self.sht.analysis(self.maps(mapped, valid)).astype(np.float32)
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
-            temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            with open(temporary, "wb") as file:
-                np.save(file, coefficients)
-            os.replace(temporary, path)
+            with atomic_path(path) as temporary:
+                np.save(temporary, coefficients)
         return coefficients

@@ -24,10 +24,10 @@ from __future__ import annotations
 import functools
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_path
 from .merl import SHAPE, merl_lookup_directions
 
 
@@ -165,15 +165,11 @@ def save_png(path: str | os.PathLike, image: np.ndarray) -> None:
     """Writes an image in [0, 1] ``(H, W, 3)`` as an 8-bit PNG, atomically."""
     import matplotlib.image
 
-    path = Path(path)
-    temporary = path.with_name(f".{path.name}.tmp.png")
-    matplotlib.image.imsave(temporary, np.clip(image, 0, 1))
-    os.replace(temporary, path)
+    with atomic_path(path) as temporary:
+        matplotlib.image.imsave(temporary, np.clip(image, 0, 1))
 
 
 def save_figure(figure, path: str | os.PathLike, dpi: int = 100) -> None:
     """Writes a matplotlib figure as a PNG, atomically (temporary file in the same folder, then rename)."""
-    path = Path(path)
-    temporary = path.with_name(f".{path.name}.tmp.png")
-    figure.savefig(temporary, dpi=dpi)
-    os.replace(temporary, path)
+    with atomic_path(path) as temporary:
+        figure.savefig(temporary, dpi=dpi)

@@ -48,7 +48,8 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .data import list_materials, save_csv, save_json, split_materials
+from .atomic import save_csv, save_json, write_text
+from .data import list_materials, split_materials
 from .evaluation import FrequencyMetric, reconstruction_rows
 from .losses import FrequencyLoss
 from .models.autoencoder import AutoEncoder, Model
@@ -406,12 +407,6 @@ def combine_seeds(runs: list[dict]) -> list[dict]:
     return rows
 
 
-def _write_text(path: Path, text: str) -> None:
-    temporary = path.with_name(f".{path.name}.tmp")
-    temporary.write_text(text)
-    os.replace(temporary, path)
-
-
 def _csv_rows(rows: list[dict]) -> list[dict]:
     """The chart rows as CSV cells: sequences joined, floats to 6 significant digits."""
     cells = []
@@ -719,7 +714,7 @@ def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfi
                "config": str(config_path) if config_path else None, "considered": [_brief(r) for r in considered]}
     save_json(out / "selection.json", summary)
     report_path = out / "selection.md"
-    _write_text(report_path, _selection_markdown(summary))
+    write_text(report_path, _selection_markdown(summary))
     return Selection(target, chosen is not None, chosen, best, considered, source, config_path, report_path)
 
 

@@ -101,13 +101,13 @@ import functools
 import json
 import os
 import re
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import write_text
 from .merl import CHANNEL_SCALES, merl_bin_directions, merl_bin_grid, write_merl
 
 #: The kinds of material in a bank, and the share of each.
@@ -646,17 +646,5 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, progr
         write_merl(path, merl_table(material))
         paths.append(path)
     manifest = {"n": n, "seed": seed, "materials": [{"file": p.name, **m.to_dict()} for p, m in zip(paths, bank)]}
-    _write_text_atomically(out_dir / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
+    write_text(out_dir / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
     return paths
-
-
-def _write_text_atomically(path: Path, text: str) -> None:
-    """Writes to a temporary file beside ``path``, then renames it over ``path``."""
-    fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as file:
-            file.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        os.unlink(temporary)
-        raise

@@ -31,7 +31,8 @@ import torch
 import torch.distributed as dist
 from tqdm.auto import tqdm
 
-from .data import (LogRelativeMapping, MaterialBank, Split, list_materials, mapped_bank, read_tables, save_json,
+from .atomic import atomic_path, save_json
+from .data import (LogRelativeMapping, MaterialBank, Split, list_materials, mapped_bank, read_tables,
                    split_materials)
 from .losses import (FrequencyLoss, FrequencyLossConfig, FrequencyTruth, latent_penalty, reconstruction_loss,
                      weight_penalty)
@@ -181,9 +182,8 @@ def _merge(base: dict, update: dict) -> dict:
 
 def save_checkpoint(path: Path, state: dict) -> None:
     """``torch.save`` to a temporary file in the same folder, then rename: never a half-written file."""
-    temporary = path.with_name(f".{path.name}.tmp")
-    torch.save(state, temporary)
-    os.replace(temporary, path)
+    with atomic_path(path) as temporary:
+        torch.save(state, temporary)
 
 
 def load_checkpoint(path: str | os.PathLike) -> dict:
