@@ -36,7 +36,7 @@ import numpy as np
 import torch
 
 from frenbrdf import mitsuba as fm
-from frenbrdf.data import LogRelativeMapping
+from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates, nbrdf_forward
 from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
 

@@ -9,8 +9,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import frenbrdf
-from frenbrdf.data import (N_BINS, LogRelativeMapping, MappingConfig, Split, bin_geometry, list_materials, mapped_bank,
-                           read_tables, split_materials)
+from frenbrdf.data import Split, list_materials, mapped_bank, read_tables, split_materials
+from frenbrdf.merl import N_BINS
+from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
+from frenbrdf.models.nbrdf import bin_geometry
 
 
 def test_split_is_70_10_20_disjoint_and_reproducible():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from frenbrdf.data import bin_geometry
+from frenbrdf.models.nbrdf import bin_geometry
 from frenbrdf.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, reconstruction_loss
 from frenbrdf.merl import merl_above_horizon
 from frenbrdf.models import NBRDFConfig, nbrdf_forward

@@ -19,7 +19,7 @@ import torch
 
 import frenbrdf
 from frenbrdf import mitsuba as fm
-from frenbrdf.data import LogRelativeMapping
+from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.fitting import save_nbrdf
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig
 from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
@@ -329,7 +329,7 @@ def test_scalar_fallback_when_llvm_is_unusable(tmp_path):
         import warnings
         import numpy as np, torch
         from frenbrdf import mitsuba as fm
-        from frenbrdf.data import LogRelativeMapping
+        from frenbrdf.models.mapping import LogRelativeMapping
         from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")

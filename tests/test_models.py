@@ -7,7 +7,7 @@ import pytest
 import torch
 
 import frenbrdf
-from frenbrdf.data import LogRelativeMapping
+from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models import (AutoEncoder, DecoderConfig, EncoderConfig, HyperNetwork, Model, ModelConfig, NBRDF,
                              NBRDFConfig, SetEncoder, interpolate, nbrdf_coordinates, nbrdf_forward)
 
@@ -132,7 +132,7 @@ def test_decoded_materials_are_isotropic():
 
 
 def test_nbrdf_coordinates_at_the_bins_are_the_training_inputs():
-    from frenbrdf.data import bin_geometry
+    from frenbrdf.models.nbrdf import bin_geometry
     from frenbrdf.evaluation import _bin_directions
 
     bins = np.random.default_rng(0).choice(90 * 90 * 180, 2000)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import frenbrdf
-from frenbrdf.data import LogRelativeMapping
+from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models import NBRDF, NBRDFConfig
 from frenbrdf.render import Scene, environment_radiance, render, render_linear, save_png, tonemap
 

@@ -11,7 +11,8 @@ import torch
 
 import frenbrdf
 from frenbrdf import synth
-from frenbrdf.data import LogRelativeMapping, MappingConfig, mapped_bank, read_tables, split_materials
+from frenbrdf.data import mapped_bank, read_tables, split_materials
+from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.losses import FrequencyLossConfig, FrequencyTruth
 from frenbrdf.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models import NBRDF, NBRDFConfig

@@ -1,6 +1,6 @@
-"""Training data: MERL folders, the log-relative mapping, splits and sample sets.
+"""Training data: MERL folders, splits and sample sets.
 
-Every model in the package works in the *mapped* space of DESIGN §6,
+Every model in the package works in the *mapped* space (:mod:`frenbrdf.models.mapping`),
 
     y = ln((f + ε) / (f_ref + ε)),     f = (f_ref + ε) · exp(y) − ε  (clamped to ≥ 0),
 
@@ -20,7 +20,6 @@ Examples
 
 from __future__ import annotations
 
-import functools
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -29,12 +28,9 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .coords import half_diff_vectors
-from .merl import SHAPE, merl_bin_directions, merl_lookup_directions, read_merl
-
-#: Number of bins per channel of a MERL table.
-N_BINS = SHAPE[1] * SHAPE[2] * SHAPE[3]
-
+from .merl import N_BINS, read_merl
+from .models.mapping import LogRelativeMapping
+from .models.nbrdf import bin_geometry
 
 # --------------------------------------------------------------------------- files, split
 
@@ -101,117 +97,7 @@ def split_materials(names, seed: int, fractions: tuple[float, float, float] = (0
                  tuple(sorted(pick[n_train + n_val:])), seed)
 
 
-# --------------------------------------------------------------------------- mapping
-
-
-@dataclass
-class MappingConfig:
-    """The log-relative mapping of reflectance (DESIGN §6)."""
-
-    epsilon: float = 0.002
-    """Offset that keeps the logarithm finite at zero reflectance."""
-    reference: str = "per_bin"
-    """``"per_bin"``: f_ref is the per-bin median of the training tables; ``"per_channel"``: one median per channel."""
-
-    def __post_init__(self):
-        if not (self.epsilon > 0 and np.isfinite(self.epsilon)):
-            raise ValueError(f"mapping.epsilon must be a positive number, got {self.epsilon}")
-        if self.reference not in ("per_bin", "per_channel"):
-            raise ValueError(f"mapping.reference must be 'per_bin' or 'per_channel', got {self.reference!r}")
-
-
-class LogRelativeMapping:
-    """Reflectance ↔ mapped values, relative to a reference BRDF.
-
-    Parameters
-    ----------
-    reference
-        f_ref: a MERL-shaped table ``(3, 90, 90, 180)`` or one value per channel ``(3,)``;
-        finite and ≥ 0.
-    epsilon
-        The offset ε.
-    """
-
-    def __init__(self, reference, epsilon: float = 0.002):
-        reference = np.asarray(reference, dtype=np.float64)
-        if reference.shape not in ((3,), SHAPE):
-            raise ValueError(f"the reference BRDF must have shape (3,) or {SHAPE}, got {reference.shape}")
-        if not np.all(np.isfinite(reference)) or reference.min() < 0:
-            raise ValueError("the reference BRDF must be finite and non-negative")
-        self.reference = reference
-        self.epsilon = float(epsilon)
-
-    @classmethod
-    def from_tables(cls, tables: np.ndarray, config: MappingConfig) -> LogRelativeMapping:
-        """The median of ``tables`` ``(M, 3, N_BINS)`` (missing = NaN) as reference."""
-        if config.reference == "per_channel":
-            reference = np.nan_to_num(np.nanmedian(tables.transpose(1, 0, 2).reshape(3, -1), axis=1))
-        else:
-            # Bins missing in no material take the plain median, bins missing in some the
-            # median of the others (slower), bins missing in all get f_ref = 0.
-            missing = np.isnan(tables)
-            some, every = missing.any(axis=0), missing.all(axis=0)
-            reference = np.zeros(tables.shape[1:], dtype=np.float64)
-            complete = ~some
-            reference[complete] = np.median(tables[:, complete], axis=0)
-            partial = some & ~every
-            if partial.any():
-                reference[partial] = np.nanmedian(tables[:, partial], axis=0)
-            reference = reference.reshape(SHAPE)
-        return cls(np.maximum(reference, 0.0), config.epsilon)
-
-    @property
-    def per_bin(self) -> bool:
-        return self.reference.ndim == 4
-
-    def reference_bins(self) -> np.ndarray:
-        """f_ref at every bin, ``(3, N_BINS)``."""
-        return np.broadcast_to(self.reference.reshape(3, -1), (3, N_BINS))
-
-    def reference_at(self, wi, wo) -> np.ndarray:
-        """f_ref at direction pairs ``(..., 3)`` (trilinear in the MERL bins)."""
-        if not self.per_bin:
-            return np.broadcast_to(self.reference, np.shape(wi)[:-1] + (3,))
-        return np.maximum(merl_lookup_directions(self.reference, wi, wo, method="trilinear"), 0.0)
-
-    def forward(self, reflectance, reference):
-        """Reflectance → mapped values (numpy or torch, broadcasting)."""
-        log = torch.log if isinstance(reflectance, torch.Tensor) else np.log
-        return log((reflectance + self.epsilon) / (reference + self.epsilon))
-
-    def inverse(self, mapped, reference):
-        """Mapped values → reflectance, clamped to ≥ 0 (numpy or torch)."""
-        if isinstance(mapped, torch.Tensor):
-            return ((reference + self.epsilon) * torch.exp(mapped) - self.epsilon).clamp_min(0.0)
-        return np.maximum((reference + self.epsilon) * np.exp(mapped) - self.epsilon, 0.0)
-
-    def state(self) -> dict:
-        return {"reference": self.reference.astype(np.float32), "epsilon": self.epsilon}
-
-    @classmethod
-    def from_state(cls, state: dict) -> LogRelativeMapping:
-        return cls(np.asarray(state["reference"], dtype=np.float64), state["epsilon"])
-
-
-# --------------------------------------------------------------------------- bins and samples
-
-
-@dataclass(frozen=True)
-class BinGeometry:
-    """What every MERL bin means to an NBRDF (φ_h = 0), shared by all materials."""
-
-    half_diff: torch.Tensor
-    """(N_BINS, 6) float32: the NBRDF input (H, D)."""
-    cos_in: torch.Tensor
-    """(N_BINS,) float32: cos θ_i clamped to [0, 1], the reconstruction-loss weight."""
-
-
-@functools.cache
-def bin_geometry() -> BinGeometry:
-    wi, wo = (d.reshape(-1, 3) for d in merl_bin_directions())
-    h, d = half_diff_vectors(wi, wo)
-    return BinGeometry(torch.from_numpy(np.concatenate([h, d], axis=-1).astype(np.float32)),
-                       torch.from_numpy(np.clip(wi[:, 2], 0.0, 1.0).astype(np.float32)))
+# --------------------------------------------------------------------------- samples
 
 
 @dataclass

@@ -23,9 +23,9 @@ import torch
 from tqdm.auto import tqdm
 
 from .atomic import save_json, write_text
-from .data import N_BINS, list_materials
+from .data import list_materials
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
-from .merl import SHAPE, merl_bin_angles, read_merl
+from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
 from .render import Scene, render_linear, save_figure, tonemap
 

@@ -17,9 +17,9 @@ import torch
 from tqdm.auto import tqdm
 
 from .atomic import atomic_path
-from .data import N_BINS, LogRelativeMapping, bin_geometry
-from .merl import SHAPE
-from .models.nbrdf import NBRDF, NBRDFConfig, nbrdf_forward
+from .merl import N_BINS, SHAPE
+from .models.mapping import LogRelativeMapping
+from .models.nbrdf import NBRDF, NBRDFConfig, bin_geometry, nbrdf_forward
 
 #: Sztrajman's output activation exp(x) − 1 as a mapping.
 EXP_MINUS_ONE = LogRelativeMapping(np.zeros(3), epsilon=1.0)

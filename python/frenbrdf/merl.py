@@ -24,6 +24,8 @@ from .exceptions import MerlFormatError
 
 #: Table shape: (channel, θ_h, θ_d, φ_d).
 SHAPE = (3, 90, 90, 180)
+#: Number of bins per channel of a MERL table.
+N_BINS = SHAPE[1] * SHAPE[2] * SHAPE[3]
 #: Stored value × scale = reflectance, per channel (MERL's reference reader).
 CHANNEL_SCALES = tuple(_native.CHANNEL_SCALES)
 #: Size in bytes of every MERL file.

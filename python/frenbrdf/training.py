@@ -32,11 +32,12 @@ import torch.distributed as dist
 from tqdm.auto import tqdm
 
 from .atomic import atomic_path, save_json
-from .data import (LogRelativeMapping, MaterialBank, Split, list_materials, mapped_bank, read_tables,
+from .data import (MaterialBank, Split, list_materials, mapped_bank, read_tables,
                    split_materials)
 from .losses import (FrequencyLoss, FrequencyLossConfig, FrequencyTruth, latent_penalty, reconstruction_loss,
                      weight_penalty)
 from .models.autoencoder import AutoEncoder, ModelConfig
+from .models.mapping import LogRelativeMapping
 from .models.nbrdf import nbrdf_forward
 
 METHODS = ("frenbrdf", "nbrdf", "hyperbrdf")

@@ -10,7 +10,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from ..data import LogRelativeMapping, MappingConfig
+from .mapping import LogRelativeMapping, MappingConfig
 from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates

@@ -8,6 +8,7 @@ mapping back to reflectance.
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 
@@ -15,8 +16,8 @@ import numpy as np
 import torch
 
 from ..coords import half_diff_vectors
-from ..data import LogRelativeMapping, N_BINS, bin_geometry
-from ..merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, write_merl
+from ..merl import CHANNEL_SCALES, N_BINS, SHAPE, merl_above_horizon, merl_bin_directions, write_merl
+from .mapping import LogRelativeMapping
 
 #: The NBRDF input: H and D as Cartesian 3-vectors.
 N_INPUTS = 6
@@ -47,6 +48,24 @@ class NBRDFConfig:
     @property
     def n_weights(self) -> int:
         return sum(int(np.prod(shape)) for shape in self.shapes())
+
+
+@dataclass(frozen=True)
+class BinGeometry:
+    """What every MERL bin means to an NBRDF (φ_h = 0), shared by all materials."""
+
+    half_diff: torch.Tensor
+    """(N_BINS, 6) float32: the NBRDF input (H, D)."""
+    cos_in: torch.Tensor
+    """(N_BINS,) float32: cos θ_i clamped to [0, 1], the reconstruction-loss weight."""
+
+
+@functools.cache
+def bin_geometry() -> BinGeometry:
+    wi, wo = (d.reshape(-1, 3) for d in merl_bin_directions())
+    h, d = half_diff_vectors(wi, wo)
+    return BinGeometry(torch.from_numpy(np.concatenate([h, d], axis=-1).astype(np.float32)),
+                       torch.from_numpy(np.clip(wi[:, 2], 0.0, 1.0).astype(np.float32)))
 
 
 def nbrdf_coordinates(wi, wo) -> np.ndarray:
