@@ -4,7 +4,6 @@
 pub mod coords;
 pub mod error;
 pub mod knn;
-pub mod linalg;
 pub mod merl;
 pub mod parallel;
 pub mod sht;

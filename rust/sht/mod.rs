@@ -18,7 +18,7 @@
 //!
 //! # How it runs
 //! An FFT along the rings, then per order m a Legendre step that is a matrix product
-//! ([`crate::linalg`]) over a chunk of maps. North and south rings are folded into
+//! ([`linalg`]) over a chunk of maps. North and south rings are folded into
 //! symmetric and antisymmetric parts, since λ_lm(−x) = (−1)^(l+m) λ_lm(x): each half of the
 //! degrees meets only one of them, which halves the work. Analysis gets both parts of a
 //! ring pair from one complex FFT (rustfft), split into the parts and transposed to the
@@ -34,6 +34,8 @@
 
 pub mod grid;
 pub mod legendre;
+mod linalg;
+mod real;
 mod split;
 mod streamed;
 mod transpose;
@@ -47,24 +49,10 @@ use realfft::{ComplexToReal, RealFftPlanner};
 use rustfft::{Fft, FftPlanner};
 
 use crate::error::{invalid_argument, Result};
-use crate::linalg::{matmul_packed, MatMut, MatRef, Packed};
 use crate::parallel;
 use legendre::{Paired, Recurrence, Scaled};
-
-/// Floating-point types the transform runs in.
-pub trait Real: realfft::FftNum + realfft::num_traits::Float + Default {
-    fn of(value: f64) -> Self;
-}
-impl Real for f32 {
-    fn of(value: f64) -> Self {
-        value as f32
-    }
-}
-impl Real for f64 {
-    fn of(value: f64) -> Self {
-        value
-    }
-}
+use linalg::{matmul_packed, MatMut, MatRef, Packed};
+pub use real::Real;
 
 /// Largest Legendre table a plan keeps (per node set); larger ones are recomputed.
 pub const LEGENDRE_CACHE_BYTES: usize = 256 << 20;

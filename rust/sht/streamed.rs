@@ -22,7 +22,7 @@
 //! to lmax ([`silent_vectors`], counted once per plan) are not run at all.
 
 use super::legendre::{Paired, Recurrence, BIG, SMALL};
-use super::Real;
+use super::real::Real;
 use lanes::Lanes;
 pub(super) use lanes::LANES;
 

@@ -7,7 +7,7 @@
 
 use std::mem::MaybeUninit;
 
-use super::Real;
+use super::real::Real;
 
 /// One order's block of the Legendre step's output, `block[(2 (l − m) + part) · batch + b]`,
 /// and where its coefficients go: `out[b · stride + offset + part · degrees + (l − m)]`.
