@@ -35,16 +35,17 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 from frenbrdf import mitsuba as fm
-from frenbrdf.atomic import save_csv, save_json
-from frenbrdf.render import save_figure
 from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import pyplot, run_metadata, save_chart, save_figure, time_calls  # noqa: E402
 
 DEFAULT_SPP = (1, 4, 16, 64, 256)
 SAMPLINGS = ("fitted", "cosine")
@@ -102,12 +103,11 @@ def rendering_chart(materials: dict, out_dir, *, spps=DEFAULT_SPP, reference_spp
     import mitsuba as mi
 
     start = time.perf_counter()
+    run = run_metadata()
     if repeats < 1 or not spps or min(spps) < 1 or reference_spp < 1:
         raise ValueError(f"need repeats ≥ 1 and spp ≥ 1, got repeats={repeats}, spps={spps}, "
                          f"reference_spp={reference_spp}")
     variant = fm.register()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     rows, details = [], {}
     for label, source in materials.items():
         material = fm.load_material(source)  # one Material: its sampling mixture is fitted once, here
@@ -121,44 +121,35 @@ def rendering_chart(materials: dict, out_dir, *, spps=DEFAULT_SPP, reference_spp
         display_reference = fm.tonemap(reference)
         for sampling in SAMPLINGS:
             for spp in spps:
-                def render():
-                    return fm.render_material(material, spp=spp, resolution=resolution, seed=0, sampling=sampling)
+                last = {}
 
-                begin = time.perf_counter()
-                render()  # warm-up: compiles the kernels of this spp
-                first = time.perf_counter() - begin
-                times = []
-                for _ in range(repeats):
-                    begin = time.perf_counter()
-                    image = render()
-                    times.append(time.perf_counter() - begin)
+                def render():
+                    last["image"] = fm.render_material(material, spp=spp, resolution=resolution, seed=0,
+                                                       sampling=sampling)
+
+                timing = time_calls(render, repeats)  # the warm-up compiles the kernels of this spp
+                image = last["image"]
                 rmse = float(np.sqrt(np.mean((fm.tonemap(image) - display_reference) ** 2)))
                 linear = float(np.sqrt(np.mean((image - reference) ** 2)) / reference.mean())
-                rows.append({"material": label, "sampling": sampling, "spp": spp, "seconds": statistics.median(times),
+                rows.append({"material": label, "sampling": sampling, "spp": spp, "seconds": timing.median_s,
                              "display_rmse": rmse, "linear_relative_rmse": linear})
-                details[label]["times"][f"{sampling} {spp}"] = {"first_s": first, "timed_s": times}
-                print(f"{label:>24} {sampling:>6} {spp:>4} spp: {statistics.median(times):7.3f} s, "
+                details[label]["times"][f"{sampling} {spp}"] = {"first_s": timing.first_s, "timed_s": timing.samples_s}
+                print(f"{label:>24} {sampling:>6} {spp:>4} spp: {timing.median_s:7.3f} s, "
                       f"display RMSE {rmse:.4f}", flush=True)
 
     machine = (f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs; Mitsuba {mi.__version__} "
                f"({variant}, Dr.Jit {dr.__version__}, {dr.thread_count()} threads)")
     report = {"variant": variant, "machine": machine, "resolution": resolution, "reference_spp": reference_spp,
               "repeats": repeats, "spp": list(spps), "materials": details, "rows": rows,
-              "seconds": time.perf_counter() - start}
-    save_csv(out / f"{name}.csv", rows)
-    save_json(out / f"{name}.json", report)
-    plot(rows, out / f"{name}.png", title=f"Mitsuba {variant}, {resolution}² sphere, reference {reference_spp} spp, "
-                                          f"{dr.thread_count()} thread(s)")
+              "seconds": time.perf_counter() - start, "run": run}
+    title = f"Mitsuba {variant}, {resolution}² sphere, reference {reference_spp} spp, {dr.thread_count()} thread(s)"
+    save_chart(out_dir, name, rows, report, lambda path: plot(rows, path, title=title))
     return report
 
 
 def plot(rows: list[dict], path: Path, title: str = "") -> None:
     """Display RMSE against spp and against seconds (log-log); solid: fitted sampling, dashed: cosine."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     materials = list(dict.fromkeys(r["material"] for r in rows))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     figure, axes = plt.subplots(1, 2, figsize=(11, 5.6))
@@ -186,7 +177,6 @@ def plot(rows: list[dict], path: Path, title: str = "") -> None:
     figure.suptitle(title, fontsize=10)
     figure.tight_layout(rect=(0, 0.035 * (1 + len(labels) // columns), 1, 1))
     save_figure(figure, path)
-    plt.close(figure)
 
 
 def main(argv=None) -> None:

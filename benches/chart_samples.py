@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -34,10 +35,12 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from frenbrdf.atomic import save_csv, save_json
 from frenbrdf.evaluation import image_metrics, load_runs, reconstruct, sample_bins
 from frenbrdf.merl import read_merl, valid_mask
-from frenbrdf.render import Scene, render_linear, save_figure, tonemap
+from frenbrdf.render import Scene, render_linear, tonemap
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import pyplot, run_metadata, save_chart, save_figure  # noqa: E402
 
 #: Samples given to the encoder; ``None`` is every measured bin.
 DEFAULT_COUNTS = (40, 100, 400, 1000, 4000, None)
@@ -76,11 +79,10 @@ def samples_chart(run_dirs, out_dir, *, data: str | None = None, counts=DEFAULT_
         What ``<name>.json`` holds.
     """
     start = time.perf_counter()
+    run = run_metadata()
     if seeds < 1 or not counts or any(c is not None and c < 1 for c in counts):
         raise ValueError(f"need seeds ≥ 1 and counts ≥ 1 (or None for all), got seeds={seeds}, counts={counts}")
     runs = load_runs(run_dirs, data, max_materials)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     scene = Scene(resolution=resolution)
     rows, valid_bins = [], {}
     with tqdm(total=len(runs.test) * len(counts), desc="samples chart", disable=not progress) as bar:
@@ -105,11 +107,9 @@ def samples_chart(run_dirs, out_dir, *, data: str | None = None, counts=DEFAULT_
               "samples": [label(c) for c in counts], "seeds": seeds, "resolution": resolution,
               "valid_bins": valid_bins, "summary": summary, "per_material": rows,
               "machine": f"{platform.machine()}, torch {torch.__version__} ({torch.get_num_threads()} threads)",
-              "seconds": time.perf_counter() - start}
-    save_csv(out / f"{name}.csv", summary)
-    save_json(out / f"{name}.json", report)
-    plot(summary, out / f"{name}.png", title=f"{runs.data.name}: {len(runs.test)} test materials, "
-                                             f"{resolution}² renders, {seeds} draws per count")
+              "seconds": time.perf_counter() - start, "run": run}
+    title = f"{runs.data.name}: {len(runs.test)} test materials, {resolution}² renders, {seeds} draws per count"
+    save_chart(out_dir, name, summary, report, lambda path: plot(summary, path, title=title))
     return report
 
 
@@ -132,11 +132,7 @@ def summarise(rows: list[dict], methods: list[str], counts, valid_bins: dict[str
 
 def plot(summary: list[dict], path: Path, title: str = "") -> None:
     """PSNR and SSIM against the number of samples (log axis), one line and ±std band per method."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     methods = list(dict.fromkeys(r["method"] for r in summary))
     figure, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for axis, metric, name in zip(axes, ("psnr", "ssim"), ("PSNR (dB) ↑", "SSIM ↑")):
@@ -160,7 +156,6 @@ def plot(summary: list[dict], path: Path, title: str = "") -> None:
     figure.suptitle(title, fontsize=10)
     figure.tight_layout()
     save_figure(figure, path)
-    plt.close(figure)
 
 
 def main(argv=None) -> None:

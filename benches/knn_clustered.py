@@ -47,6 +47,10 @@ from pathlib import Path
 import numpy as np
 
 import frenbrdf
+from frenbrdf.atomic import save_json, write_text
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import CpuMeter, gaussian_weighting, time_calls, unit_vectors  # noqa: E402
 
 CHANNELS = 3
 JITTER = 1e-9
@@ -61,13 +65,6 @@ def merl_slice_directions() -> np.ndarray:
     _, theta_d, phi_d = frenbrdf.merl_bin_angles()
     theta, phi = np.meshgrid(theta_d, np.concatenate([phi_d, phi_d + np.pi]), indexing="ij")
     return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1).reshape(-1, 3)
-
-
-def unit_vectors(rng: np.random.Generator, n: int, hemisphere: bool = False) -> np.ndarray:
-    v = rng.normal(size=(n, 3))
-    if hemisphere:
-        v[:, 2] = np.abs(v[:, 2])
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
 def source_sets(copies: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -94,13 +91,6 @@ def smooth_values(points: np.ndarray) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------
 # The computation, three ways
-
-
-def gaussian_weighting(squared: np.ndarray, indices: np.ndarray, values: np.ndarray, sigma: float) -> np.ndarray:
-    """Eq. 5–7 in numpy, weights relative to the nearest neighbour (as frenbrdf does)."""
-    w = np.exp(-(squared - squared[:, :1]) / (2 * sigma**2))
-    w /= w.sum(axis=1, keepdims=True)
-    return np.einsum("mk,mkc->mc", w, values[indices])
 
 
 def brute_force(src: np.ndarray, values: np.ndarray, dst: np.ndarray, k: int, sigma: float):
@@ -194,22 +184,6 @@ def run_scipy(folder: Path, k: int, sigma: float, workers: int, repeats: int, ti
 # Main
 
 
-def busy_cpu_seconds() -> float | None:
-    """Machine-wide busy CPU time (all processes), from /proc/stat; None off Linux."""
-    try:
-        fields = [int(x) for x in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:9]]
-    except (OSError, ValueError):
-        return None
-    return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
-
-
-def own_cpu_seconds() -> float:
-    import resource
-
-    return sum(getattr(resource.getrusage(who), field) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)
-               for field in ("ru_utime", "ru_stime"))
-
-
 def bench_set(name: str, src: np.ndarray, dst: np.ndarray, args, threads: int, rng) -> dict:
     values = smooth_values(src)
     check_rows = np.sort(rng.choice(len(dst), min(args.check, len(dst)), replace=False))
@@ -219,12 +193,8 @@ def bench_set(name: str, src: np.ndarray, dst: np.ndarray, args, threads: int, r
     squared = ((dst[check_rows][:, None, :] - src[op.indices]) ** 2).sum(-1)
     check("frenbrdf", squared, result, reference)
 
-    times = []
-    for _ in range(args.repeats):
-        start = time.perf_counter()
-        ours(src, dst, values, args.k, args.sigma)
-        times.append(time.perf_counter() - start)
-    row = {"source_set": name, "n_src": len(src), "n_dst": len(dst), "frenbrdf_s": min(times)}
+    timing = time_calls(lambda: ours(src, dst, values, args.k, args.sigma), args.repeats, warmup=False)
+    row = {"source_set": name, "n_src": len(src), "n_dst": len(dst), "frenbrdf_s": timing.best_s}
 
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
@@ -293,7 +263,7 @@ def main() -> None:
             "versions": {"frenbrdf": frenbrdf.__version__, "numpy": np.__version__, "scipy": scipy.__version__,
                          "python": platform.python_version()}}
     print(f"{len(dst):,} queries on the {args.query_domain}, k = {args.k}, {threads} thread(s)", flush=True)
-    busy_before, own_before, start = busy_cpu_seconds(), own_cpu_seconds(), time.perf_counter()
+    meter = CpuMeter()
     rows = []
     for name, src in source_sets(args.copies, rng).items():
         row = bench_set(name, src, dst, args, threads, rng)
@@ -301,15 +271,14 @@ def main() -> None:
         print(f"  {name:<28} {len(src):>9,} sources   frenbrdf {row['frenbrdf_s']:7.2f} s   scipy {scipy_text}",
               flush=True)
         rows.append(row)
-    busy_after, wall = busy_cpu_seconds(), time.perf_counter() - start
-    if busy_before is not None and busy_after is not None:
-        other = busy_after - busy_before - (own_cpu_seconds() - own_before)
-        meta["background_cpu"] = max(0.0, other / (wall * (os.cpu_count() or 1)))
+    _, background = meter.read()
+    if background is not None:
+        meta["background_cpu"] = background
 
     args.out.mkdir(parents=True, exist_ok=True)
     text = markdown(rows, meta)
-    (args.out / "knn_clustered.md").write_text(text)
-    (args.out / "knn_clustered.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=2) + "\n")
+    write_text(args.out / "knn_clustered.md", text)
+    save_json(args.out / "knn_clustered.json", {"meta": meta, "rows": rows})
     print("\n" + text)
     print(f"wrote {args.out / 'knn_clustered.md'} and {args.out / 'knn_clustered.json'}")
 

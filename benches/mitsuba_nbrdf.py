@@ -25,9 +25,9 @@ sampling and with cosine sampling only. Writes ``bench-results/mitsuba_nbrdf.{md
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -36,9 +36,13 @@ import numpy as np
 import torch
 
 from frenbrdf import mitsuba as fm
+from frenbrdf.atomic import save_json, write_text
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates, nbrdf_forward
 from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import time_calls, unit_vectors  # noqa: E402
 
 SHARED_FIT = Path(__file__).resolve().parents[2] / "shared" / "data" / "merl-nbrdf" / "chrome-steel.h5"
 #: What the NBRDF paper reports for its C++ Mitsuba plugin (evaluations per second).
@@ -53,20 +57,9 @@ def random_nbrdf(hidden, reference, seed: int = 0) -> NBRDF:
     return NBRDF(params, LogRelativeMapping(reference))
 
 
-def hemisphere(rng: np.random.Generator, n: int) -> np.ndarray:
-    v = rng.normal(size=(n, 3))
-    v[:, 2] = np.abs(v[:, 2])
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
 def best_time(function, repeats: int) -> float:
-    """The fastest of ``repeats`` calls: the machine is shared, and other work only slows calls down."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return min(times)
+    """The fastest of ``repeats`` calls, no warm-up: the machine is shared, and other work only slows calls down."""
+    return time_calls(function, repeats, warmup=False).best_s
 
 
 def time_mitsuba_eval(material: fm.Material, wi: np.ndarray, wo: np.ndarray, repeats: int) -> dict:
@@ -170,7 +163,7 @@ def main():
     import mitsuba as mi
 
     rng = np.random.default_rng(0)
-    wi, wo = hemisphere(rng, args.n), hemisphere(rng, args.n)
+    wi, wo = unit_vectors(rng, args.n, hemisphere=True), unit_vectors(rng, args.n, hemisphere=True)
     gold = merl_table(AnalyticMaterial("gold-ggx-0.05", metal_n=METALS["gold"][0], metal_k=METALS["gold"][1],
                                        roughness=0.05))
     per_bin_reference = np.maximum(merl_table(AnalyticMaterial("reference", diffuse=(0.3, 0.3, 0.3), specular=1.0,
@@ -228,11 +221,11 @@ def main():
         lines.append(f"| {sampling} | {result['display_rmse']:.4f} | {100 * result['pixels_off_by_0.1']:.2f} % |")
 
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "mitsuba_nbrdf.md").write_text("\n".join(lines) + "\n")
-    (args.out / "mitsuba_nbrdf.json").write_text(json.dumps(
-        {"variant": variant, "machine": machine, "n": args.n, "repeats": args.repeats, "eval": cases,
-         "render": {"spp": args.spp, "resolution": args.resolution, **renders}, "noise": noise_result,
-         "paper_rate": PAPER_RATE}, indent=2) + "\n")
+    write_text(args.out / "mitsuba_nbrdf.md", "\n".join(lines) + "\n")
+    save_json(args.out / "mitsuba_nbrdf.json",
+              {"variant": variant, "machine": machine, "n": args.n, "repeats": args.repeats, "eval": cases,
+               "render": {"spp": args.spp, "resolution": args.resolution, **renders}, "noise": noise_result,
+               "paper_rate": PAPER_RATE})
     print("\n".join(lines))
 
 

@@ -17,38 +17,18 @@ Times are the median of several repetitions, after a warm-up run.
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import statistics
+import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 import frenbrdf
+from frenbrdf.atomic import save_json
 
-
-def median_seconds(function, repeats: int) -> float:
-    function()  # warm-up: page cache, thread pools, allocator
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
-def unit_vectors(rng: np.random.Generator, n: int) -> np.ndarray:
-    v = rng.normal(size=(n, 3))
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def gaussian_weighting(squared_distances: np.ndarray, indices: np.ndarray, values: np.ndarray, sigma: float):
-    """The numpy weighting step the peers need: Eq. 5–7, relative to the nearest."""
-    w = np.exp(-(squared_distances - squared_distances[:, :1]) / (2 * sigma**2))
-    w /= w.sum(axis=1, keepdims=True)
-    return np.einsum("mk,mkc->mc", w, values[indices])
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import gaussian_weighting, median_seconds, unit_vectors  # noqa: E402
 
 
 def bench_merl_read(repeats: int) -> dict:
@@ -138,7 +118,7 @@ def main() -> None:
     print(f"  build speed ratio vs pykdtree {knn['build_ratio_vs_pykdtree']:5.2f}×   (goal ≥ 1)")
 
     if args.json:
-        args.json.write_text(json.dumps({"merl_read": merl, "knn": knn}, indent=2))
+        save_json(args.json, {"merl_read": merl, "knn": knn})
 
 
 if __name__ == "__main__":

@@ -1,0 +1,256 @@
+"""Helpers shared by the scripts of ``benches/``, and the conventions their charts follow.
+
+The scripts run as ``python benches/NAME.py`` (``benches/`` is then ``sys.path[0]``) and
+are also loaded by path (``tests/test_charts.py``), so each puts its own folder on
+``sys.path`` before ``import common``.
+
+Nothing heavy is imported here at module level: the SHT peer workers import this module in
+processes that time other libraries, so frenbrdf (and with it torch) and matplotlib are
+imported only inside the functions that need them.
+
+Timing
+    :func:`time_calls` (warm-up, samples of back-to-back calls, :class:`Timing`),
+    :func:`median_seconds`; :class:`CpuMeter` (how much of the machine other processes
+    used meanwhile), :func:`busy_cpu_seconds`, :func:`own_cpu_seconds`.
+Inputs
+    :func:`unit_vectors`, :func:`gaussian_weighting` (the numpy weighting that kNN peers
+    need to compute what ``frenbrdf.KnnInterpolator`` computes).
+Charts
+    A chart is written as a trio beside each other: ``<name>.png``, ``<name>.csv`` (the
+    plotted numbers) and ``<name>.json`` (those, the settings and the details), every file
+    atomically (:func:`save_chart`, :func:`save_figure`); figures are drawn with the
+    ``Agg`` backend (:func:`pyplot`); the JSON holds a ``run`` block (:func:`run_metadata`:
+    the command, the CPU, the time).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+import shlex
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+#: Environment variables that set thread counts; :func:`run_metadata` records those set.
+THREAD_ENV = ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+
+
+# ---------------------------------------------------------------------------------------
+# Timing
+
+
+@dataclass
+class Timing:
+    """What :func:`time_calls` measured."""
+
+    samples_s: list[float]
+    """Seconds per call, one entry per sample."""
+    calls: int = 1
+    """Back-to-back calls in each sample."""
+    first_s: float | None = None
+    """The warm-up call (None without one): compilation, caches, thread pools, allocator."""
+
+    @property
+    def median_s(self) -> float:
+        return statistics.median(self.samples_s)
+
+    @property
+    def best_s(self) -> float:
+        """The fastest sample: on a shared machine other work only slows calls down."""
+        return min(self.samples_s)
+
+
+def time_calls(function: Callable[[], object], repeats: int, *, warmup: bool = True, min_sample_s: float = 0.0,
+               budget_s: float | None = None) -> Timing:
+    """Times ``repeats`` samples of ``function()``, after one warm-up call.
+
+    Parameters
+    ----------
+    function
+        Called without arguments; what it returns is dropped at once.
+    repeats
+        Number of samples.
+    warmup
+        Call once first, timed apart (:attr:`Timing.first_s`). ``min_sample_s`` and
+        ``budget_s`` scale from that call's time, so they need it.
+    min_sample_s
+        Each sample repeats the call back to back until it lasts at least this long: a
+        sample of one sub-millisecond call is at the mercy of a single wake-up or
+        preemption on a shared machine.
+    budget_s
+        Take fewer samples (but at least 3, or ``repeats`` if fewer) when ``repeats`` of
+        them would last longer than this, judged from the warm-up call.
+    """
+    if not warmup and (min_sample_s > 0 or budget_s is not None):
+        raise ValueError("min_sample_s and budget_s are judged from the warm-up call: they need warmup=True")
+    first, calls, count = None, 1, repeats
+    if warmup:
+        start = time.perf_counter()
+        function()
+        first = time.perf_counter() - start
+        elapsed = max(first, 1e-9)
+        calls = max(1, math.ceil(min_sample_s / elapsed))
+        if budget_s is not None:
+            count = max(min(3, repeats), min(repeats, int(budget_s / (elapsed * calls))))
+    samples = []
+    for _ in range(count):
+        start = time.perf_counter()
+        for _ in range(calls):
+            function()
+        samples.append((time.perf_counter() - start) / calls)
+    return Timing(samples, calls, first)
+
+
+def median_seconds(function: Callable[[], object], repeats: int) -> float:
+    """Median of ``repeats`` one-call samples after a warm-up call (see :func:`time_calls`)."""
+    return time_calls(function, repeats).median_s
+
+
+def busy_cpu_seconds() -> float | None:
+    """Machine-wide busy CPU time (all processes), from /proc/stat; None off Linux."""
+    try:
+        values = [int(x) for x in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:9]]
+    except (OSError, ValueError):
+        return None
+    idle = values[3] + values[4]  # idle + iowait
+    return (sum(values) - idle) / os.sysconf("SC_CLK_TCK")
+
+
+def own_cpu_seconds() -> float:
+    """CPU time of this process and of its waited-for children, user and system."""
+    import resource
+
+    return sum(getattr(resource.getrusage(who), field) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)
+               for field in ("ru_utime", "ru_stime"))
+
+
+class CpuMeter:
+    """How much of the machine's CPU other processes used while something was measured.
+
+    >>> meter = CpuMeter()          # doctest: +SKIP
+    >>> ...                         # the measurement, in this process or its children
+    >>> wall_s, background = meter.read()
+
+    ``background`` is the busy CPU time of the whole machine (/proc/stat), less this
+    process's and its children's, as a share of every core over the wall time; None off
+    Linux. Children count once they have been waited for.
+    """
+
+    def __init__(self):
+        self.busy, self.own, self.start = busy_cpu_seconds(), own_cpu_seconds(), time.perf_counter()
+
+    def read(self) -> tuple[float, float | None]:
+        """Seconds since the meter was made, and the share of the machine other processes used in them."""
+        wall, busy = time.perf_counter() - self.start, busy_cpu_seconds()
+        if self.busy is None or busy is None:
+            return wall, None
+        other = busy - self.busy - (own_cpu_seconds() - self.own)
+        return wall, max(0.0, other / (wall * (os.cpu_count() or 1)))
+
+
+# ---------------------------------------------------------------------------------------
+# Inputs
+
+
+def unit_vectors(rng: np.random.Generator, n: int, hemisphere: bool = False) -> np.ndarray:
+    """``n`` random directions ``(n, 3)``, uniform on the sphere, or on the upper (z ≥ 0) hemisphere."""
+    v = rng.normal(size=(n, 3))
+    if hemisphere:
+        v[:, 2] = np.abs(v[:, 2])
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def gaussian_weighting(squared: np.ndarray, indices: np.ndarray, values: np.ndarray, sigma: float) -> np.ndarray:
+    """FreNBRDF Eq. 5–7 in numpy, weights relative to the nearest neighbour (as frenbrdf does).
+
+    ``squared``: squared distances of the k nearest sources ``(m, k)``, nearest first;
+    ``indices``: those sources ``(m, k)``; ``values``: every source's channels ``(n, C)``.
+    Returns the weighted means ``(m, C)``.
+    """
+    w = np.exp(-(squared - squared[:, :1]) / (2 * sigma**2))
+    w /= w.sum(axis=1, keepdims=True)
+    return np.einsum("mk,mkc->mc", w, values[indices])
+
+
+# ---------------------------------------------------------------------------------------
+# Charts
+
+
+def pyplot():
+    """``matplotlib.pyplot`` on the non-interactive ``Agg`` backend (charts are files)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(figure, path: str | os.PathLike, dpi: int = 100) -> None:
+    """Writes a figure as a PNG atomically (:func:`frenbrdf.render.save_figure`) and closes it."""
+    from frenbrdf.render import save_figure as save
+
+    save(figure, path, dpi=dpi)
+    pyplot().close(figure)
+
+
+def cpu_model() -> str:
+    """The CPU's model name (``lscpu``), else what :mod:`platform` knows."""
+    try:
+        output = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10,
+                                env={**os.environ, "LC_ALL": "C"}).stdout
+    except (OSError, subprocess.SubprocessError):
+        output = ""
+    for line in output.splitlines():
+        key, _, value = line.partition(":")
+        if key.strip() == "Model name" and value.strip():
+            return value.strip()
+    return platform.processor() or platform.machine()
+
+
+def run_metadata() -> dict:
+    """Where a result comes from: the command that ran (with the thread variables set in the
+    environment), the CPU, its core count and when it started (UTC)."""
+    threads = [f"{name}={os.environ[name]}" for name in THREAD_ENV if name in os.environ]
+    return {"command": " ".join([*threads, "python", shlex.join(sys.argv)]), "cpu": cpu_model(),
+            "cores": os.cpu_count(), "time": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+
+
+def save_chart(out_dir: str | os.PathLike, name: str, rows: list[dict], report: dict,
+               draw: Callable[[Path], None]) -> dict[str, Path]:
+    """Writes a chart: ``<name>.csv`` (``rows``), ``<name>.json`` (``report``), then ``<name>.png``.
+
+    Parameters
+    ----------
+    out_dir
+        Folder of the three files (made if missing).
+    rows
+        The plotted numbers, one dict per CSV row (:func:`frenbrdf.atomic.save_csv`).
+    report
+        Everything else worth keeping (settings, details, :func:`run_metadata`).
+    draw
+        Draws the figure and writes it to the path it is given (with :func:`save_figure`).
+
+    Returns
+    -------
+    dict
+        The paths written, under ``"csv"``, ``"json"`` and ``"png"``.
+    """
+    from frenbrdf.atomic import save_csv, save_json
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {suffix: out / f"{name}.{suffix}" for suffix in ("csv", "json", "png")}
+    save_csv(paths["csv"], rows)
+    save_json(paths["json"], report)
+    draw(paths["png"])
+    return paths
