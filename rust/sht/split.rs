@@ -11,8 +11,8 @@
 
 use realfft::num_complex::Complex;
 
-use super::transpose::{same_type, same_type_mut};
 use super::real::Real;
+use super::transpose::{same_type, same_type_mut};
 
 /// One ring pair's spectra: `block` maps of `nlon` values, and the scale of each part.
 pub(super) struct PairSpectra<'a, T> {

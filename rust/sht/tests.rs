@@ -1,3 +1,6 @@
+use std::mem::MaybeUninit;
+
+use super::analysis::SHARED_MAP_BYTES;
 use super::*;
 
 fn random(n: usize, seed: u64) -> Vec<f64> {

@@ -1,0 +1,266 @@
+//! Building a plan: the checks, grids, FFTs and Legendre tables of [`Sht::new`], and the
+//! tables themselves (λ_lm at a set of rings, packed for the kernel per order).
+
+use std::sync::{Arc, Mutex};
+
+use rayon::prelude::*;
+use realfft::RealFftPlanner;
+use rustfft::FftPlanner;
+
+use super::legendre::{Paired, Recurrence, Scaled};
+use super::linalg::{MatRef, Packed};
+use super::real::Real;
+use super::resample::fold_resampling;
+use super::{grid, streamed, BufferPool, Grid, Sht, LEGENDRE_CACHE_BYTES};
+use crate::error::{invalid_argument, Result};
+
+impl<T: Real> Sht<T> {
+    pub fn new(nlat: usize, nlon: usize, lmax: usize, grid: Grid) -> Result<Self> {
+        Self::with_cache_limit(nlat, nlon, lmax, grid, LEGENDRE_CACHE_BYTES)
+    }
+
+    /// A plan that keeps Legendre tables up to `cache_bytes` (tests use 0 to exercise the
+    /// on-the-fly path on small grids).
+    pub(super) fn with_cache_limit(
+        nlat: usize,
+        nlon: usize,
+        lmax: usize,
+        grid: Grid,
+        cache_bytes: usize,
+    ) -> Result<Self> {
+        let min_rings = match grid {
+            Grid::GaussLegendre => lmax + 1,
+            Grid::Equiangular => (lmax + 2).max(2),
+        };
+        if nlat < min_rings {
+            return invalid_argument!(
+                "nlat = {nlat} rings are too few for exact quadrature at lmax = {lmax} on the {} grid: need nlat ≥ {min_rings}",
+                grid.name()
+            );
+        }
+        if nlon < 2 * lmax + 1 {
+            return invalid_argument!(
+                "nlon = {nlon} is too small for lmax = {lmax}: need nlon ≥ 2·lmax + 1 = {}",
+                2 * lmax + 1
+            );
+        }
+        let recurrence = Arc::new(Recurrence::new(lmax));
+        let (theta, weights) = match grid {
+            Grid::GaussLegendre => grid::gauss_legendre(nlat),
+            Grid::Equiangular => (grid::equiangular(nlat), grid::clenshaw_curtis_weights(nlat)),
+        };
+        let gauss = (grid == Grid::Equiangular).then(|| {
+            let (gauss_theta, gauss_weights) = grid::gauss_legendre(lmax + 1);
+            let resampling = fold_resampling(&grid::equiangular_to_gauss(&theta, &gauss_theta), nlat, &gauss_weights);
+            (
+                LegendreTable::new(recurrence.clone(), &gauss_theta, cache_bytes),
+                resampling,
+            )
+        });
+        let mut planner = RealFftPlanner::<T>::new();
+        let mut offsets = Vec::with_capacity(lmax + 1);
+        let mut next = 0;
+        for m in 0..=lmax {
+            offsets.push(next);
+            next += if m == 0 { lmax + 1 } else { 2 * (lmax + 1 - m) };
+        }
+        Ok(Sht {
+            nlat,
+            nlon,
+            lmax,
+            grid,
+            at_grid: LegendreTable::new(recurrence, &theta, cache_bytes),
+            theta,
+            weights,
+            fft: FftPlanner::new().plan_fft_forward(nlon),
+            inverse: planner.plan_fft_inverse(nlon),
+            gauss,
+            offsets,
+            pool: BufferPool {
+                free: Mutex::new(Vec::new()),
+            },
+        })
+    }
+}
+
+/// λ_lm at one set of rings, folded to the northern half (equator included).
+pub(super) struct LegendreTable<T> {
+    lmax: usize,
+    half_rings: usize,
+    recurrence: Arc<Recurrence>,
+    /// cos θ and λ_mm per half ring, zero-padded to whole vectors of [`streamed::LANES`]
+    /// rings (`padded` of them) for the on-the-fly kernel to load directly; λ_mm by
+    /// order, as mantissas `sectoral.0[m * padded + p]` and scales `sectoral.1[..]`.
+    cos_theta: Vec<f64>,
+    sectoral: (Vec<f64>, Vec<i32>),
+    padded: usize,
+    /// Per order, the vectors of rings from the pole whose λ stay negligible to lmax
+    /// ([`streamed::silent_vectors`]), which the on-the-fly kernel skips.
+    silent: Vec<usize>,
+    /// Per m, when within the cache budget.
+    pub(super) cached: Option<Vec<OrderPanels<T>>>,
+}
+
+/// One order's λ_lm, split by the parity of l − m and packed for the kernel both ways:
+/// degrees × half rings (analysis) and half rings × degrees (synthesis).
+#[derive(Default)]
+pub(super) struct OrderPanels<T> {
+    pub(super) analysis: [Packed<T>; 2],
+    pub(super) synthesis: [Packed<T>; 2],
+}
+
+impl<T: Real> LegendreTable<T> {
+    fn new(recurrence: Arc<Recurrence>, theta: &[f64], cache_bytes: usize) -> Self {
+        let lmax = recurrence.lmax();
+        let half = &theta[..theta.len().div_ceil(2)];
+        let padded = half.len().next_multiple_of(streamed::LANES);
+        let mut by_ring = vec![Scaled::ZERO; half.len() * (lmax + 1)];
+        by_ring
+            .par_chunks_mut(lmax + 1)
+            .zip(half)
+            .for_each(|(row, t)| recurrence.sectoral(t.sin(), row));
+        let (mut mantissas, mut scales) = (vec![0.0; (lmax + 1) * padded], vec![0; (lmax + 1) * padded]);
+        for (p, row) in by_ring.chunks_exact(lmax + 1).enumerate() {
+            for (m, value) in row.iter().enumerate() {
+                mantissas[m * padded + p] = value.mantissa;
+                scales[m * padded + p] = value.scale;
+            }
+        }
+        let mut cos_theta: Vec<f64> = half.iter().map(|t| t.cos()).collect();
+        cos_theta.resize(padded, 0.0);
+        let mut table = LegendreTable {
+            lmax,
+            half_rings: half.len(),
+            recurrence,
+            cos_theta,
+            sectoral: (mantissas, scales),
+            padded,
+            silent: Vec::new(),
+            cached: None,
+        };
+        table.silent = (0..=lmax)
+            .into_par_iter()
+            .map_init(Paired::default, |paired, m| {
+                streamed::silent_vectors(&table.recurrence, m, table.rings(m), paired)
+            })
+            .collect();
+        // Two packed copies of every value.
+        if 2 * table.bytes() <= cache_bytes {
+            let panels = (0..=lmax)
+                .into_par_iter()
+                .map(|m| {
+                    let mut panels = OrderPanels::default();
+                    table.compute(m, &mut panels, Orientation::Both);
+                    panels
+                })
+                .collect();
+            table.cached = Some(panels);
+        }
+        table
+    }
+
+    pub(super) fn half_rings(&self) -> usize {
+        self.half_rings
+    }
+
+    /// Size of one packed copy of the table (analysis or synthesis).
+    pub(super) fn bytes(&self) -> usize {
+        (self.lmax + 1) * (self.lmax + 2) / 2 * self.half_rings() * std::mem::size_of::<T>()
+    }
+
+    /// Computes order m's λ and packs the panels `orientation` asks for.
+    fn compute(&self, m: usize, panels: &mut OrderPanels<T>, orientation: Orientation) {
+        let (degrees, half) = (self.lmax + 1 - m, self.half_rings());
+        let rings = self.rings(m);
+        let start: Vec<Scaled> = (rings.mantissa.iter().zip(rings.scale))
+            .take(half)
+            .map(|(&mantissa, &scale)| Scaled { mantissa, scale })
+            .collect();
+        let mut values = vec![0f64; degrees * half];
+        self.recurrence.rows(m, &self.cos_theta[..half], &start, &mut values);
+        let lambda: Vec<T> = values.into_iter().map(T::of).collect();
+        for parity in 0..2 {
+            let rows = (degrees + 1 - parity) / 2;
+            if orientation != Orientation::Synthesis {
+                panels.analysis[parity].pack(MatRef {
+                    data: &lambda,
+                    offset: parity * half,
+                    rows,
+                    cols: half,
+                    row_stride: 2 * half,
+                    col_stride: 1,
+                });
+            }
+            if orientation != Orientation::Analysis {
+                panels.synthesis[parity].pack(MatRef {
+                    data: &lambda,
+                    offset: parity * half,
+                    rows: half,
+                    cols: rows,
+                    row_stride: 1,
+                    col_stride: 2 * half,
+                });
+            }
+        }
+    }
+
+    /// Order m's analysis with λ recomputed in registers ([`streamed`]): `spectra` at
+    /// this table's rings → `out[(l − m) · width + c]`.
+    pub(super) fn streamed_order(
+        &self,
+        m: usize,
+        spectra: streamed::Spectra<'_>,
+        out: &mut [T],
+        scratch: &mut streamed::Scratch,
+    ) {
+        streamed::analysis_order(
+            streamed::Job {
+                recurrence: &self.recurrence,
+                m,
+                rings: streamed::Rings {
+                    silent: self.silent[m],
+                    ..self.rings(m)
+                },
+                spectra,
+            },
+            out,
+            scratch,
+        );
+    }
+
+    /// The half rings' cos θ and order m's λ_mm there, padded to whole vectors (none
+    /// counted silent).
+    fn rings(&self, m: usize) -> streamed::Rings<'_> {
+        streamed::Rings {
+            cos_theta: &self.cos_theta,
+            mantissa: &self.sectoral.0[m * self.padded..][..self.padded],
+            scale: &self.sectoral.1[m * self.padded..][..self.padded],
+            silent: 0,
+        }
+    }
+
+    /// Order m's panels: from the cache, or computed into `scratch` (only the
+    /// `orientation` asked for).
+    pub(super) fn panels<'a>(
+        &'a self,
+        m: usize,
+        scratch: &'a mut OrderPanels<T>,
+        orientation: Orientation,
+    ) -> &'a OrderPanels<T> {
+        match &self.cached {
+            Some(panels) => &panels[m],
+            None => {
+                self.compute(m, scratch, orientation);
+                scratch
+            }
+        }
+    }
+}
+
+/// Which packed copies of λ a caller needs.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Orientation {
+    Analysis,
+    Synthesis,
+    Both,
+}
