@@ -29,8 +29,9 @@ fn inputs() -> (Vec<Vec3>, Vec<Vec3>) {
         .unzip()
 }
 
-/// One kernel call takes ~0.1–0.2 s on two cores, so flat sampling with a few
-/// iterations per sample; criterion's default of 100 linear samples would take minutes.
+/// One kernel call takes a good fraction of a second on two cores (docs/performance.md),
+/// so flat sampling with a few iterations per sample; criterion's default of 100 linear
+/// samples would take minutes.
 fn configure(group: &mut BenchmarkGroup<'_, WallTime>) {
     group.throughput(Throughput::Elements(N_PAIRS as u64));
     group.sampling_mode(SamplingMode::Flat);

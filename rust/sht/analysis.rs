@@ -13,16 +13,14 @@ use crate::error::Result;
 
 /// Chunks of at most this many maps are analysed with λ recomputed in registers
 /// ([`streamed`]) even where the table is kept: a one-map product reuses each table value
-/// only twice, so reading the table costs more than recomputing it. Measured on one
-/// thread, f64 (f32), one map: 90×180 0.13 (0.12) ms with the table, 0.10 (0.10) on the
-/// fly; 128×256 0.20 (0.25) and 0.18 (0.175).
+/// only twice, so reading the table costs more than recomputing it (single maps of 90×180
+/// and 128×256, one thread, f64 and f32: docs/performance.md).
 const STREAMED_MAX_BATCH: usize = 1;
 
 /// Tables larger than this (about half the last-level cache) are read from memory for
-/// every chunk of maps: beyond it every batch is analysed on the fly, a map at a time.
-/// Measured on one thread, f64, 256×512 (34 MB table), batches of 8 (192): 1.15 (1.32)
-/// ms a map with the table, 1.20 on the fly in chunks of 8 maps, 0.90 (1.13) a map at a
-/// time.
+/// every chunk of maps: beyond it every batch is analysed on the fly, a map at a time,
+/// which beat both reading the table and chunks of maps on the fly at 256×512 (a 34 MB
+/// table; docs/performance.md).
 const STREAMED_MIN_TABLE_BYTES_ANY_BATCH: usize = 16 << 20;
 
 /// Bytes of gathered spectra a group of orders analysed on the fly may occupy (per
@@ -31,9 +29,8 @@ const STREAMED_GROUP_BYTES: usize = 256 << 10;
 
 /// Maps larger than this (a core's L2 cache) are analysed one after another, each parallel
 /// inside over orders ([`Chunks::OneAfterAnother`]), rather than one per worker: two at once evict each other's
-/// intermediates. Measured on two threads, f64 512×1024 (4 MB a map), batch of 8: 2.40 ms
-/// a map one per worker, 2.26 one after another; 256×512 (1 MB), batch of 192: 0.53 one
-/// per worker, 0.66 one after another.
+/// intermediates. Below it one map per worker stays the faster (512×1024 against 256×512
+/// on two threads: docs/performance.md).
 pub(super) const SHARED_MAP_BYTES: usize = 2 << 20;
 
 impl<T: Real> Sht<T> {
@@ -48,8 +45,8 @@ impl<T: Real> Sht<T> {
     }
 
     /// [`Sht::analysis`] into `coefficients`, which it fills. Not zero-filled first by the
-    /// caller: every value is written once, and zeroing a large output cost up to a tenth
-    /// of a transform.
+    /// caller: every value is written once, and zeroing a large output cost a noticeable
+    /// share of a transform (docs/performance.md).
     pub fn analysis_into(&self, maps: &[T], batch: usize, coefficients: &mut [MaybeUninit<T>]) -> Result<()> {
         self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;

@@ -54,14 +54,14 @@ pub struct Recurrence {
     norm: Vec<f64>,
     offset: Vec<usize>,
     /// Every order's [`Paired`] form, where lmax ≤ [`PAIRED_KEPT_LMAX`]. Computing it
-    /// takes divisions in a chain, measured at 7 % of a single 256 × 512 analysis.
+    /// takes divisions in a chain, a noticeable share of a single-map analysis
+    /// (docs/performance.md).
     paired: Vec<Paired>,
 }
 
 /// Largest lmax whose [`Paired`] forms a [`Recurrence`] keeps (about 10 MB at 1023, as
 /// much as its α and N); beyond it each order's form is computed again for every map,
-/// which the kept ones avoid (7 % of one 256 × 512 analysis, measured before they were
-/// kept).
+/// which the kept ones avoid.
 const PAIRED_KEPT_LMAX: usize = 1023;
 
 impl Recurrence {

@@ -6,8 +6,8 @@
 //! real parts and the sine sums minus the imaginary parts. This is a transposition (each
 //! map's spectrum is contiguous in m, the output is contiguous in maps), so on x86 with
 //! AVX2 whole blocks of 8 maps go through vector registers: a vector of orders per map,
-//! then a transposition of the block to a vector of maps per order. Measured on one
-//! thread, 192 maps of 90 × 180: the scalar loop took a quarter of the analysis.
+//! then a transposition of the block to a vector of maps per order. The scalar loop was
+//! a large share of a batched 90 × 180 analysis (docs/performance.md).
 
 use realfft::num_complex::Complex;
 

@@ -1,9 +1,9 @@
 //! Transpositions between the per-order blocks of the Legendre step (maps innermost) and
 //! per-map layouts (degrees or orders innermost), in AVX2 registers where the CPU has them:
 //! 4 × 4 blocks of f64, 8 × 8 of f32. The analysis split ([`super::split`]) and the final
-//! scatter of coefficients use them. Measured on one thread, 192 maps of 90 × 180, the
-//! scatter takes a sixth of the f32 analysis; the vector scatter saved about 3 % of the
-//! whole analysis over contiguous scalar runs (it is bound by writing the output).
+//! scatter of coefficients use them. The scatter is a sizeable part of a batched f32
+//! analysis and bound by writing the output, so the vector scatter gains little over
+//! contiguous scalar runs, but some (docs/performance.md).
 
 use std::mem::MaybeUninit;
 
