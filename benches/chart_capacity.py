@@ -14,7 +14,7 @@ docs/charts/chart3_capacity.json`` picks the smallest configuration reaching a P
 
 import sys
 
-from frenbrdf.sweep import chart_main
+from sweeps import chart_main
 
 if __name__ == "__main__":
     sys.exit(chart_main("capacity", doc=__doc__))

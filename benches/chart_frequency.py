@@ -8,13 +8,13 @@ the default). Regenerate with the one command
 minutes on one CPU thread). Writes ``docs/charts/chart2_frequency.{png,csv,json}``. The
 training runs go to ``bench-results/sweeps/runs/`` and are reused: a second call only
 measures what is missing, an interrupted one resumes, and chart 3
-(``benches/chart_capacity.py``) shares the default runs. See ``frenbrdf.sweep`` for what
+(``benches/chart_capacity.py``) shares the default runs. See ``benches/sweeps.py`` and ``frenbrdf.variants`` for what
 is measured and how, and ``docs/charts/README.md`` for the reading.
 """
 
 import sys
 
-from frenbrdf.sweep import chart_main
+from sweeps import chart_main
 
 if __name__ == "__main__":
     sys.exit(chart_main("frequency", doc=__doc__))

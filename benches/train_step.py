@@ -17,12 +17,12 @@ from pathlib import Path
 
 import torch
 
-from frenbrdf.sweep import time_training_step
+from frenbrdf.timing import time_training_step
 from frenbrdf.training import config_for
 
 
 def time_method(method: str, data: Path, steps: int, device: torch.device, slices=None) -> dict:
-    """One method's preset, timed by :func:`frenbrdf.sweep.time_training_step` (shared with chart 2)."""
+    """One method's preset, timed by :func:`frenbrdf.timing.time_training_step` (shared with chart 2)."""
     cfg = config_for(method, data=str(data), out="", progress=False, cache_dir=str(data / ".cache"))
     if slices is not None:
         cfg.loss.frequency.slices = slices

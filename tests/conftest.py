@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +19,24 @@ if os.environ.get("CI"):
     settings.load_profile("ci")
 
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+BENCHES = Path(__file__).resolve().parents[1] / "benches"
+
+
+def _installed(name: str) -> bool:
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):  # ValueError: blocked in sys.modules
+        return False
+
+
+HAVE_MITSUBA = _installed("mitsuba") and _installed("drjit")
+
+
+def bench_module(name: str):
+    """A module of benches/ (not part of the installed package), imported as the scripts import it."""
+    if str(BENCHES) not in sys.path:
+        sys.path.insert(0, str(BENCHES))
+    return importlib.import_module(name)
 
 
 @pytest.fixture(scope="session")
@@ -71,3 +92,17 @@ def toy_materials(tmp_path_factory) -> Path:
     for i in range(8):
         frenbrdf.write_merl(folder / f"toy-{i:02d}.binary", toy_table(rng))
     return folder
+
+
+def tiny(method: str, data: Path, out: Path, **overrides):
+    """A training config that trains in seconds on the CPU."""
+    from frenbrdf.training import config_for
+
+    fields = dict(data=str(data), out=str(out), epochs=4, batch_materials=2, lr=3e-3, context_samples=256,
+                    query_samples=512, cache_dir=str(out.parent / "cache"), progress=False)
+    cfg = config_for(method, **{**fields, **overrides})
+    cfg.model.nbrdf.hidden = (16, 16)
+    cfg.model.encoder.hidden, cfg.model.encoder.latent = (32, 32), 8
+    cfg.model.decoder.hidden = (32,)
+    cfg.loss.frequency.lmax, cfg.loss.frequency.slices = 11, (0, 30, 60)
+    return cfg

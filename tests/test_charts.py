@@ -12,10 +12,7 @@ import pytest
 
 from frenbrdf.training import train
 
-from .test_mitsuba import HAVE_MITSUBA
-from .test_training import tiny
-
-BENCHES = Path(__file__).resolve().parents[1] / "benches"
+from .conftest import BENCHES, HAVE_MITSUBA, tiny
 
 
 def load_script(name: str):

@@ -11,7 +11,7 @@ from frenbrdf import cli
 from frenbrdf.evaluation import EvaluateConfig, evaluate_runs, image_metrics
 from frenbrdf.training import train
 
-from .test_training import tiny
+from .conftest import tiny
 
 
 def test_image_metrics():

@@ -20,7 +20,7 @@ from frenbrdf.render import Scene, render, render_linear
 from frenbrdf.training import train
 
 from .conftest import toy_table
-from .test_training import tiny
+from .conftest import tiny
 
 # --------------------------------------------------------------------------- grazing angles
 

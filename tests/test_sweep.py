@@ -8,11 +8,15 @@ from pathlib import Path
 import pytest
 
 from frenbrdf import cli
-from frenbrdf.sweep import (MeasureSettings, Variant, capacity_variants, combine_seeds, frequency_variants,
-                            pareto_front, save_chart, select_config, spread_slices)
+from frenbrdf.select import select_config
 from frenbrdf.training import load_config
+from frenbrdf.variants import MeasureSettings, Variant, capacity_variants
 
-from .test_training import tiny
+from .conftest import bench_module, tiny
+
+sweeps = bench_module("sweeps")
+combine_seeds, frequency_variants, pareto_front, save_chart, spread_slices = (
+    sweeps.combine_seeds, sweeps.frequency_variants, sweeps.pareto_front, sweeps.save_chart, sweeps.spread_slices)
 
 
 def _row(name, hidden, latent, psnr, **extra):

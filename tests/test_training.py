@@ -15,19 +15,11 @@ import torch
 import frenbrdf
 from frenbrdf import cli, training
 from frenbrdf.data import list_materials, split_materials
-from frenbrdf.training import TrainingDiverged, config_for, load_config, load_checkpoint, train
+from frenbrdf.checkpoints import load as load_checkpoint
+from frenbrdf.configs import to_dict
+from frenbrdf.training import TrainingDiverged, config_for, load_config, train
 
-
-def tiny(method: str, data: Path, out: Path, **overrides):
-    """A config that trains in seconds on the CPU."""
-    settings = dict(data=str(data), out=str(out), epochs=4, batch_materials=2, lr=3e-3, context_samples=256,
-                    query_samples=512, cache_dir=str(out.parent / "cache"), progress=False)
-    cfg = config_for(method, **{**settings, **overrides})
-    cfg.model.nbrdf.hidden = (16, 16)
-    cfg.model.encoder.hidden, cfg.model.encoder.latent = (32, 32), 8
-    cfg.model.decoder.hidden = (32,)
-    cfg.loss.frequency.lmax, cfg.loss.frequency.slices = 11, (0, 30, 60)
-    return cfg
+from .conftest import tiny
 
 
 def test_tiny_frenbrdf_training_loss_falls(toy_materials, tmp_path):
@@ -45,7 +37,7 @@ def test_every_method_writes_a_loadable_run(method, toy_materials, tmp_path):
     assert ("train_fre" in result.history[-1]) == (method == "frenbrdf")
     for name in ("config.json", "split.json", "history.json", "best.pt", "last.pt"):
         assert (result.run_dir / name).exists(), name
-    assert not list(result.run_dir.glob(".*.tmp"))
+    assert not list(result.run_dir.glob(".*")), "temporary files left behind"
     split = json.loads((result.run_dir / "split.json").read_text())
     assert len(split["train"]) + len(split["val"]) + len(split["test"]) == 8
     model = frenbrdf.Model.load(result.run_dir)
@@ -65,7 +57,7 @@ def test_resume_reproduces_the_uninterrupted_run(toy_materials, tmp_path):
 def test_nan_loss_stops_with_the_step_and_term_and_keeps_the_checkpoint(toy_materials, tmp_path, monkeypatch):
     cfg = tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=3)
     calls = {"n": 0}
-    real = training.reconstruction_loss
+    real = training.step.reconstruction_loss
 
     def poisoned(*args, **kwargs):
         value = real(*args, **kwargs)
@@ -75,7 +67,7 @@ def test_nan_loss_stops_with_the_step_and_term_and_keeps_the_checkpoint(toy_mate
                 return value * float("nan")
         return value
 
-    monkeypatch.setattr(training, "reconstruction_loss", poisoned)
+    monkeypatch.setattr(training.step, "reconstruction_loss", poisoned)
     with pytest.raises(TrainingDiverged, match=r"step 3: loss term\(s\) \['rec'\]"):
         train(cfg)
     checkpoint = load_checkpoint(tmp_path / "run" / "last.pt")
@@ -127,7 +119,7 @@ def test_bad_configs_fail_before_any_work(toy_materials, tmp_path):
 
 def test_cli_train_and_resume(toy_materials, tmp_path, capsys):
     config_file = tmp_path / "tiny.json"
-    config_file.write_text(json.dumps(training.to_dict(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1))))
+    config_file.write_text(json.dumps(to_dict(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1))))
     argv = ["train", "--config", str(config_file), "--json", "--quiet"]
     assert cli.main(argv) == 0
     assert json.loads(capsys.readouterr().out)["best_epoch"] == 0
@@ -141,7 +133,7 @@ def test_cli_train_and_resume(toy_materials, tmp_path, capsys):
 
 DDP_SCRIPT = """
 import sys, torch
-from tests.test_training import tiny
+from tests.conftest import tiny
 from frenbrdf.training import train
 from pathlib import Path
 cfg = tiny("frenbrdf", Path(sys.argv[1]), Path(sys.argv[2]), epochs=2)

@@ -14,7 +14,7 @@ from .coords import (
 from .exceptions import MerlFormatError
 from .knn import KnnInterpolator, knn_interpolate
 from .models import NBRDF, Model, interpolate
-from .training import TrainConfig, TrainResult, config_for, train
+from .training import Run, TrainConfig, TrainResult, config_for, train
 from .merl import (
     merl_above_horizon,
     merl_angles_to_bin,
@@ -36,6 +36,7 @@ __all__ = [
     "MerlFormatError",
     "Model",
     "NBRDF",
+    "Run",
     "TrainConfig",
     "TrainResult",
     "config_for",

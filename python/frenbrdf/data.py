@@ -118,6 +118,10 @@ class SampleBatch:
     def to(self, device) -> SampleBatch:
         return SampleBatch(self.coords.to(device), self.values.to(device), self.cos_in.to(device))
 
+    def take(self, materials: slice) -> SampleBatch:
+        """The samples of some of the materials (a slice of the batch)."""
+        return SampleBatch(self.coords[materials], self.values[materials], self.cos_in[materials])
+
 
 class MaterialBank:
     """Mapped tables of several materials, held in memory, ready to sample.

@@ -1,7 +1,7 @@
 """The main job: data → FreNBRDF and both baselines → evaluation → a report folder.
 
 ``frenbrdf demo`` runs it. Without ``--data`` it first writes the default bank of 100
-analytic materials. Training uses a small configuration (:data:`DEMO_TRAINING`) so the
+analytic materials. Training uses the ``demo`` training length of :mod:`frenbrdf.presets` so the
 whole job fits in about 15 minutes on 2 CPU cores; the report says what was run.
 """
 
@@ -17,11 +17,10 @@ import torch
 
 from . import __version__
 from .atomic import write_text
-from .evaluation import EvaluateConfig, evaluate_runs
-from .training import METHODS, config_for, train
+from .evaluation import EvaluateConfig, evaluate_runs, report_markdown
+from .presets import TRAINING, TRAINING_METHOD_OVERRIDES, method_names
+from .training import Run, config_for, train
 
-#: Overrides of each method's preset for the demo (everything else: the preset).
-DEMO_TRAINING = {"epochs": 100, "batch_materials": 8, "context_samples": 2000, "query_samples": 2000}
 #: Evaluation settings of the demo: the full reconstruction table, a shorter editing table.
 DEMO_EVALUATION = EvaluateConfig(samples=4000, edits=120, edit_resolution=96)
 
@@ -41,37 +40,33 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
             write_bank(data, n=100, seed=0, progress=progress)
         timings["synthesise 100 materials"] = time.perf_counter() - start
     runs = []
-    for method in METHODS:
+    for method in method_names():
         begin = time.perf_counter()
-        overrides = {**DEMO_TRAINING, **({"epochs": epochs} if epochs else {})}
-        cfg = config_for(method, data=str(data), out=str(out / "runs" / method), progress=progress, **overrides)
-        cfg.cache_dir = str(out / "cache")  # the report folder holds everything the demo made
-        if method == "hyperbrdf":
-            cfg.lr = 5e-4  # the preset's 5e-5 is tuned for thousands of epochs, not a 15-minute demo
-        train(cfg)
-        runs.append(out / "runs" / method)
+        # The report folder holds everything the demo made, the coefficient cache too.
+        cfg = config_for(method, training="demo", data=str(data), out=str(out / "runs" / method),
+                         cache_dir=str(out / "cache"), progress=progress, **({"epochs": epochs} if epochs else {}))
+        runs.append(train(cfg))
         timings[f"train {method}"] = time.perf_counter() - begin
     begin = time.perf_counter()
-    report = evaluate_runs(runs, out / "evaluation", config=dataclasses.replace(DEMO_EVALUATION, progress=progress))
+    report = evaluate_runs([run.path for run in runs], out / "evaluation", config=dataclasses.replace(DEMO_EVALUATION, progress=progress))
     timings["evaluate"] = time.perf_counter() - begin
     timings["total"] = time.perf_counter() - start
     _write_readme(out, data, runs, report, timings)
     return out
 
 
-def _write_readme(out: Path, data, runs, report: dict, timings: dict) -> None:
-    table = (out / "evaluation" / "evaluation.md").read_text()
-    config = json.loads((runs[0] / "config.json").read_text())
+def _write_readme(out: Path, data, runs: list[Run], report: dict, timings: dict) -> None:
+    table = report_markdown(report)
     lines = [
         "# frenbrdf demo report", "",
         f"frenbrdf {__version__}, torch {torch.__version__}, Python {platform.python_version()}, "
         f"{torch.get_num_threads()} torch threads.", "",
         "## What was run", "",
         f"- Data: `{data}` ({len(report['test_materials'])} test materials of a 70/10/20 split, seed "
-        f"{config['seed']}).",
-        f"- Training: FreNBRDF, NBRDF (η = 0) and HyperBRDF settings, each with {json.dumps(DEMO_TRAINING)} over its "
-        "preset (HyperBRDF's learning rate raised to 5e-4 for the short run). Run folders: "
-        + ", ".join(f"`{r}`" for r in runs) + ".",
+        f"{runs[0].config.seed}).",
+        f"- Training: FreNBRDF, NBRDF (η = 0) and HyperBRDF settings, each with {json.dumps(TRAINING['demo'])} over "
+        f"its preset (and {json.dumps(TRAINING_METHOD_OVERRIDES['demo'])} for the short run). Run folders: "
+        + ", ".join(f"`{r.path}`" for r in runs) + ".",
         f"- Evaluation: encoder given {DEMO_EVALUATION.samples} samples per test material, "
         f"{DEMO_EVALUATION.edits} interpolations for editing (renders {DEMO_EVALUATION.resolution}² and "
         f"{DEMO_EVALUATION.edit_resolution}²).", "",

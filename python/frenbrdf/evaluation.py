@@ -13,7 +13,6 @@ PNG figures; ``frenbrdf evaluate`` is its command line.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ from .data import list_materials
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
+from .training.run import Run
 from .render import Scene, render_linear, save_figure, tonemap
 
 #: The paper's numbers (MERL, their protocol), DESIGN §7.
@@ -181,19 +181,16 @@ def load_runs(run_dirs, data: str | None = None, max_materials: int = 0) -> RunS
     ValueError
         No runs, or runs trained on different splits.
     """
-    runs = [Path(r) for r in run_dirs]
+    runs = [Run(r) for r in run_dirs]
     if not runs:
         raise ValueError("give at least one run folder")
     models, test_sets, data_dirs = {}, [], set()
     for run in runs:
-        if not (run / "best.pt").exists():
-            raise FileNotFoundError(f"{run} holds no best.pt: is it a training run folder?")
-        model = Model.load(run)
-        cfg = json.loads((run / "config.json").read_text())
-        name = model.method if model.method not in models else f"{model.method} ({run.name})"
+        model = run.model()
+        name = model.method if model.method not in models else f"{model.method} ({run.path.name})"
         models[name] = model
-        test_sets.append(tuple(json.loads((run / "split.json").read_text())["test"]))
-        data_dirs.add(cfg["data"])
+        test_sets.append(run.split.test)
+        data_dirs.add(run.data)
     if len(set(test_sets)) != 1:
         raise ValueError("the runs were trained on different splits; evaluate runs of the same data and seed together")
     data_dir = Path(data) if data else Path(data_dirs.pop())
@@ -202,7 +199,7 @@ def load_runs(run_dirs, data: str | None = None, max_materials: int = 0) -> RunS
     missing = [n for n in names if n not in files]
     if missing:
         raise FileNotFoundError(f"test materials {missing[:3]} not found in {data_dir}")
-    return RunSet(runs, models, data_dir, names, files)
+    return RunSet([run.path for run in runs], models, data_dir, names, files)
 
 
 def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig()) -> dict:
@@ -268,10 +265,15 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
               "summary": summary, "reconstruction": per_material, "editing": edits,
               "seconds": time.perf_counter() - start}
     save_json(out / "evaluation.json", report)
-    write_text(out / "evaluation.md", markdown_table(summary, len(names), sum(len(e) for e in edits.values())
-                                                      // max(1, len(models))))
+    write_text(out / "evaluation.md", report_markdown(report))
     _figures(out, names, renders, per_material, models, latents, pairs, edit_truth_linear, config)
     return report
+
+
+def report_markdown(report: dict) -> str:
+    """The Markdown table of a report of :func:`evaluate_runs`."""
+    n_edits = sum(len(e) for e in report["editing"].values()) // max(1, len(report["summary"]))
+    return markdown_table(report["summary"], len(report["test_materials"]), n_edits)
 
 
 def markdown_table(summary: dict, n_materials: int, n_edits: int) -> str:

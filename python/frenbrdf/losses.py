@@ -1,7 +1,7 @@
 """The training losses: L_rec (paper Eq. 1), the regularisers and L_fre (DESIGN §5).
 
-All values are in the mapped space of :mod:`frenbrdf.data`. The total loss is composed
-in one place, :func:`frenbrdf.train.loss_terms`:
+All values are in the mapped space of :mod:`frenbrdf.models.mapping`. :class:`LossConfig`
+weights the terms; they are composed in one place, :func:`frenbrdf.training.step.loss_terms`:
 
     L = L_rec + λ1 · weights + λ2 · latents + η · L_fre
 
@@ -21,8 +21,9 @@ coefficients of the truth and of the decoded NBRDF:
 from __future__ import annotations
 
 import hashlib
+import math
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -228,3 +229,29 @@ class FrequencyTruth:
             with atomic_path(path) as temporary:
                 np.save(temporary, coefficients)
         return coefficients
+
+
+# --------------------------------------------------------------------------- the weights of the terms
+
+
+@dataclass
+class LossConfig:
+    """How the loss terms are weighted: L = L_rec + λ1 · weights + λ2 · latents + η · L_fre."""
+
+    kind: str = "l1"
+    """Reconstruction error: ``"l1"`` (paper Eq. 1) or ``"mse"`` (HyperBRDF)."""
+    lambda_weights: float = 1e-3
+    """λ1, on the mean squared NBRDF weight of each tensor."""
+    lambda_latent: float = 1e-3
+    """λ2, on the mean squared latent."""
+    eta: float = 0.1
+    """η, the weight of the frequency-rectified loss (0 switches it off)."""
+    frequency: FrequencyLossConfig = field(default_factory=FrequencyLossConfig)
+
+    def __post_init__(self):
+        if self.kind not in ("l1", "mse"):
+            raise ValueError(f"loss.kind must be 'l1' or 'mse', got {self.kind!r}")
+        for name in ("lambda_weights", "lambda_latent", "eta"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"loss.{name} must be a finite number ≥ 0, got {value}")

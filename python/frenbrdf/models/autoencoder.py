@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,9 +11,11 @@ import numpy as np
 import torch
 from torch import nn
 
-from .mapping import LogRelativeMapping, MappingConfig
+from .. import checkpoints
+from ..configs import from_dict
 from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
+from .mapping import LogRelativeMapping, MappingConfig
 from .nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates
 
 #: :meth:`Model.encode` passes larger sample sets through the encoder in chunks of this size.
@@ -27,6 +30,11 @@ class ModelConfig:
     encoder: EncoderConfig = field(default_factory=EncoderConfig)
     decoder: DecoderConfig = field(default_factory=DecoderConfig)
     mapping: MappingConfig = field(default_factory=MappingConfig)
+
+    @classmethod
+    def from_checkpoint(cls, checkpoint: dict) -> ModelConfig:
+        """The model config saved in a checkpoint (inside its training config)."""
+        return from_dict(cls, json.loads(checkpoint["config"])["model"], "checkpoint model config")
 
 
 class AutoEncoder(nn.Module):
@@ -61,14 +69,15 @@ class Model:
     @classmethod
     def load(cls, path: str | os.PathLike) -> Model:
         """Loads a checkpoint file, or the best checkpoint of a run folder."""
-        from ..training import load_checkpoint, model_config_from_checkpoint
-
         path = Path(path)
-        checkpoint = load_checkpoint(path / "best.pt" if path.is_dir() else path)
-        config = model_config_from_checkpoint(checkpoint)
+        if path.is_dir():
+            path = path / "best.pt"
+        checkpoint = checkpoints.load(path)
+        config = ModelConfig.from_checkpoint(checkpoint)
         network = AutoEncoder(config)
         network.load_state_dict(checkpoint["model"])
-        return cls(network, LogRelativeMapping.from_state(checkpoint["mapping"]), config, checkpoint["method"])
+        mapping = LogRelativeMapping.from_state(checkpoints.load_mapping(path, checkpoint))
+        return cls(network, mapping, config, checkpoint["method"])
 
     @torch.no_grad()
     def encode(self, values, directions) -> np.ndarray:

@@ -1,0 +1,81 @@
+"""Checkpoints: the format version, atomic save, checked load, and the run's mapping.
+
+A checkpoint (``best.pt``, ``last.pt``) is a dict written by ``torch.save``: ``format``,
+``method``, ``config`` (the training config as JSON), ``split``, ``model`` (state dict),
+``optimizer``, ``generator``, ``epoch``, ``best`` and ``history``.
+
+Format 2 keeps the mapping's f_ref table (17.5 MB per-bin) out of the checkpoints: it is
+written once per run folder, as ``mapping.npz`` beside them. Format 1 held it in every
+checkpoint; such run folders still load.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .atomic import atomic_path
+
+FORMAT = 2
+"""The format :func:`save` writes."""
+READABLE_FORMATS = (1, 2)
+"""Formats :func:`load` accepts."""
+MAPPING_FILE = "mapping.npz"
+"""The run folder's mapping (format 2)."""
+
+
+def save(path: str | os.PathLike, state: dict) -> None:
+    """``torch.save`` of ``state`` (with ``format`` set), atomically: never a half-written file."""
+    with atomic_path(path) as temporary:
+        torch.save({**state, "format": FORMAT}, temporary)
+
+
+def load(path: str | os.PathLike) -> dict:
+    """A checkpoint, checked to be one of the readable formats.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        The file is damaged, not a frenbrdf checkpoint, or of a format this version cannot read.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"checkpoint {path} does not exist")
+    try:
+        checkpoint = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as error:  # torch raises several types for damaged files
+        raise ValueError(f"{path}: not a readable frenbrdf checkpoint ({error})") from None
+    if not isinstance(checkpoint, dict) or "format" not in checkpoint:
+        raise ValueError(f"{path}: not a frenbrdf checkpoint")
+    if checkpoint["format"] not in READABLE_FORMATS:
+        raise ValueError(f"{path}: checkpoint format {checkpoint['format']!r}; this frenbrdf reads formats "
+                         f"{READABLE_FORMATS}")
+    return checkpoint
+
+
+def save_mapping(folder: str | os.PathLike, state: dict) -> None:
+    """Writes a mapping's state (``reference``, ``epsilon``) as the run folder's ``mapping.npz``."""
+    with atomic_path(Path(folder) / MAPPING_FILE) as temporary:
+        np.savez(temporary, reference=np.asarray(state["reference"], dtype=np.float32),
+                 epsilon=np.float64(state["epsilon"]))
+
+
+def load_mapping(path: str | os.PathLike, checkpoint: dict) -> dict:
+    """The mapping state of the checkpoint read from ``path``: in it (format 1) or beside it (format 2)."""
+    if checkpoint["format"] == 1:
+        mapping = checkpoint["mapping"]
+        return {"reference": np.asarray(mapping["reference"]), "epsilon": float(mapping["epsilon"])}
+    file = Path(path).parent / MAPPING_FILE
+    if not file.exists():
+        raise FileNotFoundError(f"{path}: its run folder holds no {MAPPING_FILE} (the mapping of format-2 "
+                                "checkpoints is stored once per run folder; copy it along with the checkpoint)")
+    try:
+        with np.load(file) as saved:
+            return {"reference": saved["reference"], "epsilon": float(saved["epsilon"])}
+    except Exception as error:  # numpy raises several types for damaged files
+        raise ValueError(f"{file}: not a readable mapping ({error})") from None

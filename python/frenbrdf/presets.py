@@ -1,0 +1,57 @@
+"""The one registry of presets: what each method sets, and the standard training lengths.
+
+A preset is a nested dict of :class:`~frenbrdf.training.TrainConfig` keys laid over the
+defaults (:func:`frenbrdf.training.config_for` applies them). Methods (docs/method.md):
+
+- ``frenbrdf``: L1 reconstruction + η · L_fre (the defaults);
+- ``nbrdf``: the same autoencoder with η = 0;
+- ``hyperbrdf``: HyperBRDF's settings: MSE, a 6→60×4→3 NBRDF, λ1 = λ2 = 0.1,
+  learning rate 5e-5, gradient norm clipped at 1.
+
+Training lengths are top-level overrides for a whole comparison: the paper's protocol
+uses the defaults; ``demo`` fits ``frenbrdf demo`` in minutes on 2 cores; ``sweep`` is
+half the demo, for the many runs of the chart sweeps and ``frenbrdf select``.
+"""
+
+from __future__ import annotations
+
+METHODS: dict[str, dict] = {
+    "frenbrdf": {},
+    "nbrdf": {"loss": {"eta": 0.0}},
+    "hyperbrdf": {
+        "loss": {"kind": "mse", "lambda_weights": 0.1, "lambda_latent": 0.1, "eta": 0.0},
+        "model": {"nbrdf": {"hidden": [60, 60, 60, 60]}},
+        "lr": 5e-5,
+        "grad_clip": 1.0,
+    },
+}
+"""Method → its overrides of the defaults."""
+
+TRAINING: dict[str, dict] = {
+    "demo": {"epochs": 100, "batch_materials": 8, "context_samples": 2000, "query_samples": 2000},
+    "sweep": {"epochs": 50, "batch_materials": 8, "context_samples": 2000, "query_samples": 2000},
+}
+"""Training length → top-level overrides, the same for every method."""
+
+TRAINING_METHOD_OVERRIDES: dict[str, dict[str, dict]] = {"demo": {"hyperbrdf": {"lr": 5e-4}}}
+"""Training length → method → overrides that go with it: HyperBRDF's 5e-5 is tuned for
+thousands of epochs, not the demo's minutes."""
+
+
+def method_names() -> tuple[str, ...]:
+    """The methods, in the order tables list them."""
+    return tuple(METHODS)
+
+
+def check_method(method: str) -> str:
+    """``method`` if it names a preset, else ValueError naming the valid ones."""
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {method_names()}, got {method!r}")
+    return method
+
+
+def training_overrides(name: str) -> dict:
+    """The top-level overrides of a training length (``demo``, ``sweep``)."""
+    if name not in TRAINING:
+        raise ValueError(f"training preset must be one of {sorted(TRAINING)}, got {name!r}")
+    return dict(TRAINING[name])

@@ -1,0 +1,22 @@
+"""Training: configs and presets, the prepared data, one optimisation step, the loop, run folders.
+
+- :mod:`.config`: :class:`TrainConfig`, :func:`config_for`, :func:`load_config`;
+- :mod:`.prepared`: the materials read, mapped and their true SH coefficients;
+- :mod:`.step`: the loss composed, one optimisation step;
+- :mod:`.loop`: :func:`train`;
+- :mod:`.run`: :class:`Run`, a run folder opened (what :func:`train` returns).
+"""
+
+from ..exceptions import TrainingDiverged
+from .config import TrainConfig, config_for, load_config
+from .loop import evaluate_split, train
+from .prepared import Distributed, PreparedData, prepare, select_device
+from .run import Run
+from .step import LossTerms, loss_terms, optimisation_step
+
+#: What :func:`train` returns (the name of earlier versions).
+TrainResult = Run
+
+__all__ = ["Distributed", "LossTerms", "PreparedData", "Run", "TrainConfig", "TrainResult", "TrainingDiverged",
+           "config_for", "evaluate_split", "load_config", "loss_terms", "optimisation_step", "prepare",
+           "select_device", "train"]

@@ -1,0 +1,101 @@
+"""A training run folder, opened: its config, split, history, mapping and best model.
+
+:func:`~frenbrdf.training.train` returns one; evaluation, sweeps, the demo and the CLI
+open run folders only through it.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+from pathlib import Path
+
+from ..configs import from_dict
+from ..data import Split
+from ..models.autoencoder import Model
+from .config import TrainConfig
+
+
+class Run:
+    """A run folder written by :func:`~frenbrdf.training.train`.
+
+    Parameters
+    ----------
+    path
+        The run folder (holding ``config.json``).
+    seconds
+        Training time, when the run was just trained (``train`` sets it).
+
+    Raises
+    ------
+    FileNotFoundError
+        The folder does not exist or is not a run folder.
+    """
+
+    def __init__(self, path: str | os.PathLike, *, seconds: float | None = None):
+        self.path = Path(path)
+        if not (self.path / "config.json").exists():
+            raise FileNotFoundError(f"{self.path} is not a training run folder (it holds no config.json)")
+        self.seconds = seconds
+
+    def __repr__(self) -> str:
+        return f"Run({str(self.path)!r})"
+
+    @property
+    def run_dir(self) -> Path:
+        """The folder (the name :class:`TrainResult` had)."""
+        return self.path
+
+    @functools.cached_property
+    def config(self) -> TrainConfig:
+        return from_dict(TrainConfig, self._json("config.json"), str(self.path / "config.json"))
+
+    @functools.cached_property
+    def split(self) -> Split:
+        return Split.from_json(self._json("split.json"))
+
+    @property
+    def method(self) -> str:
+        return self.config.method
+
+    @property
+    def data(self) -> Path:
+        """The folder of MERL files the run was trained on."""
+        return Path(self.config.data)
+
+    @property
+    def history(self) -> list[dict]:
+        """One entry per epoch (epoch −1: the untrained model); read afresh, it grows while training runs."""
+        return self._json("history.json") if (self.path / "history.json").exists() else []
+
+    @property
+    def best(self) -> dict:
+        """The history entry of the best epoch (lowest validation reconstruction loss, the first of ties)."""
+        trained = [entry for entry in self.history if entry["epoch"] >= 0]
+        if not trained:
+            raise ValueError(f"{self.path}: no epoch has been trained yet")
+        return min(trained, key=lambda entry: entry["val_rec"])
+
+    @property
+    def best_epoch(self) -> int:
+        return self.best["epoch"]
+
+    @property
+    def best_val(self) -> float:
+        """Validation reconstruction loss (L1, cosine-weighted, mapped space) of the best epoch."""
+        return self.best["val_rec"]
+
+    def model(self) -> Model:
+        """The best checkpoint as a :class:`~frenbrdf.Model`."""
+        if not (self.path / "best.pt").exists():
+            raise FileNotFoundError(f"{self.path} holds no best.pt: training has not finished an epoch")
+        return Model.load(self.path)
+
+    def _json(self, name: str):
+        try:
+            return json.loads((self.path / name).read_text())
+        except FileNotFoundError:
+            raise FileNotFoundError(f"{self.path} lacks {name}: not a complete training run folder") from None
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{self.path / name}: not valid JSON ({error})") from None
