@@ -9,15 +9,17 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
 import frenbrdf
 from frenbrdf import cli, training
 from frenbrdf.data import list_materials, split_materials
+from frenbrdf import checkpoints, presets
 from frenbrdf.checkpoints import load as load_checkpoint
 from frenbrdf.configs import to_dict
-from frenbrdf.training import TrainingDiverged, config_for, load_config, train
+from frenbrdf.training import Run, TrainingDiverged, config_for, load_config, train
 
 from .conftest import tiny
 
@@ -35,13 +37,59 @@ def test_every_method_writes_a_loadable_run(method, toy_materials, tmp_path):
     cfg = tiny(method, toy_materials, tmp_path / method, epochs=2)
     result = train(cfg)
     assert ("train_fre" in result.history[-1]) == (method == "frenbrdf")
-    for name in ("config.json", "split.json", "history.json", "best.pt", "last.pt"):
+    for name in ("config.json", "split.json", "history.json", "mapping.npz", "best.pt", "last.pt"):
         assert (result.run_dir / name).exists(), name
     assert not list(result.run_dir.glob(".*")), "temporary files left behind"
     split = json.loads((result.run_dir / "split.json").read_text())
     assert len(split["train"]) + len(split["val"]) + len(split["test"]) == 8
     model = frenbrdf.Model.load(result.run_dir)
     assert model.method == method and model.config.nbrdf.hidden == cfg.model.nbrdf.hidden
+    # The run folder, reopened, is the one training returned.
+    run = Run(result.run_dir)
+    assert run.config == cfg and run.split.to_json() == split and run.history == result.history
+    assert run.best_epoch == load_checkpoint(run.path / "best.pt")["epoch"]
+
+
+def test_checkpoints_hold_no_mapping_and_format_1_run_folders_still_load(toy_materials, tmp_path):
+    run = train(tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=1))
+    checkpoint = load_checkpoint(run.path / "best.pt")
+    assert checkpoint["format"] == checkpoints.FORMAT == 2 and "mapping" not in checkpoint
+    model = run.model()
+    # A format-1 checkpoint carried the mapping inside it, and its folder had no mapping.npz.
+    old = tmp_path / "old"
+    old.mkdir()
+    mapping = {"reference": torch.from_numpy(model.mapping.state()["reference"]), "epsilon": model.mapping.epsilon}
+    torch.save({**checkpoint, "format": 1, "mapping": mapping}, old / "best.pt")
+    loaded = frenbrdf.Model.load(old)
+    np.testing.assert_array_equal(loaded.mapping.reference, model.mapping.reference)
+    # A format-2 checkpoint copied without its mapping says what is missing.
+    lonely = tmp_path / "lonely"
+    lonely.mkdir()
+    (lonely / "best.pt").write_bytes((run.path / "best.pt").read_bytes())
+    with pytest.raises(FileNotFoundError, match="mapping.npz"):
+        frenbrdf.Model.load(lonely)
+    torch.save({**checkpoint, "format": 99}, old / "future.pt")
+    with pytest.raises(ValueError, match="format 99"):
+        frenbrdf.Model.load(old / "future.pt")
+
+
+def test_a_folder_that_is_not_a_run_is_refused_by_name(tmp_path):
+    with pytest.raises(FileNotFoundError, match="not a training run folder"):
+        Run(tmp_path)
+
+
+def test_presets_come_from_one_registry():
+    hyper = config_for("hyperbrdf")
+    assert (hyper.loss.kind, hyper.lr, hyper.grad_clip, hyper.model.nbrdf.hidden) == ("mse", 5e-5, 1.0, (60,) * 4)
+    assert config_for("nbrdf").loss.eta == 0 and config_for("frenbrdf").loss.eta == presets.METHODS["frenbrdf"].get(
+        "loss", {}).get("eta", 0.1)
+    demo = config_for("hyperbrdf", training="demo", epochs=7)
+    assert (demo.epochs, demo.context_samples, demo.lr) == (7, presets.TRAINING["demo"]["context_samples"], 5e-4)
+    assert config_for("frenbrdf", training="demo").lr == config_for("frenbrdf").lr
+    with pytest.raises(ValueError, match="training preset"):
+        config_for("frenbrdf", training="marathon")
+    with pytest.raises(ValueError, match="unknown key"):
+        config_for("frenbrdf", epoch=3)
 
 
 def test_resume_reproduces_the_uninterrupted_run(toy_materials, tmp_path):

@@ -12,7 +12,7 @@ import csv
 import io
 import json
 import os
-import tempfile
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -26,9 +26,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     ...     figure.savefig(temporary)
     """
     path = Path(path)
-    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix or ".tmp")
-    os.close(fd)
-    temporary = Path(name)
+    # A name no other process or thread picks; the writer creates the file, so it gets the
+    # usual permissions (a file made by mkstemp would be private to its owner).
+    temporary = path.with_name(f".{path.name}.{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix or '.tmp'}")
     try:
         yield temporary
         os.replace(temporary, path)
