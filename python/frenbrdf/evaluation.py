@@ -1,4 +1,4 @@
-"""Evaluation (DESIGN §7): reconstruction and editing tables, histograms, render grids.
+"""Evaluation (docs/method.md §7): reconstruction and editing tables, histograms, render grids.
 
 - Reconstruction: each test material is encoded from N random valid bins (default 4000,
   the same bins for every method), decoded, rendered and compared with the render of the
@@ -29,7 +29,7 @@ from .models.autoencoder import Model
 from .training.run import Run
 from .render import Scene, render_linear, save_figure, tonemap
 
-#: The paper's numbers (MERL, their protocol), DESIGN §7.
+#: The paper's numbers (MERL, their protocol), docs/method.md §7.
 PAPER = {
     "hyperbrdf": {"rmse_x100": 6.89, "psnr": 26.3, "ssim_x10": 9.26, "lfre_x1000": 6.74, "edit_psnr": 22.4,
                   "edit_ssim_x10": 9.13},

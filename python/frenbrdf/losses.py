@@ -1,4 +1,4 @@
-"""The training losses: L_rec (paper Eq. 1), the regularisers and L_fre (DESIGN §5).
+"""The training losses: L_rec (paper Eq. 1), the regularisers and L_fre (docs/method.md §5, §6).
 
 All values are in the mapped space of :mod:`frenbrdf.models.mapping`. :class:`LossConfig`
 weights the terms; they are composed in one place, :func:`frenbrdf.training.step.loss_terms`:
@@ -63,7 +63,7 @@ def latent_penalty(z: torch.Tensor) -> torch.Tensor:
 
 @dataclass
 class FrequencyLossConfig:
-    """Settings of L_fre (DESIGN §5)."""
+    """Settings of L_fre (docs/method.md §5)."""
 
     lmax: int = 49
     """Band limit of the spherical-harmonic expansion."""

@@ -18,7 +18,7 @@ from ..merl import N_BINS, SHAPE, merl_lookup_directions
 
 @dataclass
 class MappingConfig:
-    """The log-relative mapping of reflectance (DESIGN §6)."""
+    """The log-relative mapping of reflectance (docs/method.md §3)."""
 
     epsilon: float = 0.002
     """Offset that keeps the logarithm finite at zero reflectance."""
