@@ -25,19 +25,20 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from frenbrdf.atomic import save_csv, save_json
 from frenbrdf.models.autoencoder import Model
 from frenbrdf.presets import TRAINING
-from frenbrdf.render import save_figure
 from frenbrdf.timing import nbrdf_throughput
 from frenbrdf.variants import MeasureSettings, Variant, base_config, capacity_variants, run_sweep
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+import common  # noqa: E402
 
 #: File names of the charts in the output folder (``.png``, ``.csv``, ``.json``).
 CHART_NAMES = {"frequency": "chart2_frequency", "capacity": "chart3_capacity"}
@@ -151,28 +152,15 @@ def save_chart(kind: str, runs: list[dict], out_dir: str | os.PathLike, meta: di
     """
     if kind not in CHART_NAMES:
         raise ValueError(f"chart kind must be one of {sorted(CHART_NAMES)}, got {kind!r}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     runs = [{"seed": 0, **run} for run in runs]
     rows = combine_seeds(runs)
     if kind == "capacity":
         for row, on_front in zip(rows, pareto_front(rows)):
             row["front"] = on_front
-    stem = out / CHART_NAMES[kind]
-    paths = {"json": stem.with_suffix(".json"), "csv": stem.with_suffix(".csv"), "png": stem.with_suffix(".png")}
-    save_json(paths["json"], {"chart": kind, **(meta or {}), "rows": rows, "runs": runs})
-    save_csv(paths["csv"], _csv_rows(rows))
-    (_plot_frequency if kind == "frequency" else _plot_capacity)(rows, paths["png"], meta or {})
-    return paths
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    plot = _plot_frequency if kind == "frequency" else _plot_capacity
+    return common.save_chart(out_dir, CHART_NAMES[kind], _csv_rows(rows),
+                             {"chart": kind, **(meta or {}), "rows": rows, "runs": runs},
+                             lambda path: plot(rows, path, meta or {}))
 
 
 FREQUENCY_AXES = (("lmax", "lmax", "L_fre band limit lmax"), ("slices", "n_slices", "θ_h slices"),
@@ -186,7 +174,7 @@ def _axis_points(rows: list[dict], axis: str, column: str) -> list[dict]:
 
 
 def _plot_frequency(rows: list[dict], path: Path, meta: dict) -> None:
-    plt = _pyplot()
+    plt = common.pyplot()
     metrics = (("step_ms", "training step (ms)"), ("psnr", "validation PSNR (dB)"), ("lfre", "validation L_fre"))
     figure, axes = plt.subplots(len(metrics), len(FREQUENCY_AXES), figsize=(13, 8.5), squeeze=False)
     for col, (axis, column, label) in enumerate(FREQUENCY_AXES):
@@ -217,8 +205,7 @@ def _plot_frequency(rows: list[dict], path: Path, meta: dict) -> None:
                     f"circled).\n{meta.get('caption', '')} Error bars: half the spread over seeds of the PSNR "
                     "difference to the default of the same seed.", fontsize=9)
     figure.tight_layout()
-    save_figure(figure, path, dpi=110)
-    plt.close(figure)
+    common.save_figure(figure, path, dpi=110)
 
 
 def _label(row: dict) -> str:
@@ -226,7 +213,7 @@ def _label(row: dict) -> str:
 
 
 def _plot_capacity(rows: list[dict], path: Path, meta: dict) -> None:
-    plt = _pyplot()
+    plt = common.pyplot()
     panels = (("bytes_per_material", "psnr", "bytes per material (NBRDF float32 weights)", "validation PSNR (dB)"),
               ("throughput_mqps", "psnr", "NBRDF evaluation throughput (million queries/s, 1 CPU thread)",
                "validation PSNR (dB)"),
@@ -271,8 +258,7 @@ def _plot_capacity(rows: list[dict], path: Path, meta: dict) -> None:
                     f"{meta.get('caption', '')} Error bars: half the spread over seeds of the PSNR difference to the "
                     "default of the same seed.", fontsize=9)
     figure.tight_layout()
-    save_figure(figure, path, dpi=110)
-    plt.close(figure)
+    common.save_figure(figure, path, dpi=110)
 
 
 def chart_main(kind: str, argv: list[str] | None = None, doc: str | None = None) -> int:
