@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from frenbrdf import mitsuba as fm
-from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
+from frenbrdf.analytic import METALS, AnalyticMaterial, merl_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
 from common import pyplot, run_metadata, save_chart, save_figure, time_calls  # noqa: E402

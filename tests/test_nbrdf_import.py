@@ -13,7 +13,9 @@ import pytest
 
 import frenbrdf
 from frenbrdf.merl import CHANNEL_SCALES, SHAPE
-from frenbrdf.nbrdf_import import evaluate_keras_nbrdf, import_nbrdf, load_keras_nbrdf, nbrdf_merl_table
+from frenbrdf.models.nbrdf import nbrdf_coordinates
+from frenbrdf.nbrdf_import import (evaluate_keras_nbrdf, import_nbrdf, keras_nbrdf, load_keras_nbrdf,
+                                   nbrdf_merl_table)
 
 NBRDF_DATA = Path(os.environ.get("FRENBRDF_SHARED_DATA",
                                  Path(__file__).resolve().parents[2] / "shared" / "data")) / "merl-nbrdf"
@@ -43,7 +45,7 @@ def random_layers(sizes, seed=0):
 
 
 def reference_rgb(kernels, biases, i: int, j: int, k: int) -> np.ndarray:
-    """The network at MERL bin (i, j, k), from DESIGN §3's angles and explicit products."""
+    """The network at MERL bin (i, j, k), from the angles of docs/method.md §1 and explicit products."""
     theta_h = (i / 90) ** 2 * math.pi / 2
     theta_d = j / 90 * math.pi / 2
     phi_d = k / 180 * math.pi
@@ -283,3 +285,21 @@ def test_duplicate_names_are_refused(tmp_path):
     with pytest.raises(ValueError, match="no NBRDF weight files"):
         import_nbrdf([], tmp_path / "out", progress=False)
     assert not (tmp_path / "out").exists()
+
+
+# ---------------------------------------------------------------------------------------
+# One forward pass, one table writer
+
+def test_keras_network_as_an_nbrdf_agrees_with_the_float64_evaluation():
+    """keras_nbrdf (float32 NBRDF, mapping exp(x) − 1) against evaluate_keras_nbrdf (float64)."""
+    layers = random_layers([6, 8, 8, 3], seed=6)
+    nbrdf = keras_nbrdf(layers)
+    rng = np.random.default_rng(8)
+    wi, wo = rng.normal(size=(500, 3)), rng.normal(size=(500, 3))
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]) + 0.05, np.abs(wo[:, 2]) + 0.05
+    wi, wo = wi / np.linalg.norm(wi, axis=1, keepdims=True), wo / np.linalg.norm(wo, axis=1, keepdims=True)
+    coords = nbrdf_coordinates(wi, wo)
+    expected = np.maximum(evaluate_keras_nbrdf(layers, coords[:, :3], coords[:, 3:]), 0)
+    np.testing.assert_allclose(nbrdf(wi, wo), expected, rtol=1e-4, atol=1e-6)
+    # The same table writer for both: the NBRDF object's table equals the import's to float32 accuracy.
+    np.testing.assert_allclose(nbrdf.merl_table(), nbrdf_merl_table(layers), rtol=1e-4, atol=1e-6)

@@ -115,25 +115,17 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from .render import Scene, render, save_png
-
-    material = Path(args.material)
-    if args.mitsuba:
+    if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.materials
         from .mitsuba import render_material
 
-        render_material(str(material), out_path=args.out, spp=args.spp, resolution=args.resolution)
+        render_material(args.material, out_path=args.out, spp=args.spp, resolution=args.resolution)
     else:
-        save_png(args.out, render(_load_material(material), Scene(resolution=args.resolution)))
+        from .materials import load_material_file
+        from .render import Scene, render, save_png
+
+        save_png(args.out, render(load_material_file(args.material), Scene(resolution=args.resolution)))
     print(f"wrote {args.out}")
     return 0
-
-
-def _load_material(path: Path):
-    """A MERL file or a saved NBRDF (.pt)."""
-    from .fitting import load_nbrdf
-    from .merl import read_merl
-
-    return load_nbrdf(path) if path.suffix == ".pt" else read_merl(path)
 
 
 def _select(args: argparse.Namespace) -> int:
@@ -231,7 +223,8 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars")
     evaluate.set_defaults(run=_evaluate)
 
-    render = commands.add_parser("render", help="render a material (MERL file or saved NBRDF .pt) on a sphere")
+    render = commands.add_parser("render", help="render a material (MERL .binary, saved NBRDF .pt or Keras "
+                                 "NBRDF .h5) on a sphere")
     render.add_argument("material")
     render.add_argument("--out", required=True, help="PNG file")
     render.add_argument("--resolution", type=int, default=256)

@@ -39,7 +39,6 @@ Examples
 from __future__ import annotations
 
 import errno
-import functools
 import os
 import re
 from collections.abc import Iterable
@@ -47,10 +46,11 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import torch
 from tqdm import tqdm
 
-from .coords import rusinkiewicz_to_half_diff
-from .merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_rusinkiewicz, write_merl
+from .merl import write_merl
+from .models.nbrdf import NBRDF, nbrdf_forward, nbrdf_merl_table as _write_table
 
 #: One Dense layer: kernel ``(in, out)`` and bias ``(out,)``, float64.
 Layer = tuple[np.ndarray, np.ndarray]
@@ -59,9 +59,7 @@ Layer = tuple[np.ndarray, np.ndarray]
 N_INPUTS, N_OUTPUTS = 6, 3
 
 _DENSE_GROUP = re.compile(r"dense_(\d+)")
-# Rows evaluated at once. Small blocks stay in cache and below the size at which OpenBLAS
-# starts threads, which for these thin products cost more than they save: 2048 rows
-# evaluate a full table ~3× faster than 65536 on a 2-core machine (and bound the memory).
+# Rows evaluated at once: small blocks stay in cache (and bound the memory).
 _CHUNK_ROWS = 2048
 
 
@@ -182,25 +180,41 @@ def evaluate_keras_nbrdf(layers: list[Layer], h, d) -> np.ndarray:
 
 
 def _forward(layers: list[Layer], x: np.ndarray) -> np.ndarray:
-    """The network on rows ``x`` ``(n, in)`` → ``(n, out)``, float64."""
-    for kernel, bias in layers[:-1]:
-        x = np.maximum(x @ kernel + bias, 0.0)
-    kernel, bias = layers[-1]
-    return np.expm1(x @ kernel + bias)  # exp(x) − 1, without the cancellation near 0
+    """The network on rows ``x`` ``(n, in)`` → ``(n, out)``, float64.
 
-
-@functools.lru_cache(maxsize=1)
-def _merl_bin_inputs() -> tuple[np.ndarray, np.ndarray]:
-    """The bins above the horizon, bool ``(90, 90, 180)``, and their inputs ``(n, 6)``.
-
-    The same for every material, so computed once (about 55 MB) and kept read-only.
+    The forward pass is :func:`frenbrdf.models.nbrdf.nbrdf_forward` (the one reference
+    implementation) in float64, followed by ``exp(x) − 1`` without the cancellation near 0.
     """
-    above = merl_above_horizon()
-    h, d = rusinkiewicz_to_half_diff(merl_bin_rusinkiewicz()[above])
-    inputs = np.concatenate([h, d], axis=-1)
-    above.flags.writeable = False
-    inputs.flags.writeable = False
-    return above, inputs
+    params = [torch.as_tensor(array, dtype=torch.float64)[None] for kernel, bias in layers
+              for array in (kernel.T, bias)]
+    x = np.asarray(x, dtype=np.float64)
+    out = np.empty((len(x), N_OUTPUTS))
+    # One thread: torch's threads cost far more than they save on these thin products
+    # (measured 3-10x slower on 2 busy cores; single-threaded it matches numpy).
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with torch.inference_mode():
+            for start in range(0, len(x), _CHUNK_ROWS):
+                rows = torch.from_numpy(np.array(x[start:start + _CHUNK_ROWS]))  # a writable copy, in cache
+                out[start:start + _CHUNK_ROWS] = torch.expm1(nbrdf_forward(params, rows[None]))[0].numpy()
+    finally:
+        torch.set_num_threads(threads)
+    return out
+
+
+def keras_nbrdf(layers: list[Layer]) -> NBRDF:
+    """The network as a :class:`frenbrdf.NBRDF` (float32 weights; output ``exp(x) − 1``).
+
+    ``exp(x) − 1`` is the log-relative mapping with f_ref = 0 and ε = 1
+    (:data:`frenbrdf.fitting.EXP_MINUS_ONE`), so the NBRDF evaluates, renders and
+    writes MERL tables like any decoded or fitted one.
+    """
+    from .fitting import EXP_MINUS_ONE
+
+    params = [torch.from_numpy(np.asarray(array, dtype=np.float32))[None] for kernel, bias in layers
+              for array in (kernel.T, bias)]
+    return NBRDF(params, EXP_MINUS_ONE)
 
 
 def nbrdf_merl_table(layers: list[Layer]) -> np.ndarray:
@@ -217,20 +231,9 @@ def nbrdf_merl_table(layers: list[Layer]) -> np.ndarray:
         float64 ``(3, 90, 90, 180)`` in physical units, ready for
         :func:`frenbrdf.merl.write_merl`: the network output clamped to ≥ 0 on bins above
         the horizon, ``−CHANNEL_SCALES[c]`` (stored value −1, MERL's missing marker)
-        on the others.
+        on the others (written by :func:`frenbrdf.models.nbrdf.nbrdf_merl_table`).
     """
-    above, inputs = _merl_bin_inputs()
-    valid = np.empty((len(inputs), N_OUTPUTS))
-    for start in range(0, len(inputs), _CHUNK_ROWS):
-        rows = slice(start, start + _CHUNK_ROWS)
-        valid[rows] = _forward(layers, inputs[rows])
-    np.maximum(valid, 0.0, out=valid)
-
-    table = np.empty(SHAPE)
-    for channel, scale in enumerate(CHANNEL_SCALES):
-        table[channel][above] = valid[:, channel]
-        table[channel][~above] = -1.0 * scale  # write_merl stores exactly −1
-    return table
+    return _write_table(lambda inputs: _forward(layers, inputs))
 
 
 def import_nbrdf(weight_paths: Iterable[str | os.PathLike], out_dir: str | os.PathLike, *,

@@ -28,7 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .atomic import atomic_path
+from .lighting import LIGHTS, environment_radiance
 from .merl import SHAPE, merl_lookup_directions
+
+__all__ = ["Scene", "environment_radiance", "render", "render_linear", "save_figure", "save_png", "tonemap"]
 
 
 @dataclass(frozen=True)
@@ -37,9 +40,9 @@ class Scene:
 
     resolution: int = 256
     """Image width and height in pixels (orthographic camera looking down −z at a unit sphere)."""
-    light_directions: tuple[tuple[float, float, float], ...] = ((-0.5, 0.6, 0.62), (0.7, 0.2, 0.68), (0.0, -0.8, 0.3))
-    """Directional lights (towards the light, world space; normalised)."""
-    light_colors: tuple[tuple[float, float, float], ...] = ((2.2, 2.1, 2.0), (0.9, 0.95, 1.1), (0.5, 0.5, 0.5))
+    light_directions: tuple[tuple[float, float, float], ...] = tuple(direction for direction, _ in LIGHTS)
+    """Directional lights (towards the light, world space; normalised): :data:`frenbrdf.lighting.LIGHTS`."""
+    light_colors: tuple[tuple[float, float, float], ...] = tuple(colour for _, colour in LIGHTS)
     """Their irradiance (RGB, at normal incidence)."""
     environment_samples: int = 48
     """Fixed directions (Fibonacci sphere) integrating the environment."""
@@ -51,14 +54,6 @@ class Scene:
             raise ValueError(f"invalid scene {self}: resolution ≥ 8, environment_samples ≥ 0, exposure > 0")
         if len(self.light_directions) != len(self.light_colors):
             raise ValueError("one colour per light direction")
-
-
-def environment_radiance(directions: np.ndarray) -> np.ndarray:
-    """A soft sky: bluish above, warm near the horizon, dark ground. ``(..., 3)`` → RGB ``(..., 3)``."""
-    up = directions[..., 1:2]  # world +y is up in the image
-    sky = np.array([0.35, 0.45, 0.6]) * np.clip(up, 0, 1) + np.array([0.5, 0.42, 0.35]) * (1 - np.abs(up))
-    ground = np.array([0.08, 0.07, 0.06])
-    return np.where(up > 0, sky, ground) * 0.6
 
 
 def _fibonacci_sphere(n: int) -> np.ndarray:

@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..coords import half_diff_vectors
-from ..merl import CHANNEL_SCALES, N_BINS, SHAPE, merl_above_horizon, merl_bin_directions, write_merl
+from ..coords import half_diff_vectors, rusinkiewicz_to_half_diff
+from ..merl import (CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz,
+                    write_merl)
 from .mapping import LogRelativeMapping
 
 #: The NBRDF input: H and D as Cartesian 3-vectors.
@@ -66,6 +67,48 @@ def bin_geometry() -> BinGeometry:
     h, d = half_diff_vectors(wi, wo)
     return BinGeometry(torch.from_numpy(np.concatenate([h, d], axis=-1).astype(np.float32)),
                        torch.from_numpy(np.clip(wi[:, 2], 0.0, 1.0).astype(np.float32)))
+
+
+@functools.cache
+def merl_bin_inputs() -> tuple[np.ndarray, np.ndarray]:
+    """The MERL bins above the horizon, bool ``(90, 90, 180)``, and their NBRDF inputs ``(n, 6)``.
+
+    The inputs are (H, D) with φ_h = 0 in float64, from the bins' angles
+    (:func:`frenbrdf.coords.rusinkiewicz_to_half_diff`). The same for every material, so
+    computed once (about 55 MB) and kept read-only.
+    """
+    above = merl_above_horizon()
+    h, d = rusinkiewicz_to_half_diff(merl_bin_rusinkiewicz()[above])
+    inputs = np.concatenate([h, d], axis=-1)
+    above.flags.writeable = False
+    inputs.flags.writeable = False
+    return above, inputs
+
+
+def nbrdf_merl_table(reflectance) -> np.ndarray:
+    """Writes a network as a MERL table: the one NBRDF → MERL table writer.
+
+    Parameters
+    ----------
+    reflectance
+        ``reflectance(inputs) -> (n, 3)``: RGB reflectance at the NBRDF inputs ``(n, 6)``
+        of the bins above the horizon (:func:`merl_bin_inputs`, in that order).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 ``(3, 90, 90, 180)`` in physical units, ready for
+        :func:`frenbrdf.merl.write_merl`: the reflectance clamped to ≥ 0 on bins above
+        the horizon, ``−CHANNEL_SCALES[c]`` (stored value −1, MERL's missing marker) on
+        the others.
+    """
+    above, inputs = merl_bin_inputs()
+    values = np.maximum(np.asarray(reflectance(inputs), dtype=np.float64), 0.0)
+    table = np.empty(SHAPE)
+    for channel, scale in enumerate(CHANNEL_SCALES):
+        table[channel][above] = values[:, channel]
+        table[channel][~above] = -1.0 * scale  # write_merl stores exactly −1
+    return table
 
 
 def nbrdf_coordinates(wi, wo) -> np.ndarray:
@@ -145,13 +188,9 @@ class NBRDF:
     def merl_table(self) -> np.ndarray:
         """The material at every MERL bin, ``(3, 90, 90, 180)``, missing bins marked as MERL does."""
         self._only()
-        mapped = self.mapped(bin_geometry().half_diff.numpy()).T
-        table = self.mapping.inverse(mapped, self.mapping.reference_bins()).reshape(SHAPE)
-        missing = ~merl_above_horizon()
-        for channel, scale in enumerate(CHANNEL_SCALES):
-            table[channel][missing] = -1.0 * scale
-        assert table.shape[1:] == SHAPE[1:] and table[0].size == N_BINS
-        return table
+        above, _ = merl_bin_inputs()
+        reference = self.mapping.reference_bins()[:, above.reshape(-1)].T
+        return nbrdf_merl_table(lambda inputs: self.mapping.inverse(self.mapped(inputs), reference))
 
     def to_merl(self, path: str | os.PathLike) -> None:
         """Writes the material as a MERL file (atomically)."""
