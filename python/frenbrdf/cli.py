@@ -9,6 +9,8 @@ import platform
 import sys
 from pathlib import Path
 
+from .presets import method_names
+
 
 def _info(args: argparse.Namespace) -> int:
     """Reports the installation and checks that the native core works."""
@@ -72,13 +74,13 @@ def _train(args: argparse.Namespace) -> int:
         cfg = config_for(args.method or "frenbrdf", **{k: v for k, v in overrides.items()
                                                         if v is not None and k != "method"})
     cfg.progress = not args.quiet
-    result = train(cfg, resume=args.resume)
-    summary = {"run_dir": str(result.run_dir), "method": cfg.method, "best_epoch": result.best_epoch,
-               "best_val_rec": result.best_val, "seconds": round(result.seconds, 1)}
+    run = train(cfg, resume=args.resume)
+    summary = {"run_dir": str(run.path), "method": cfg.method, "best_epoch": run.best_epoch,
+               "best_val_rec": run.best_val, "seconds": round(run.seconds, 1)}
     if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
         print(json.dumps(summary, indent=2) if args.json else
-              f"{cfg.method}: best validation L_rec {result.best_val:.4g} at epoch {result.best_epoch}; "
-              f"{result.seconds:.0f} s; run folder {result.run_dir}")
+              f"{cfg.method}: best validation L_rec {run.best_val:.4g} at epoch {run.best_epoch}; "
+              f"{run.seconds:.0f} s; run folder {run.path}")
     return 0
 
 
@@ -129,8 +131,9 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _select(args: argparse.Namespace) -> int:
-    from .sweep import base_config, select_config
+    from .select import select_config
     from .training import load_config
+    from .variants import base_config
 
     if args.front and (args.config or args.epochs is not None):
         raise ValueError("--config and --epochs set the training of candidates; with --front nothing is trained")
@@ -141,9 +144,8 @@ def _select(args: argparse.Namespace) -> int:
         base = base_config(args.data, epochs=args.epochs)
     selection = select_config(args.data, args.target_psnr, args.out, front=args.front, base=base,
                               progress=not args.quiet)
-    summary = json.loads((Path(args.out) / "selection.json").read_text())
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json.dumps(selection.summary, indent=2))
     elif selection.reached:
         chosen = selection.chosen
         print(f"{chosen['name']}: NBRDF 6→{'→'.join(map(str, chosen['hidden']))}→3 "
@@ -189,7 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     imported.set_defaults(run=_import_nbrdf)
 
     train = commands.add_parser("train", help="train FreNBRDF or a baseline on a folder of MERL files")
-    train.add_argument("--method", choices=("frenbrdf", "nbrdf", "hyperbrdf"), help="default: frenbrdf")
+    train.add_argument("--method", choices=method_names(), help="default: frenbrdf")
     train.add_argument("--data", help="folder of MERL files")
     train.add_argument("--out", help="run folder (created)")
     train.add_argument("--config", help="JSON file with any TrainConfig keys, over the method's preset")

@@ -73,6 +73,7 @@ on the first kernel with a minimum or an arc tangent, which is why the backend i
 once in a subprocess (:func:`llvm_available`) before it is used here.
 """
 
+from .bsdf import register
 from .material import (
     _HANDLES,
     Material,
@@ -85,7 +86,7 @@ from .material import (
 )
 from .sampling import ALPHA_GRID, COSINE_ONLY, MIN_COSINE_WEIGHT, Lobe, SamplingMixture, fit_sampling
 from .scene import environment_bitmap, render_material, save_png, scene_dict, tonemap
-from .variants import FALLBACK_VARIANT, PLUGIN_NAME, PREFERRED_VARIANT, llvm_available, register, set_variant
+from .variants import FALLBACK_VARIANT, PLUGIN_NAME, PREFERRED_VARIANT, llvm_available, set_variant
 
 __all__ = [
     "ALPHA_GRID", "COSINE_ONLY", "FALLBACK_VARIANT", "MIN_COSINE_WEIGHT", "PLUGIN_NAME", "PREFERRED_VARIANT",

@@ -8,7 +8,8 @@ from pathlib import Path
 from .kernels import Kernels
 from .material import _HANDLES, _load_file
 from .sampling import COSINE_ONLY
-from .variants import _import_mitsuba
+from .variants import PLUGIN_NAME, _import_mitsuba, set_variant
+
 
 @functools.cache
 def bsdf_class(variant: str):
@@ -105,3 +106,20 @@ def bsdf_class(variant: str):
 
     return FreNBRDFBSDF
 
+
+_REGISTERED: set[str] = set()
+
+
+def register() -> str:
+    """Registers the ``"frenbrdf"`` BSDF plugin with Mitsuba and returns the variant.
+
+    Selects a variant first (:func:`set_variant`) if none is set. Registration is per
+    variant: call again after switching variants. Calling twice is harmless.
+    """
+    mi, _ = _import_mitsuba()
+    variant = set_variant()
+    if variant not in _REGISTERED:
+        cls = bsdf_class(variant)
+        mi.register_bsdf(PLUGIN_NAME, lambda props: cls(props))
+        _REGISTERED.add(variant)
+    return variant

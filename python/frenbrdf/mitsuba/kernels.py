@@ -9,7 +9,6 @@ import numpy as np
 from .material import Material
 
 
-
 class Kernels:
     """The BRDF in Dr.Jit for the current variant: ``f(wi, wo)`` (no cosine), RGB."""
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..microfacet import ggx_d, ggx_visibility
 
+
 @dataclass(frozen=True)
 class Lobe:
     """One GGX lobe of the sampling mixture."""

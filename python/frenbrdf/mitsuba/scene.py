@@ -8,9 +8,9 @@ import numpy as np
 
 from ..lighting import FILL_LIGHT, KEY_LIGHT, environment_radiance
 from ..render import save_png, tonemap  # one tone mapping for both renderers
+from .bsdf import register
 from .material import _HANDLES, bsdf_dict, material_handle, release_handle
-from .variants import _import_mitsuba, register
-
+from .variants import _import_mitsuba
 
 
 def environment_bitmap(width: int = 128) -> np.ndarray:

@@ -98,24 +98,3 @@ def set_variant(variant: str | None = None) -> str:
         raise ValueError(f"the frenbrdf plugin returns RGB reflectance and needs an *_rgb variant, got {variant!r}")
     mi.set_variant(variant)
     return variant
-
-
-_REGISTERED: set[str] = set()
-
-
-def register() -> str:
-    """Registers the ``"frenbrdf"`` BSDF plugin with Mitsuba and returns the variant.
-
-    Selects a variant first (:func:`set_variant`) if none is set. Registration is per
-    variant: call again after switching variants. Calling twice is harmless.
-    """
-    mi, _ = _import_mitsuba()
-    variant = set_variant()
-    if variant not in _REGISTERED:
-        from .bsdf import bsdf_class
-
-        cls = bsdf_class(variant)
-        mi.register_bsdf(PLUGIN_NAME, lambda props: cls(props))
-        _REGISTERED.add(variant)
-    return variant
-
