@@ -15,7 +15,7 @@ from pathlib import Path
 
 import torch
 
-from . import __version__
+from ._native import __version__
 from .atomic import write_text
 from .evaluation import EvaluateConfig, evaluate_runs, report_markdown
 from .presets import TRAINING, TRAINING_METHOD_OVERRIDES, method_names
