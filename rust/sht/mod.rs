@@ -27,10 +27,10 @@
 //! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre
 //! tables are built once per plan and kept while they fit in [`LEGENDRE_CACHE_BYTES`].
 //! Analysis of single maps, and of every map where the table is not kept or exceeds
-//! [`analysis::STREAMED_MIN_TABLE_BYTES_ANY_BATCH`], recomputes λ in registers instead, a
-//! map at a time ([`streamed`]); on Gauss–Legendre grids each map's FFTs are then folded
-//! straight into tiles of ring blocks that the kernel reads as vectors. Synthesis
-//! recomputes the tables it lacks per call.
+//! `STREAMED_MIN_TABLE_BYTES_ANY_BATCH` ([`analysis`]), recomputes λ in registers
+//! instead, a map at a time ([`streamed`]); on Gauss–Legendre grids each map's FFTs are
+//! then folded straight into tiles of ring blocks that the kernel reads as vectors.
+//! Synthesis recomputes the tables it lacks per call.
 //!
 //! # Files, by stage
 //! This file holds the plan type, its accessors and the batching shared by every stage.
@@ -40,6 +40,10 @@
 //! Gauss–Legendre ones. Below them: the matrix kernel ([`linalg`]), the on-the-fly kernel
 //! ([`streamed`]), the vector transpositions ([`split`], [`transpose`]), the recurrence
 //! ([`legendre`]) and the grids ([`grid`]); [`Real`] is the scalar type of them all.
+
+// The docs above link the private stages for readers of `cargo doc --document-private-items`
+// (the crate is not published; its public face is the Python package).
+#![allow(rustdoc::private_intra_doc_links)]
 
 mod analysis;
 mod fold;
