@@ -6,8 +6,8 @@ use std::mem::MaybeUninit;
 use rayon::prelude::*;
 
 use super::linalg::{matmul_packed, MatMut, MatRef};
-use super::plan::{LegendreTable, OrderPanels, Orientation};
 use super::real::Real;
+use super::table::{LegendreTable, OrderPanels, Orientation};
 use super::{order_scale, streamed, transpose, Chunks, Layout, Sht, MAP_BLOCK};
 use crate::error::Result;
 

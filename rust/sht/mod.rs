@@ -33,13 +33,14 @@
 //! Synthesis recomputes the tables it lacks per call.
 //!
 //! # Files, by stage
-//! This file holds the plan type, its accessors and the batching shared by every stage.
-//! [`plan`] builds a plan and its Legendre tables; [`fold`] is the FFT stage (rings ↔
-//! folded spectra); [`analysis`] and [`synthesis`] (with the adjoint) run the Legendre
-//! step and the layout changes around it; [`resample`] maps equiangular rings to
-//! Gauss–Legendre ones. Below them: the matrix kernel ([`linalg`]), the on-the-fly kernel
-//! ([`streamed`]), the vector transpositions ([`split`], [`transpose`]), the recurrence
-//! ([`legendre`]) and the grids ([`grid`]); [`Real`] is the scalar type of them all.
+//! This file holds the plan type: its construction, accessors and the batching shared by
+//! every stage. The stages are further `impl Sht` blocks: [`fold`], the FFT stage (rings ↔
+//! folded spectra); [`analysis`] and [`synthesis`] (with the adjoint), the Legendre step
+//! and the layout changes around it; [`resample`], equiangular rings to Gauss–Legendre
+//! ones and back. What they use does not depend on them or on this file: the fixed
+//! matrices a plan builds ([`table`]), the matrix kernel ([`linalg`]), the on-the-fly
+//! kernel ([`streamed`]), the vector transpositions ([`split`], [`transpose`]), the
+//! recurrence ([`legendre`]), the grids ([`grid`]) and the scalar type ([`Real`]).
 
 // The docs above link the private stages for readers of `cargo doc --document-private-items`
 // (the crate is not published; its public face is the Python package).
@@ -50,25 +51,25 @@ mod fold;
 pub mod grid;
 pub mod legendre;
 mod linalg;
-mod plan;
 mod real;
 mod resample;
 mod split;
 mod streamed;
 mod synthesis;
+mod table;
 mod transpose;
 
 use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
-use realfft::ComplexToReal;
-use rustfft::Fft;
+use realfft::{ComplexToReal, RealFftPlanner};
+use rustfft::{Fft, FftPlanner};
 
 use crate::error::{invalid_argument, Result};
 use crate::parallel;
-use plan::LegendreTable;
+use legendre::Recurrence;
 pub use real::Real;
-use resample::Resampling;
+use table::{fold_resampling, LegendreTable, Resampling};
 
 /// Largest Legendre table a plan keeps (per node set); larger ones are recomputed.
 pub const LEGENDRE_CACHE_BYTES: usize = 256 << 20;
@@ -165,6 +166,73 @@ struct Layout {
 }
 
 impl<T: Real> Sht<T> {
+    pub fn new(nlat: usize, nlon: usize, lmax: usize, grid: Grid) -> Result<Self> {
+        Self::with_cache_limit(nlat, nlon, lmax, grid, LEGENDRE_CACHE_BYTES)
+    }
+
+    /// A plan that keeps Legendre tables up to `cache_bytes` (tests use 0 to exercise the
+    /// on-the-fly path on small grids).
+    pub(super) fn with_cache_limit(
+        nlat: usize,
+        nlon: usize,
+        lmax: usize,
+        grid: Grid,
+        cache_bytes: usize,
+    ) -> Result<Self> {
+        let min_rings = match grid {
+            Grid::GaussLegendre => lmax + 1,
+            Grid::Equiangular => (lmax + 2).max(2),
+        };
+        if nlat < min_rings {
+            return invalid_argument!(
+                "nlat = {nlat} rings are too few for exact quadrature at lmax = {lmax} on the {} grid: need nlat ≥ {min_rings}",
+                grid.name()
+            );
+        }
+        if nlon < 2 * lmax + 1 {
+            return invalid_argument!(
+                "nlon = {nlon} is too small for lmax = {lmax}: need nlon ≥ 2·lmax + 1 = {}",
+                2 * lmax + 1
+            );
+        }
+        let recurrence = Arc::new(Recurrence::new(lmax));
+        let (theta, weights) = match grid {
+            Grid::GaussLegendre => grid::gauss_legendre(nlat),
+            Grid::Equiangular => (grid::equiangular(nlat), grid::clenshaw_curtis_weights(nlat)),
+        };
+        let gauss = (grid == Grid::Equiangular).then(|| {
+            let (gauss_theta, gauss_weights) = grid::gauss_legendre(lmax + 1);
+            let resampling = fold_resampling(&grid::equiangular_to_gauss(&theta, &gauss_theta), nlat, &gauss_weights);
+            (
+                LegendreTable::new(recurrence.clone(), &gauss_theta, cache_bytes),
+                resampling,
+            )
+        });
+        let mut planner = RealFftPlanner::<T>::new();
+        let mut offsets = Vec::with_capacity(lmax + 1);
+        let mut next = 0;
+        for m in 0..=lmax {
+            offsets.push(next);
+            next += if m == 0 { lmax + 1 } else { 2 * (lmax + 1 - m) };
+        }
+        Ok(Sht {
+            nlat,
+            nlon,
+            lmax,
+            grid,
+            at_grid: LegendreTable::new(recurrence, &theta, cache_bytes),
+            theta,
+            weights,
+            fft: FftPlanner::new().plan_fft_forward(nlon),
+            inverse: planner.plan_fft_inverse(nlon),
+            gauss,
+            offsets,
+            pool: BufferPool {
+                free: Mutex::new(Vec::new()),
+            },
+        })
+    }
+
     pub fn nlat(&self) -> usize {
         self.nlat
     }

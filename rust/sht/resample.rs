@@ -1,18 +1,12 @@
 //! Equiangular grids: each order's folded spectra resampled exactly onto Gauss–Legendre
-//! rings for analysis (and back, for the adjoint), with matrices built once per plan.
+//! rings for analysis, and back for the adjoint, with the matrices a plan built once
+//! ([`Resampling`](super::table::Resampling)).
 
 use rayon::prelude::*;
 
 use super::linalg::{matmul_packed, MatMut, MatRef, Packed};
 use super::real::Real;
 use super::{Layout, Sht};
-
-/// The equiangular → Gauss–Legendre resampling, `[m parity][symmetric, antisymmetric]`,
-/// packed for both directions.
-pub(super) struct Resampling<T> {
-    pub(super) forward: [[Packed<T>; 2]; 2],
-    pub(super) adjoint: [[Packed<T>; 2]; 2],
-}
 
 impl<T: Real> Sht<T> {
     /// Maps each order's folded spectra to other rings with a packed per-parity matrix
@@ -62,67 +56,5 @@ impl<T: Real> Sht<T> {
             });
         let [sym, anti] = out;
         (sym, anti)
-    }
-}
-
-/// Restricts the full resampling matrices (Gauss rings × equiangular rings) to folded
-/// symmetric/antisymmetric parts on half rings, with the Gauss weights folded in.
-///
-/// A folded symmetric part holds g_j + g_j' on paired rings and g_j on an equator ring
-/// (antisymmetric: g_j − g_j', and 0 on the equator); the rows are built so that the
-/// output holds the same quantities at the Gauss rings, times their weights.
-pub(super) fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights: &[f64]) -> Resampling<T> {
-    let n_target = gauss_weights.len();
-    let (source_half, target_half) = (n_source.div_ceil(2), n_target.div_ceil(2));
-    let folded: [[Vec<T>; 2]; 2] = full.each_ref().map(|matrix| {
-        [1.0, -1.0].map(|sign: f64| {
-            let mut folded = vec![T::zero(); target_half * source_half];
-            for k in 0..target_half {
-                let target_is_equator = n_target - 1 - k == k;
-                let rows_per_part = match (target_is_equator, sign > 0.0) {
-                    (true, true) => 1.0,
-                    (true, false) => 0.0,
-                    (false, _) => 2.0,
-                };
-                for j in 0..source_half {
-                    let mirror = n_source - 1 - j;
-                    let entry = &matrix[k * n_source..];
-                    let value = if mirror == j {
-                        if sign > 0.0 {
-                            entry[j]
-                        } else {
-                            0.0
-                        }
-                    } else {
-                        0.5 * (entry[j] + sign * entry[mirror])
-                    };
-                    folded[k * source_half + j] = T::of(rows_per_part * gauss_weights[k] * value);
-                }
-            }
-            folded
-        })
-    });
-    let pack = |transpose: bool| {
-        folded.each_ref().map(|parts| {
-            parts.each_ref().map(|matrix| {
-                let (rows, cols, row_stride, col_stride) = if transpose {
-                    (source_half, target_half, 1, source_half)
-                } else {
-                    (target_half, source_half, source_half, 1)
-                };
-                Packed::new(MatRef {
-                    data: matrix,
-                    offset: 0,
-                    rows,
-                    cols,
-                    row_stride,
-                    col_stride,
-                })
-            })
-        })
-    };
-    Resampling {
-        forward: pack(false),
-        adjoint: pack(true),
     }
 }

@@ -5,8 +5,8 @@
 use rayon::prelude::*;
 
 use super::linalg::{matmul_packed, MatMut, MatRef};
-use super::plan::{LegendreTable, OrderPanels, Orientation};
 use super::real::Real;
+use super::table::{LegendreTable, OrderPanels, Orientation};
 use super::{order_scale, Chunks, Layout, Sht};
 use crate::error::Result;
 

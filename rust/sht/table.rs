@@ -1,87 +1,15 @@
-//! Building a plan: the checks, grids, FFTs and Legendre tables of [`Sht::new`], and the
-//! tables themselves (λ_lm at a set of rings, packed for the kernel per order).
+//! The fixed matrices a plan builds once: λ_lm at a set of rings, packed for the kernel
+//! per order (kept, or recomputed per call where too large), and on equiangular grids the
+//! resampling onto Gauss–Legendre rings.
 
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use rayon::prelude::*;
-use realfft::RealFftPlanner;
-use rustfft::FftPlanner;
 
 use super::legendre::{Paired, Recurrence, Scaled};
 use super::linalg::{MatRef, Packed};
 use super::real::Real;
-use super::resample::fold_resampling;
-use super::{grid, streamed, BufferPool, Grid, Sht, LEGENDRE_CACHE_BYTES};
-use crate::error::{invalid_argument, Result};
-
-impl<T: Real> Sht<T> {
-    pub fn new(nlat: usize, nlon: usize, lmax: usize, grid: Grid) -> Result<Self> {
-        Self::with_cache_limit(nlat, nlon, lmax, grid, LEGENDRE_CACHE_BYTES)
-    }
-
-    /// A plan that keeps Legendre tables up to `cache_bytes` (tests use 0 to exercise the
-    /// on-the-fly path on small grids).
-    pub(super) fn with_cache_limit(
-        nlat: usize,
-        nlon: usize,
-        lmax: usize,
-        grid: Grid,
-        cache_bytes: usize,
-    ) -> Result<Self> {
-        let min_rings = match grid {
-            Grid::GaussLegendre => lmax + 1,
-            Grid::Equiangular => (lmax + 2).max(2),
-        };
-        if nlat < min_rings {
-            return invalid_argument!(
-                "nlat = {nlat} rings are too few for exact quadrature at lmax = {lmax} on the {} grid: need nlat ≥ {min_rings}",
-                grid.name()
-            );
-        }
-        if nlon < 2 * lmax + 1 {
-            return invalid_argument!(
-                "nlon = {nlon} is too small for lmax = {lmax}: need nlon ≥ 2·lmax + 1 = {}",
-                2 * lmax + 1
-            );
-        }
-        let recurrence = Arc::new(Recurrence::new(lmax));
-        let (theta, weights) = match grid {
-            Grid::GaussLegendre => grid::gauss_legendre(nlat),
-            Grid::Equiangular => (grid::equiangular(nlat), grid::clenshaw_curtis_weights(nlat)),
-        };
-        let gauss = (grid == Grid::Equiangular).then(|| {
-            let (gauss_theta, gauss_weights) = grid::gauss_legendre(lmax + 1);
-            let resampling = fold_resampling(&grid::equiangular_to_gauss(&theta, &gauss_theta), nlat, &gauss_weights);
-            (
-                LegendreTable::new(recurrence.clone(), &gauss_theta, cache_bytes),
-                resampling,
-            )
-        });
-        let mut planner = RealFftPlanner::<T>::new();
-        let mut offsets = Vec::with_capacity(lmax + 1);
-        let mut next = 0;
-        for m in 0..=lmax {
-            offsets.push(next);
-            next += if m == 0 { lmax + 1 } else { 2 * (lmax + 1 - m) };
-        }
-        Ok(Sht {
-            nlat,
-            nlon,
-            lmax,
-            grid,
-            at_grid: LegendreTable::new(recurrence, &theta, cache_bytes),
-            theta,
-            weights,
-            fft: FftPlanner::new().plan_fft_forward(nlon),
-            inverse: planner.plan_fft_inverse(nlon),
-            gauss,
-            offsets,
-            pool: BufferPool {
-                free: Mutex::new(Vec::new()),
-            },
-        })
-    }
-}
+use super::streamed;
 
 /// λ_lm at one set of rings, folded to the northern half (equator included).
 pub(super) struct LegendreTable<T> {
@@ -110,7 +38,7 @@ pub(super) struct OrderPanels<T> {
 }
 
 impl<T: Real> LegendreTable<T> {
-    fn new(recurrence: Arc<Recurrence>, theta: &[f64], cache_bytes: usize) -> Self {
+    pub(super) fn new(recurrence: Arc<Recurrence>, theta: &[f64], cache_bytes: usize) -> Self {
         let lmax = recurrence.lmax();
         let half = &theta[..theta.len().div_ceil(2)];
         let padded = half.len().next_multiple_of(streamed::LANES);
@@ -263,4 +191,73 @@ pub(super) enum Orientation {
     Analysis,
     Synthesis,
     Both,
+}
+
+/// The equiangular → Gauss–Legendre resampling, `[m parity][symmetric, antisymmetric]`,
+/// packed for both directions.
+pub(super) struct Resampling<T> {
+    pub(super) forward: [[Packed<T>; 2]; 2],
+    pub(super) adjoint: [[Packed<T>; 2]; 2],
+}
+
+/// Restricts the full resampling matrices (Gauss rings × equiangular rings) to folded
+/// symmetric/antisymmetric parts on half rings, with the Gauss weights folded in.
+///
+/// A folded symmetric part holds g_j + g_j' on paired rings and g_j on an equator ring
+/// (antisymmetric: g_j − g_j', and 0 on the equator); the rows are built so that the
+/// output holds the same quantities at the Gauss rings, times their weights.
+pub(super) fn fold_resampling<T: Real>(full: &[Vec<f64>; 2], n_source: usize, gauss_weights: &[f64]) -> Resampling<T> {
+    let n_target = gauss_weights.len();
+    let (source_half, target_half) = (n_source.div_ceil(2), n_target.div_ceil(2));
+    let folded: [[Vec<T>; 2]; 2] = full.each_ref().map(|matrix| {
+        [1.0, -1.0].map(|sign: f64| {
+            let mut folded = vec![T::zero(); target_half * source_half];
+            for k in 0..target_half {
+                let target_is_equator = n_target - 1 - k == k;
+                let rows_per_part = match (target_is_equator, sign > 0.0) {
+                    (true, true) => 1.0,
+                    (true, false) => 0.0,
+                    (false, _) => 2.0,
+                };
+                for j in 0..source_half {
+                    let mirror = n_source - 1 - j;
+                    let entry = &matrix[k * n_source..];
+                    let value = if mirror == j {
+                        if sign > 0.0 {
+                            entry[j]
+                        } else {
+                            0.0
+                        }
+                    } else {
+                        0.5 * (entry[j] + sign * entry[mirror])
+                    };
+                    folded[k * source_half + j] = T::of(rows_per_part * gauss_weights[k] * value);
+                }
+            }
+            folded
+        })
+    });
+    let pack = |transpose: bool| {
+        folded.each_ref().map(|parts| {
+            parts.each_ref().map(|matrix| {
+                let (rows, cols, row_stride, col_stride) = if transpose {
+                    (source_half, target_half, 1, source_half)
+                } else {
+                    (target_half, source_half, source_half, 1)
+                };
+                Packed::new(MatRef {
+                    data: matrix,
+                    offset: 0,
+                    rows,
+                    cols,
+                    row_stride,
+                    col_stride,
+                })
+            })
+        })
+    };
+    Resampling {
+        forward: pack(false),
+        adjoint: pack(true),
+    }
 }
