@@ -36,10 +36,10 @@ import numpy as np
 import torch
 
 from frenbrdf import mitsuba as fm
+from frenbrdf.analytic import METALS, AnalyticMaterial, merl_table
 from frenbrdf.atomic import save_json, write_text
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates, nbrdf_forward
-from frenbrdf.analytic import METALS, AnalyticMaterial, merl_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
 from common import time_calls, unit_vectors  # noqa: E402

@@ -63,8 +63,20 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import co
 from common import THREAD_ENV, CpuMeter, run_metadata, time_calls  # noqa: E402
 from sht_report import build_markdown, save_report  # noqa: E402
 from sht_setup import (  # noqa: E402
-    BIG_BATCH, BIG_NLAT, BUSY_SHARE, CHECK_BATCH, EQUIANGULAR_CHECK, GL_SIZES, LIBRARIES, LIBRARY_CLASSES,
-    MIN_SAMPLE_S, TOLERANCE, WORKLOAD, check_plan, random_alm, reference_maps,
+    BIG_BATCH,
+    BIG_NLAT,
+    BUSY_SHARE,
+    CHECK_BATCH,
+    EQUIANGULAR_CHECK,
+    GL_SIZES,
+    LIBRARIES,
+    LIBRARY_CLASSES,
+    MIN_SAMPLE_S,
+    TOLERANCE,
+    WORKLOAD,
+    check_plan,
+    random_alm,
+    reference_maps,
 )
 
 

@@ -46,10 +46,12 @@ CHART_NAMES = {"frequency": "chart2_frequency", "capacity": "chart3_capacity"}
 
 
 def spread_slices(n: int) -> tuple[int, ...]:
-    """``n`` θ_h bin indices spread evenly over 0 … 95: 4 → (0, 24, 48, 72), the default."""
+    """``n`` distinct θ_h bin indices (0 … 89) spread evenly: a step of 96/n, 4 → (0, 24, 48, 72), the
+    default; from n = 16 on a step of 96/n would pass bin 89, and the step is 90/n."""
     if not 1 <= n <= 90:
         raise ValueError(f"the number of slices must be in 1 … 90, got {n}")
-    return tuple(i * 96 // n for i in range(n))
+    span = 96 if (n - 1) * 96 // n < 90 else 90
+    return tuple(i * span // n for i in range(n))
 
 
 def frequency_variants(lmax=(24, 89), slices=(2, 8), k=(1, 4), sigma=(0.025, 0.1)) -> list[Variant]:

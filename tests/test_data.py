@@ -39,13 +39,25 @@ def test_list_materials_errors(tmp_path):
         list_materials(tmp_path)
 
 
-@given(st.floats(0, 1e4, allow_subnormal=False), st.floats(0, 10))
-def test_mapping_inverts_exactly(f, reference):
-    mapping = LogRelativeMapping(np.full(3, reference))
+@given(st.floats(0, 1e4, allow_subnormal=False), st.floats(0, 10), st.sampled_from(["ratio", "one_plus_ratio"]))
+def test_mapping_inverts_exactly(f, reference, form):
+    mapping = LogRelativeMapping.from_tables(np.full((2, 3, N_BINS), reference),
+                                             MappingConfig(reference="per_channel", form=form))
     for value in (f, 0.0):
         mapped = mapping.forward(np.full(3, value), mapping.reference)
         assert np.all(np.isfinite(mapped))
         np.testing.assert_allclose(mapping.inverse(mapped, mapping.reference), value, rtol=1e-12, atol=1e-15)
+
+
+def test_hyperbrdf_form_is_ln_of_one_plus_the_ratio_and_travels_with_the_model(tmp_path):
+    mapping = LogRelativeMapping(np.full(3, 0.1), epsilon=0.002, offset=1.0)
+    np.testing.assert_allclose(mapping.forward(np.full(3, 0.3), mapping.reference),
+                               np.log(1 + 0.302 / 0.102), rtol=1e-12)
+    restored = LogRelativeMapping.from_state(mapping.state())
+    assert restored.offset == 1.0 and restored.epsilon == 0.002
+    assert LogRelativeMapping.from_state({"reference": np.ones(3), "epsilon": 0.002}).offset == 0.0  # older states
+    with pytest.raises(ValueError, match="form"):
+        MappingConfig(form="log")
 
 
 def test_mapping_rejects_bad_reference():

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from frenbrdf import cli
-from frenbrdf.evaluation import EvaluateConfig, evaluate_runs, image_metrics
+from frenbrdf.evaluation import EvaluateConfig, edit_pairs, evaluate_runs, image_metrics
+from frenbrdf.render import Scene, material_mask
 from frenbrdf.training import train
 
 from .conftest import tiny
@@ -21,6 +22,29 @@ def test_image_metrics():
     shifted = image_metrics(truth, truth + 0.1)
     assert shifted["rmse"] == pytest.approx(0.1) and shifted["psnr"] == pytest.approx(20.0)
     assert shifted["ssim"] < 1.0
+
+
+def test_image_metrics_measure_the_material_not_the_background():
+    scene = Scene(resolution=32, environment_samples=8)
+    mask = material_mask(scene)
+    assert 0.6 < mask.mean() < 0.8  # the sphere: π/4 of the frame
+    truth = np.full((32, 32, 3), 0.5)
+    background_only = truth.copy()
+    background_only[~mask] = 0.9
+    assert image_metrics(truth, background_only, mask)["psnr"] == float("inf")
+    assert image_metrics(truth, background_only)["psnr"] < 20  # what the whole frame said
+    on_material = truth.copy()
+    on_material[mask] += 0.1
+    assert image_metrics(truth, on_material, mask)["psnr"] == pytest.approx(20.0)
+
+
+def test_edits_use_each_unordered_pair_once_at_interior_weights():
+    rng = np.random.default_rng(0)
+    pairs = edit_pairs(16, 1000, rng)
+    assert len(pairs) == 120 and len({tuple(sorted(p)) for p in pairs}) == 120 and all(a != b for a, b in pairs)
+    subset = edit_pairs(16, 40, rng)
+    assert len(subset) == 40 and len(set(subset)) == 40
+    assert all(0 < t < 1 for t in EvaluateConfig().weights)
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +63,8 @@ def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
     assert set(report["summary"]) == {"frenbrdf", "nbrdf"}
     n_test = len(report["test_materials"])
     assert all(len(rows) == n_test for rows in report["reconstruction"].values())
-    assert all(len(rows) == 12 for rows in report["editing"].values())
+    pairs = min(12 // 3, n_test * (n_test - 1) // 2)  # each unordered pair once, three interior t each
+    assert all(len(rows) == 3 * pairs for rows in report["editing"].values())
     for rows in report["reconstruction"].values():
         assert all(np.isfinite(r["rmse"]) and 0 <= r["ssim"] <= 1 and r["lfre"] >= 0 for r in rows)
     # t = 0 and t = 1 reproduce the endpoints' reconstructions: their metrics repeat.
@@ -54,7 +79,7 @@ def test_evaluate_refuses_runs_of_different_splits(tiny_runs, toy_materials, tmp
     other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=5)).run_dir
     with pytest.raises(ValueError, match="different splits"):
         evaluate_runs([tiny_runs[0], other], tmp_path / "eval", config=EvaluateConfig(progress=False))
-    with pytest.raises(FileNotFoundError, match="best.pt"):
+    with pytest.raises(FileNotFoundError, match="not a training run folder"):
         evaluate_runs([tmp_path], tmp_path / "eval")
 
 

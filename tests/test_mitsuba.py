@@ -18,10 +18,10 @@ import torch
 
 import frenbrdf
 from frenbrdf import mitsuba as fm
-from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.fitting import save_nbrdf
-from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig
 from frenbrdf.analytic import METALS, AnalyticMaterial, merl_table
+from frenbrdf.fitting import save_nbrdf
+from frenbrdf.models.mapping import LogRelativeMapping
+from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, fold_difference
 
 from .conftest import HAVE_MITSUBA
 
@@ -134,7 +134,8 @@ def test_nbrdf_eval_equals_numpy(mi, plastic_table, per_bin):
 
 
 def test_nbrdf_eval_uses_the_training_convention_phi_h_zero(mi):
-    """The network sees H = (sin θ_h, 0, cos θ_h), whatever the pair's φ_h (isotropy)."""
+    """The network sees H = (sin θ_h, 0, cos θ_h), whatever the pair's φ_h (isotropy), and D folded
+    onto D_y ≥ 0 (reciprocity), as frenbrdf.models.nbrdf.nbrdf_coordinates gives them."""
     nbrdf = tiny_nbrdf(seed=3)
     bsdf = mi.load_dict(fm.bsdf_dict(nbrdf))
     rng = np.random.default_rng(2)
@@ -147,7 +148,7 @@ def test_nbrdf_eval_uses_the_training_convention_phi_h_zero(mi):
     angles = frenbrdf.directions_to_rusinkiewicz(wi, wo)
     assert np.ptp(angles[:, 1]) > 6  # pairs of every φ_h …
     h, d = frenbrdf.rusinkiewicz_to_half_diff(angles * [1, 0, 1, 1])  # … evaluated at φ_h = 0
-    expected = nbrdf.mapping.inverse(nbrdf.mapped(np.concatenate([h, d], axis=-1)), 0.1) * wo[:, 2:3]
+    expected = nbrdf.mapping.inverse(nbrdf.mapped(np.concatenate([h, fold_difference(d)], axis=-1)), 0.1) * wo[:, 2:3]
     assert_nbrdf_close(mitsuba_eval(mi, bsdf, wi, wo), expected, wi, wo)
 
 
@@ -340,7 +341,7 @@ def test_scalar_fallback_when_llvm_is_unusable(tmp_path):
         import numpy as np, torch
         from frenbrdf import mitsuba as fm
         from frenbrdf.models.mapping import LogRelativeMapping
-        from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig
+        from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, fold_difference
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             variant = fm.register()

@@ -7,9 +7,21 @@ import pytest
 import torch
 
 import frenbrdf
+from frenbrdf.models import (
+    NBRDF,
+    AutoEncoder,
+    DecoderConfig,
+    EncoderConfig,
+    HyperNetwork,
+    Model,
+    ModelConfig,
+    NBRDFConfig,
+    SetEncoder,
+    interpolate,
+    nbrdf_coordinates,
+    nbrdf_forward,
+)
 from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.models import (AutoEncoder, DecoderConfig, EncoderConfig, HyperNetwork, Model, ModelConfig, NBRDF,
-                             NBRDFConfig, SetEncoder, interpolate, nbrdf_coordinates, nbrdf_forward)
 
 from .conftest import unit_vectors
 
@@ -132,8 +144,8 @@ def test_decoded_materials_are_isotropic():
 
 
 def test_nbrdf_coordinates_at_the_bins_are_the_training_inputs():
-    from frenbrdf.models.nbrdf import bin_geometry
     from frenbrdf.evaluation import _bin_directions
+    from frenbrdf.models.nbrdf import bin_geometry
 
     bins = np.random.default_rng(0).choice(90 * 90 * 180, 2000)
     wi, wo = _bin_directions(bins)

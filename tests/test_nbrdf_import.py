@@ -14,8 +14,7 @@ import pytest
 import frenbrdf
 from frenbrdf.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models.nbrdf import nbrdf_coordinates
-from frenbrdf.nbrdf_import import (evaluate_keras_nbrdf, import_nbrdf, keras_nbrdf, load_keras_nbrdf,
-                                   nbrdf_merl_table)
+from frenbrdf.nbrdf_import import evaluate_keras_nbrdf, import_nbrdf, keras_nbrdf, load_keras_nbrdf, nbrdf_merl_table
 
 NBRDF_DATA = Path(os.environ.get("FRENBRDF_SHARED_DATA",
                                  Path(__file__).resolve().parents[2] / "shared" / "data")) / "merl-nbrdf"

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import frenbrdf
-from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models import NBRDF, NBRDFConfig
+from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.render import Scene, environment_radiance, render, render_linear, save_png, tonemap
 
 SMALL = Scene(resolution=24, environment_samples=16)

@@ -12,15 +12,14 @@ import torch
 import frenbrdf
 from frenbrdf import synth
 from frenbrdf.data import mapped_bank, read_tables, split_materials
-from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.losses import FrequencyLossConfig, FrequencyTruth
 from frenbrdf.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models import NBRDF, NBRDFConfig
+from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.render import Scene, render, render_linear
 from frenbrdf.training import train
 
-from .conftest import toy_table
-from .conftest import tiny
+from .conftest import tiny, toy_table
 
 # --------------------------------------------------------------------------- grazing angles
 

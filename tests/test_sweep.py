@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from frenbrdf import cli
+from frenbrdf.losses import FrequencyLossConfig
 from frenbrdf.select import select_config
 from frenbrdf.training import load_config
 from frenbrdf.variants import MeasureSettings, Variant, capacity_variants
@@ -49,6 +50,10 @@ def front_file(tmp_path):
 
 def test_variants_vary_one_setting_around_the_default():
     assert spread_slices(4) == (0, 24, 48, 72) and spread_slices(2) == (0, 48) and len(spread_slices(8)) == 8
+    for n in (15, 16, 17, 45, 89, 90):  # every count gives distinct valid θ_h bins (16 and up failed before)
+        slices = spread_slices(n)
+        assert len(set(slices)) == n and min(slices) == 0 and max(slices) <= 89, n
+        FrequencyLossConfig(slices=slices)
     names = [v.name for v in frequency_variants()]
     assert names[0] == "default" and len(names) == len(set(names)) == 9
     sizes = [v.config(tiny("frenbrdf", Path("d"), Path("o"))).model.nbrdf.n_weights

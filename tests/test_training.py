@@ -14,11 +14,11 @@ import pytest
 import torch
 
 import frenbrdf
-from frenbrdf import cli, training
-from frenbrdf.data import list_materials, split_materials
-from frenbrdf import checkpoints, presets
+from frenbrdf import checkpoints, cli, presets, training
 from frenbrdf.checkpoints import load as load_checkpoint
 from frenbrdf.configs import to_dict
+from frenbrdf.data import list_materials, split_materials
+from frenbrdf.losses import LossConfig
 from frenbrdf.training import Run, TrainingDiverged, config_for, load_config, train
 
 from .conftest import tiny
@@ -30,6 +30,8 @@ def test_tiny_frenbrdf_training_loss_falls(toy_materials, tmp_path):
     assert untrained["epoch"] == -1
     assert result.best_val < 0.8 * untrained["val_rec"], [epoch["val_rec"] for epoch in result.history]
     assert all(epoch["train_fre"] > 0 for epoch in result.history[1:])
+    # The strength η gives L_fre, logged every epoch: ‖∇(η·L_fre)‖ / ‖∇L_rec‖.
+    assert all(0 < epoch["train_gradient_ratio"] < math.inf for epoch in result.history[1:])
 
 
 @pytest.mark.parametrize("method", ["frenbrdf", "nbrdf", "hyperbrdf"])
@@ -81,10 +83,13 @@ def test_a_folder_that_is_not_a_run_is_refused_by_name(tmp_path):
 def test_presets_come_from_one_registry():
     hyper = config_for("hyperbrdf")
     assert (hyper.loss.kind, hyper.lr, hyper.grad_clip, hyper.model.nbrdf.hidden) == ("mse", 5e-5, 1.0, (60,) * 4)
-    assert config_for("nbrdf").loss.eta == 0 and config_for("frenbrdf").loss.eta == presets.METHODS["frenbrdf"].get(
-        "loss", {}).get("eta", 0.1)
+    # HyperBRDF's own mapping ln(1 + ratio) and weight penalty (mean over all weights), as its main.py runs.
+    assert (hyper.model.mapping.form, hyper.loss.weight_penalty) == ("one_plus_ratio", "all")
+    assert (config_for("frenbrdf").model.mapping.form, config_for("nbrdf").loss.weight_penalty) == ("ratio",
+                                                                                                   "per_tensor")
+    assert config_for("nbrdf").loss.eta == 0 and config_for("frenbrdf").loss.eta == LossConfig().eta > 0
     demo = config_for("hyperbrdf", training="demo", epochs=7)
-    assert (demo.epochs, demo.context_samples, demo.lr) == (7, presets.TRAINING["demo"]["context_samples"], 5e-4)
+    assert (demo.epochs, demo.context_samples, demo.lr) == (7, presets.TRAINING["demo"]["context_samples"], 5e-5)
     assert config_for("frenbrdf", training="demo").lr == config_for("frenbrdf").lr
     with pytest.raises(ValueError, match="training preset"):
         config_for("frenbrdf", training="marathon")

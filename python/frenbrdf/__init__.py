@@ -13,8 +13,6 @@ from .coords import (
 )
 from .exceptions import MerlFormatError
 from .knn import KnnInterpolator, knn_interpolate
-from .models import NBRDF, Model, interpolate
-from .training import Run, TrainConfig, TrainResult, config_for, train
 from .merl import (
     merl_above_horizon,
     merl_angles_to_bin,
@@ -29,9 +27,12 @@ from .merl import (
     valid_mask,
     write_merl,
 )
+from .models import NBRDF, Model, interpolate
+from .training import Run, TrainConfig, TrainResult, config_for, train
 
 __all__ = [
     "__version__",
+    "sht",
     "KnnInterpolator",
     "MerlFormatError",
     "Model",

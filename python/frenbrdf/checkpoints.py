@@ -62,7 +62,7 @@ def save_mapping(folder: str | os.PathLike, state: dict) -> None:
     """Writes a mapping's state (``reference``, ``epsilon``) as the run folder's ``mapping.npz``."""
     with atomic_path(Path(folder) / MAPPING_FILE) as temporary:
         np.savez(temporary, reference=np.asarray(state["reference"], dtype=np.float32),
-                 epsilon=np.float64(state["epsilon"]))
+                 epsilon=np.float64(state["epsilon"]), offset=np.float64(state.get("offset", 0.0)))
 
 
 def load_mapping(path: str | os.PathLike, checkpoint: dict) -> dict:
@@ -76,6 +76,7 @@ def load_mapping(path: str | os.PathLike, checkpoint: dict) -> dict:
                                 "checkpoints is stored once per run folder; copy it along with the checkpoint)")
     try:
         with np.load(file) as saved:
-            return {"reference": saved["reference"], "epsilon": float(saved["epsilon"])}
+            return {"reference": saved["reference"], "epsilon": float(saved["epsilon"]),
+                    "offset": float(saved["offset"]) if "offset" in saved else 0.0}
     except Exception as error:  # numpy raises several types for damaged files
         raise ValueError(f"{file}: not a readable mapping ({error})") from None

@@ -2,8 +2,10 @@
 
 - Reconstruction: each test material is encoded from N random valid bins (default 4000,
   the same bins for every method), decoded, rendered and compared with the render of the
-  true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the frequency loss.
-- Editing: random pairs (a, b) of test materials and t ∈ {0, 0.2, …, 1}; the truth is
+  true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) over the lit material pixels
+  (:func:`frenbrdf.render.material_mask`), and the frequency loss.
+- Editing: each unordered pair (a, b) of test materials at most once and interior
+  t ∈ {0.25, 0.5, 0.75}; the truth is
   the table (1 − t)·a + t·b (its render is the same blend of the linear renders, since
   rendering is linear in the BRDF), the prediction decode((1 − t)·z_a + t·z_b).
 
@@ -13,6 +15,7 @@ PNG figures; ``frenbrdf evaluate`` is its command line.
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,11 +26,11 @@ from tqdm.auto import tqdm
 
 from .atomic import save_json, write_text
 from .data import list_materials
-from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
+from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
 from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
+from .render import Scene, material_mask, render_linear, save_figure, tonemap
 from .training.run import Run
-from .render import Scene, render_linear, save_figure, tonemap
 
 #: The paper's numbers (MERL, their protocol), docs/method.md §7.
 PAPER = {
@@ -42,14 +45,23 @@ ROWS = [("rmse_x100", "Recon RMSE×10² ↓"), ("psnr", "Recon PSNR ↑"), ("ssi
         ("lfre_x1000", "Recon L_fre×10³ ↓"), ("edit_psnr", "Edit PSNR ↑"), ("edit_ssim_x10", "Edit SSIM×10 ↑")]
 
 
-def image_metrics(truth: np.ndarray, prediction: np.ndarray) -> dict[str, float]:
-    """RMSE, PSNR and SSIM of two display images in [0, 1] ``(H, W, 3)`` (scikit-image)."""
-    from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
+def image_metrics(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray | None = None) -> dict[str, float]:
+    """RMSE, PSNR and SSIM of two display images in [0, 1] ``(H, W, 3)`` over the pixels of ``mask``
+    ``(H, W)`` (default: all; evaluation passes :func:`frenbrdf.render.material_mask`).
 
-    mse = mean_squared_error(truth, prediction)
-    psnr = peak_signal_noise_ratio(truth, prediction, data_range=1.0) if mse > 0 else float("inf")
-    ssim = structural_similarity(truth, prediction, data_range=1.0, channel_axis=-1)
-    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim)}
+    RMSE and PSNR (data range 1) are those of the masked pixels; SSIM is scikit-image's SSIM
+    map averaged over them (its 7×7 windows near the silhouette still see some background).
+    """
+    from skimage.metrics import structural_similarity
+
+    mask = np.ones(truth.shape[:2], dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+    if mask.shape != truth.shape[:2] or truth.shape != prediction.shape or not mask.any():
+        raise ValueError(f"images {truth.shape} and {prediction.shape} need a non-empty mask of shape "
+                         f"{truth.shape[:2]}, got {mask.shape}")
+    mse = float(np.mean((truth[mask] - prediction[mask]) ** 2))
+    psnr = 10 * np.log10(1.0 / mse) if mse > 0 else float("inf")
+    _, ssim_map = structural_similarity(truth, prediction, data_range=1.0, channel_axis=-1, full=True)
+    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim_map[mask].mean())}
 
 
 @dataclass
@@ -59,9 +71,10 @@ class EvaluateConfig:
     samples: int = 4000
     """Samples given to the encoder per test material."""
     edits: int = 2000
-    """Interpolations (pair, t) in the editing table."""
-    weights: tuple[float, ...] = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
-    """Interpolation weights t."""
+    """At most this many interpolations (pair, t) in the editing table: every unordered pair of test
+    materials once, a random subset of the pairs when there are more."""
+    weights: tuple[float, ...] = (0.25, 0.5, 0.75)
+    """Interpolation weights t, interior only (t = 0 or 1 is a reconstruction, not an edit)."""
     seed: int = 0
     resolution: int = 256
     """Render size; the editing table may use ``edit_resolution``."""
@@ -104,7 +117,15 @@ class FrequencyMetric:
         with torch.no_grad():
             params = model.network.decoder(torch.from_numpy(z[None].astype(np.float32)))
             predicted = self.loss.predicted_coefficients(params)[0].numpy()
-        return float(np.mean((predicted - true) ** 2))
+        return float(spectral_distance(predicted, true))
+
+
+def edit_pairs(n_materials: int, most: int, rng: np.random.Generator) -> list[tuple[int, int]]:
+    """Unordered pairs of distinct materials, each at most once: all of them, or ``most`` drawn at random."""
+    pairs = list(itertools.combinations(range(n_materials), 2))
+    if len(pairs) > most:
+        pairs = [pairs[i] for i in sorted(rng.choice(len(pairs), size=most, replace=False))]
+    return pairs
 
 
 def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np.ndarray:
@@ -139,7 +160,7 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
         table = read_merl(path)
         bins = sample_bins(table, rng, samples)
         z, image = reconstruct(model, table, bins, scene)
-        metrics = image_metrics(tonemap(render_linear(table, scene)), image)
+        metrics = image_metrics(tonemap(render_linear(table, scene)), image, material_mask(scene))
         if frequency_metric is not False:
             metrics["lfre"] = frequency_metric(model, table, z)
         rows.append({"material": path.stem, **metrics})
@@ -211,6 +232,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(config.seed)
     scene, edit_scene = Scene(resolution=config.resolution), Scene(resolution=config.edit_resolution)
+    mask, edit_mask = material_mask(scene), material_mask(edit_scene)
     frequency_metric = FrequencyMetric()
     show = config.progress
 
@@ -229,13 +251,12 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
             z, image = reconstruct(model, table, bins, scene)
             latents[method][name] = z
             renders[name][method] = image
-            metrics = image_metrics(truth_image, image)
+            metrics = image_metrics(truth_image, image, mask)
             metrics["lfre"] = frequency_metric(model, table, z)
             per_material[method].append({"material": name, **metrics})
 
     # Editing.
-    pairs = [tuple(rng.choice(len(names), size=2, replace=False)) for _ in range(
-        max(1, int(np.ceil(config.edits / len(config.weights)))))] if len(names) >= 2 else []
+    pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)), rng)
     edits = {m: [] for m in models}
     with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing", disable=not show) as bar:
         for a, b in pairs:
@@ -245,7 +266,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
                 for method, model in models.items():
                     z = (1 - t) * latents[method][name_a] + t * latents[method][name_b]
                     image = tonemap(render_linear(model.decode(z)[0], edit_scene))
-                    edits[method].append({"a": name_a, "b": name_b, "t": t, **image_metrics(truth_image, image)})
+                    edits[method].append({"a": name_a, "b": name_b, "t": t, **image_metrics(truth_image, image, edit_mask)})
                     bar.update()
 
     summary = {}
@@ -280,7 +301,10 @@ def markdown_table(summary: dict, n_materials: int, n_edits: int) -> str:
     """The reconstruction and editing table, methods side by side, with the paper's numbers."""
     methods = list(summary)
     header = "| | " + " | ".join(methods) + " | " + " | ".join(f"paper: {m}" for m in PAPER) + " |"
-    lines = [f"Reconstruction on {n_materials} test materials; editing over {n_edits} interpolations.", "",
+    lines = [f"Reconstruction on {n_materials} test materials; editing over {n_edits} interpolations (each "
+             "unordered pair of test materials at most once, t ∈ {0.25, 0.5, 0.75}). RMSE, PSNR and SSIM over "
+             "the lit material pixels of the renders (background excluded); L_fre normalised on the sphere "
+             "(docs/method.md §5).", "",
              header, "|---" * (1 + len(methods) + len(PAPER)) + "|"]
     for key, label in ROWS:
         ours = " | ".join(f"{summary[m][key]:.3g}" for m in methods)
@@ -334,11 +358,12 @@ def _figures(out: Path, names, renders, per_material, models, latents, pairs, ed
     if pairs:
         a, b = names[pairs[0][0]], names[pairs[0][1]]
         scene = Scene(resolution=config.edit_resolution)
-        figure, axes = plt.subplots(1 + len(methods), len(config.weights),
-                                    figsize=(1.6 * len(config.weights), 1.7 * (1 + len(methods))), squeeze=False)
-        for col, t in enumerate(config.weights):
+        strip = (0.0, *config.weights, 1.0)  # the end points too, for a person to see where edits go
+        figure, axes = plt.subplots(1 + len(methods), len(strip),
+                                    figsize=(1.6 * len(strip), 1.7 * (1 + len(methods))), squeeze=False)
+        for col, t in enumerate(strip):
             axes[0, col].imshow(tonemap((1 - t) * edit_truth_linear[a] + t * edit_truth_linear[b]))
-            axes[0, col].set_title(f"t = {t:.1f}", fontsize=9)
+            axes[0, col].set_title(f"t = {t:g}", fontsize=9)
             for row, method in enumerate(methods, start=1):
                 z = (1 - t) * latents[method][a] + t * latents[method][b]
                 axes[row, col].imshow(tonemap(render_linear(models[method].decode(z)[0], scene)))

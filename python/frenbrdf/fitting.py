@@ -88,7 +88,7 @@ def save_nbrdf(path: str | os.PathLike, nbrdf: NBRDF) -> None:
     """Saves one NBRDF (weights and mapping) atomically."""
     with atomic_path(path) as temporary:
         torch.save({"params": [p[0] for p in nbrdf.params], "reference": torch.from_numpy(nbrdf.mapping.reference),
-                    "epsilon": nbrdf.mapping.epsilon}, temporary)
+                    "epsilon": nbrdf.mapping.epsilon, "offset": nbrdf.mapping.offset}, temporary)
 
 
 def load_nbrdf(path: str | os.PathLike) -> NBRDF:
@@ -96,7 +96,7 @@ def load_nbrdf(path: str | os.PathLike) -> NBRDF:
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
         return NBRDF([p[None] for p in state["params"]],
-                     LogRelativeMapping(state["reference"].numpy(), state["epsilon"]))
+                     LogRelativeMapping(state["reference"].numpy(), state["epsilon"], state.get("offset", 0.0)))
     except FileNotFoundError:
         raise
     except Exception as error:

@@ -21,6 +21,7 @@ coefficients of the truth and of the decoded NBRDF:
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import os
 from dataclasses import asdict, dataclass, field
@@ -48,8 +49,14 @@ def reconstruction_loss(predicted: torch.Tensor, true: torch.Tensor, cos_in: tor
     return error.abs().mean() if kind == "l1" else error.square().mean()
 
 
-def weight_penalty(params: list[torch.Tensor]) -> torch.Tensor:
-    """Σ over the NBRDF's tensors of the mean squared weight (averaged over materials)."""
+def weight_penalty(params: list[torch.Tensor], kind: str = "per_tensor") -> torch.Tensor:
+    """The NBRDF weights' penalty, averaged over materials.
+
+    ``"per_tensor"``: Σ over the tensors of each one's mean squared weight (ours);
+    ``"all"``: the mean squared weight over all of them together (HyperBRDF's main.py).
+    """
+    if kind == "all":
+        return sum(p.square().sum() for p in params) / sum(p.numel() for p in params)
     return sum(p.square().mean() for p in params)
 
 
@@ -59,6 +66,19 @@ def latent_penalty(z: torch.Tensor) -> torch.Tensor:
 
 
 # --------------------------------------------------------------------------- frequency loss
+
+
+SPHERE_AREA = 4 * math.pi
+
+
+def spectral_distance(predicted, true):
+    """L_fre's value between coefficients ``(..., ncoeff)`` (numpy or torch).
+
+    The mean over the leading axes (materials, slices, channels) of Σ_lm (c − c')² / 4π:
+    by Parseval, the mean squared difference of the two band-limited functions over the
+    sphere, so its scale depends neither on lmax nor on the grid (docs/method.md §5).
+    """
+    return ((predicted - true) ** 2).sum(-1).mean() / SPHERE_AREA
 
 
 @dataclass
@@ -107,9 +127,6 @@ class FrequencyLossConfig:
     def nlon(self) -> int:
         return 2 * self.lmax + 2
 
-    def key(self) -> str:
-        """A short hash of the settings, for cache file names."""
-        return hashlib.sha256(repr(sorted(asdict(self).items())).encode()).hexdigest()[:16]
 
 
 def _unit(theta, phi) -> np.ndarray:
@@ -120,7 +137,7 @@ class FrequencyLoss(nn.Module):
     """L_fre between decoded NBRDFs and precomputed true coefficients.
 
     ``forward(params, true)``: NBRDF parameters of B materials and their true
-    coefficients ``(B, S, 3, ncoeff)`` → the mean squared coefficient difference.
+    coefficients ``(B, S, 3, ncoeff)`` → :func:`spectral_distance`.
     """
 
     def __init__(self, config: FrequencyLossConfig):
@@ -159,7 +176,11 @@ class FrequencyLoss(nn.Module):
         return self.sht(self.predicted_maps(params))
 
     def forward(self, params: list[torch.Tensor], true: torch.Tensor) -> torch.Tensor:
-        return (self.predicted_coefficients(params) - true).square().mean()
+        return spectral_distance(self.predicted_coefficients(params), true)
+
+
+#: Version of how the cached truth is computed: a change of method bumps it, so old cache files miss.
+TRUTH_CACHE_FORMAT = 2
 
 
 class FrequencyTruth:
@@ -168,6 +189,17 @@ class FrequencyTruth:
     The kNN weights depend only on which bins of a slice hold data, so they are built
     once per (slice, mask) and reused for every material.
     """
+
+    def cache_key(self, material_hash: str, mapping) -> str:
+        """The cache name of a material's truth: a hash of all it depends on — the material
+        file's content hash, every field of the mapping (f_ref, ε, the offset), every
+        frequency setting and :data:`TRUTH_CACHE_FORMAT`."""
+        state = mapping.state()
+        described = {"format": TRUTH_CACHE_FORMAT, "material": material_hash, "frequency": asdict(self.config),
+                     "mapping": {key: value for key, value in state.items() if key != "reference"}}
+        digest = hashlib.sha256(json.dumps(described, sort_keys=True).encode())
+        digest.update(np.ascontiguousarray(state["reference"]).tobytes())
+        return digest.hexdigest()[:32]
 
     def __init__(self, config: FrequencyLossConfig, cache_dir: str | os.PathLike | None = None):
         self.config = config
@@ -212,10 +244,11 @@ class FrequencyTruth:
         return out
 
     def coefficients(self, mapped: np.ndarray, valid: np.ndarray, cache_key: str | None = None) -> np.ndarray:
-        """``(S, 3, ncoeff)`` float32, from the disk cache when ``cache_key`` is given and present."""
+        """``(S, 3, ncoeff)`` float32, from the disk cache when ``cache_key`` (:meth:`cache_key`) is given
+        and present."""
         path = None
         if self.cache_dir is not None and cache_key is not None:
-            path = self.cache_dir / f"{cache_key}-{self.config.key()}.npy"
+            path = self.cache_dir / f"{cache_key}.npy"
             if path.exists():
                 try:
                     cached = np.load(path)
@@ -241,16 +274,25 @@ class LossConfig:
     kind: str = "l1"
     """Reconstruction error: ``"l1"`` (paper Eq. 1) or ``"mse"`` (HyperBRDF)."""
     lambda_weights: float = 1e-3
-    """λ1, on the mean squared NBRDF weight of each tensor."""
+    """λ1, on the NBRDF weights' penalty (:func:`weight_penalty`)."""
+    weight_penalty: str = "per_tensor"
+    """``"per_tensor"``: Σ of each tensor's mean squared weight; ``"all"``: the mean over all weights
+    together (HyperBRDF)."""
     lambda_latent: float = 1e-3
     """λ2, on the mean squared latent."""
-    eta: float = 0.1
-    """η, the weight of the frequency-rectified loss (0 switches it off)."""
+    eta: float = 5e-4
+    """η, the weight of the frequency-rectified loss (0 switches it off). L_fre is normalised on the
+    sphere (:func:`spectral_distance`); 5e-4 is the paper's η = 0.1 on its mean over the (lmax + 1)²
+    coefficients at lmax 49 (0.1 · 4π / 50² ≈ 5e-4), the strength every earlier result was trained
+    with. Training logs ‖∇(η·L_fre)‖ / ‖∇L_rec‖ each epoch (``train_gradient_ratio``): about 1/250
+    at this η on the default bank."""
     frequency: FrequencyLossConfig = field(default_factory=FrequencyLossConfig)
 
     def __post_init__(self):
         if self.kind not in ("l1", "mse"):
             raise ValueError(f"loss.kind must be 'l1' or 'mse', got {self.kind!r}")
+        if self.weight_penalty not in ("per_tensor", "all"):
+            raise ValueError(f"loss.weight_penalty must be 'per_tensor' or 'all', got {self.weight_penalty!r}")
         for name in ("lambda_weights", "lambda_latent", "eta"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):

@@ -50,7 +50,8 @@ import torch
 from tqdm import tqdm
 
 from .merl import write_merl
-from .models.nbrdf import NBRDF, nbrdf_forward, nbrdf_merl_table as _write_table
+from .models.nbrdf import NBRDF, nbrdf_forward
+from .models.nbrdf import nbrdf_merl_table as _write_table
 
 #: One Dense layer: kernel ``(in, out)`` and bias ``(out,)``, float64.
 Layer = tuple[np.ndarray, np.ndarray]

@@ -31,7 +31,8 @@ from .atomic import atomic_path
 from .lighting import LIGHTS, environment_radiance
 from .merl import SHAPE, merl_lookup_directions
 
-__all__ = ["Scene", "environment_radiance", "render", "render_linear", "save_figure", "save_png", "tonemap"]
+__all__ = ["Scene", "environment_radiance", "material_mask", "render", "render_linear", "save_figure", "save_png",
+           "tonemap"]
 
 
 @dataclass(frozen=True)
@@ -144,6 +145,15 @@ def render_linear(source, scene: Scene = Scene()) -> np.ndarray:
     image = np.stack([np.bincount(geometry.pixel, contributions[:, c], minlength=geometry.n_pixels)
                       for c in range(3)], axis=-1)
     return image.reshape(scene.resolution, scene.resolution, 3)
+
+
+def material_mask(scene: Scene = Scene()) -> np.ndarray:
+    """The lit material pixels ``(resolution, resolution)`` bool: on the sphere, with any light above
+    their horizon. Image metrics are computed over these, not over the background."""
+    geometry = _geometry(scene)
+    mask = np.zeros(geometry.n_pixels, dtype=bool)
+    mask[geometry.pixel] = True
+    return mask.reshape(scene.resolution, scene.resolution)
 
 
 def tonemap(radiance: np.ndarray, exposure: float = 1.0) -> np.ndarray:

@@ -104,9 +104,10 @@ class Kernels:
     def mlp(self, h, d):
         """The NBRDF's network at (H, D) with φ_h = 0: mapped RGB (three floats)."""
         dr = self.dr
-        # The network was trained on H = (sin θ_h, 0, cos θ_h): drop H's azimuth (isotropy),
-        # as frenbrdf.models.nbrdf.nbrdf_coordinates does.
-        x = [dr.sqrt(dr.fma(h.x, h.x, h.y * h.y)), None, h.z, d.x, d.y, d.z]
+        # The network was trained on H = (sin θ_h, 0, cos θ_h) and D_y ≥ 0: drop H's azimuth
+        # (isotropy) and fold D by reciprocity, as frenbrdf.models.nbrdf.nbrdf_coordinates does.
+        flip = (d.y < 0) | ((d.y == 0) & (d.x < 0))
+        x = [dr.sqrt(dr.fma(h.x, h.x, h.y * h.y)), None, h.z, dr.select(flip, -d.x, d.x), dr.abs(d.y), d.z]
         last = len(self.layers) - 1
         for index, (weight, bias) in enumerate(self.layers):
             out = []
@@ -136,5 +137,5 @@ class Kernels:
         else:
             i, j, k = self.bin_coordinates(h, d)
             reference = dr.maximum(self.table_lookup(i, j, k, active, "trilinear", masked=False), 0.0) + eps
-        return dr.maximum(dr.fma(reference, dr.exp(y), -eps), 0.0)
+        return dr.maximum(dr.fma(reference, dr.exp(y) - self.material.offset, -eps), 0.0)
 

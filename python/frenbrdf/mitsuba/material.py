@@ -30,6 +30,8 @@ class Material:
     """NBRDF: (weight ``(out, in)``, bias ``(out,)``) per layer, float32; ReLU between layers."""
     epsilon: float = 0.0
     """NBRDF: the mapping's ε."""
+    offset: float = 0.0
+    """NBRDF: the mapping's offset c (f = (f_ref + ε)(exp(y) − c) − ε)."""
     reference: np.ndarray | None = None
     """NBRDF: f_ref, ``(3,)`` or a MERL-shaped table ``(3, 90, 90, 180)``."""
     table: np.ndarray | None = None
@@ -68,8 +70,8 @@ def material_from_nbrdf(nbrdf, name: str = "nbrdf") -> Material:
     params = [p[0].numpy().astype(np.float32) for p in nbrdf.params]
     layers = list(zip(params[0::2], params[1::2]))
     reference = np.asarray(nbrdf.mapping.reference, dtype=np.float64)
-    return Material("nbrdf", name, layers=layers, epsilon=float(nbrdf.mapping.epsilon), reference=reference,
-                    nbrdf=nbrdf)
+    return Material("nbrdf", name, layers=layers, epsilon=float(nbrdf.mapping.epsilon),
+                    offset=float(nbrdf.mapping.offset), reference=reference, nbrdf=nbrdf)
 
 
 def material_from_table(table, name: str = "merl") -> Material:

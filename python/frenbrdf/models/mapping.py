@@ -1,6 +1,8 @@
 """The log-relative mapping of reflectance, in which every model of the package works:
 
-    y = ln((f + ε) / (f_ref + ε)),     f = (f_ref + ε) · exp(y) − ε  (clamped to ≥ 0),
+    y = ln(c + (f + ε) / (f_ref + ε)),     f = (f_ref + ε) · (exp(y) − c) − ε  (clamped to ≥ 0),
+
+with c = 0 (``form="ratio"``, ours) or c = 1 (``form="one_plus_ratio"``, HyperBRDF's),
 
 where f_ref is the median BRDF of the training materials, per bin (the default) or per
 channel. The mapping is stored with every trained model so that decoding is exact.
@@ -15,6 +17,9 @@ import torch
 
 from ..merl import N_BINS, SHAPE, merl_lookup_directions
 
+#: The constant c added to the ratio inside the logarithm, per form.
+FORM_OFFSETS = {"ratio": 0.0, "one_plus_ratio": 1.0}
+
 
 @dataclass
 class MappingConfig:
@@ -24,8 +29,13 @@ class MappingConfig:
     """Offset that keeps the logarithm finite at zero reflectance."""
     reference: str = "per_bin"
     """``"per_bin"``: f_ref is the per-bin median of the training tables; ``"per_channel"``: one median per channel."""
+    form: str = "ratio"
+    """``"ratio"``: y = ln(ratio) (NBRDF, ours); ``"one_plus_ratio"``: y = ln(1 + ratio) (HyperBRDF's
+    data_processing), with ratio = (f + ε) / (f_ref + ε)."""
 
     def __post_init__(self):
+        if self.form not in FORM_OFFSETS:
+            raise ValueError(f"mapping.form must be one of {tuple(FORM_OFFSETS)}, got {self.form!r}")
         if not (self.epsilon > 0 and np.isfinite(self.epsilon)):
             raise ValueError(f"mapping.epsilon must be a positive number, got {self.epsilon}")
         if self.reference not in ("per_bin", "per_channel"):
@@ -42,16 +52,21 @@ class LogRelativeMapping:
         finite and ≥ 0.
     epsilon
         The offset ε.
+    offset
+        The constant c added to the ratio (0 or 1, :data:`FORM_OFFSETS`).
     """
 
-    def __init__(self, reference, epsilon: float = 0.002):
+    def __init__(self, reference, epsilon: float = 0.002, offset: float = 0.0):
         reference = np.asarray(reference, dtype=np.float64)
         if reference.shape not in ((3,), SHAPE):
             raise ValueError(f"the reference BRDF must have shape (3,) or {SHAPE}, got {reference.shape}")
         if not np.all(np.isfinite(reference)) or reference.min() < 0:
             raise ValueError("the reference BRDF must be finite and non-negative")
+        if offset not in FORM_OFFSETS.values():
+            raise ValueError(f"the mapping's offset must be one of {sorted(FORM_OFFSETS.values())}, got {offset}")
         self.reference = reference
         self.epsilon = float(epsilon)
+        self.offset = float(offset)
 
     @classmethod
     def from_tables(cls, tables: np.ndarray, config: MappingConfig) -> LogRelativeMapping:
@@ -70,7 +85,7 @@ class LogRelativeMapping:
             if partial.any():
                 reference[partial] = np.nanmedian(tables[:, partial], axis=0)
             reference = reference.reshape(SHAPE)
-        return cls(np.maximum(reference, 0.0), config.epsilon)
+        return cls(np.maximum(reference, 0.0), config.epsilon, FORM_OFFSETS[config.form])
 
     @property
     def per_bin(self) -> bool:
@@ -89,17 +104,19 @@ class LogRelativeMapping:
     def forward(self, reflectance, reference):
         """Reflectance → mapped values (numpy or torch, broadcasting)."""
         log = torch.log if isinstance(reflectance, torch.Tensor) else np.log
-        return log((reflectance + self.epsilon) / (reference + self.epsilon))
+        return log(self.offset + (reflectance + self.epsilon) / (reference + self.epsilon))
 
     def inverse(self, mapped, reference):
         """Mapped values → reflectance, clamped to ≥ 0 (numpy or torch)."""
         if isinstance(mapped, torch.Tensor):
-            return ((reference + self.epsilon) * torch.exp(mapped) - self.epsilon).clamp_min(0.0)
-        return np.maximum((reference + self.epsilon) * np.exp(mapped) - self.epsilon, 0.0)
+            return ((reference + self.epsilon) * (torch.exp(mapped) - self.offset) - self.epsilon).clamp_min(0.0)
+        return np.maximum((reference + self.epsilon) * (np.exp(mapped) - self.offset) - self.epsilon, 0.0)
 
     def state(self) -> dict:
-        return {"reference": self.reference.astype(np.float32), "epsilon": self.epsilon}
+        """What the mapping is: f_ref (float32), ε and the offset c."""
+        return {"reference": self.reference.astype(np.float32), "epsilon": self.epsilon, "offset": self.offset}
 
     @classmethod
     def from_state(cls, state: dict) -> LogRelativeMapping:
-        return cls(np.asarray(state["reference"], dtype=np.float64), state["epsilon"])
+        """The inverse of :meth:`state`; states saved before the offset existed have c = 0."""
+        return cls(np.asarray(state["reference"], dtype=np.float64), state["epsilon"], state.get("offset", 0.0))

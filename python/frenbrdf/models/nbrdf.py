@@ -16,8 +16,7 @@ import numpy as np
 import torch
 
 from ..coords import half_diff_vectors, rusinkiewicz_to_half_diff
-from ..merl import (CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz,
-                    write_merl)
+from ..merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz, write_merl
 from .mapping import LogRelativeMapping
 
 #: The NBRDF input: H and D as Cartesian 3-vectors.
@@ -64,8 +63,7 @@ class BinGeometry:
 @functools.cache
 def bin_geometry() -> BinGeometry:
     wi, wo = (d.reshape(-1, 3) for d in merl_bin_directions())
-    h, d = half_diff_vectors(wi, wo)
-    return BinGeometry(torch.from_numpy(np.concatenate([h, d], axis=-1).astype(np.float32)),
+    return BinGeometry(torch.from_numpy(nbrdf_coordinates(wi, wo).astype(np.float32)),
                        torch.from_numpy(np.clip(wi[:, 2], 0.0, 1.0).astype(np.float32)))
 
 
@@ -111,16 +109,32 @@ def nbrdf_merl_table(reflectance) -> np.ndarray:
     return table
 
 
+def fold_difference(d: np.ndarray) -> np.ndarray:
+    """D ``(..., 3)`` folded onto the half-space a MERL table covers (φ_d ∈ [0, π), D_y ≥ 0).
+
+    Swapping ω_i and ω_o turns D by π about H's pole, (x, y, z) → (−x, −y, z), and leaves a
+    BRDF unchanged (reciprocity); MERL stores only φ_d ∈ [0, π) for that reason, so every
+    training sample has D_y ≥ 0. Folding (x, y, z) → (−x, −y, z) where y < 0 (or y = 0 and
+    x < 0, φ_d = π) asks the network only about inputs it was trained on, and makes every
+    decoded BRDF exactly reciprocal. The Dr.Jit kernel (:mod:`frenbrdf.mitsuba.kernels`)
+    folds the same way.
+    """
+    x, y = d[..., 0:1], d[..., 1:2]
+    flip = (y < 0) | ((y == 0) & (x < 0))
+    return np.where(flip, d * np.array([-1.0, -1.0, 1.0]), d)
+
+
 def nbrdf_coordinates(wi, wo) -> np.ndarray:
-    """The NBRDF input of direction pairs, each ``(..., 3)`` → ``(..., 6)``: (H, D) with φ_h = 0.
+    """The NBRDF input of direction pairs, each ``(..., 3)`` → ``(..., 6)``: (H, D) with φ_h = 0,
+    D folded by reciprocity (:func:`fold_difference`).
 
     An isotropic BRDF does not depend on φ_h, and the networks only ever see H in the
     xz-plane (as at the MERL bins), so H is rotated about the normal onto it:
-    H = (sin θ_h, 0, cos θ_h). D, already expressed in H's frame, is unchanged.
+    H = (sin θ_h, 0, cos θ_h). D is already expressed in H's frame.
     """
     h, d = half_diff_vectors(wi, wo)
     h_isotropic = np.stack([np.hypot(h[..., 0], h[..., 1]), np.zeros(h.shape[:-1]), h[..., 2]], axis=-1)
-    return np.concatenate([h_isotropic, d], axis=-1)
+    return np.concatenate([h_isotropic, fold_difference(d)], axis=-1)
 
 
 def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Tensor:

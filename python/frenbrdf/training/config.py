@@ -12,7 +12,7 @@ from pathlib import Path
 from ..configs import from_dict, merge, to_dict
 from ..losses import LossConfig
 from ..models.autoencoder import ModelConfig
-from ..presets import METHODS, TRAINING_METHOD_OVERRIDES, check_method, training_overrides
+from ..presets import METHODS, check_method, training_overrides
 
 
 @dataclass
@@ -79,7 +79,7 @@ def config_for(method: str, *, training: str | None = None, **overrides) -> Trai
     check_method(method)
     layers = [METHODS[method]]
     if training is not None:
-        layers += [training_overrides(training), TRAINING_METHOD_OVERRIDES.get(training, {}).get(method, {})]
+        layers.append(training_overrides(training))
     layers.append({key: to_dict(value) if dataclasses.is_dataclass(value) else value
                    for key, value in overrides.items()})
     settings = to_dict(TrainConfig(method=method))

@@ -94,6 +94,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
     for epoch in range(first_epoch, cfg.epochs):
         network.train()
         sums: dict[str, float] = {}
+        gradient_ratio = None
         order = torch.randperm(data.n_train, generator=generator)
         for step_in_epoch in range(steps_per_epoch):
             batch = order[step_in_epoch * batch_size:(step_in_epoch + 1) * batch_size].tolist()
@@ -104,7 +105,10 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
             share = slice(ranks.rank * len(batch) // ranks.world, (ranks.rank + 1) * len(batch) // ranks.world)
             context, query = context.take(share).to(device), query.take(share).to(device)
             true = data.truth[batch][share].to(device) if data.truth is not None and cfg.loss.eta > 0 else None
-            terms = optimisation_step(trained, frequency, optimizer, cfg.loss, cfg.grad_clip, context, query, true)
+            terms = optimisation_step(trained, frequency, optimizer, cfg.loss, cfg.grad_clip, context, query, true,
+                                      measure_gradients=step_in_epoch == 0)
+            if terms.gradient_ratio is not None:
+                gradient_ratio = terms.gradient_ratio
             if terms.not_finite:
                 raise TrainingDiverged(
                     f"step {epoch * steps_per_epoch + step_in_epoch}: loss term(s) {terms.not_finite} became NaN/inf; "
@@ -116,6 +120,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
             bar.set_postfix({name: f"{value:.3g}" for name, value in terms.logged.items()}, refresh=False)
         validation = evaluate_split(network, frequency, cfg, data, data.validation, device)
         history.append({"epoch": epoch, **{f"train_{k}": v for k, v in sums.items()},
+                        **({"train_gradient_ratio": gradient_ratio} if gradient_ratio is not None else {}),
                         **{f"val_{k}": v for k, v in validation.items()}})
         if validation["rec"] < best["val"]:
             best = {"epoch": epoch, "val": validation["rec"]}

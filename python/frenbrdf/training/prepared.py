@@ -118,14 +118,13 @@ def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distr
 
 
 def _true_coefficients(cfg: TrainConfig, names, files, mapping, bank, ranks: Distributed) -> torch.Tensor:
-    reference_hash = hashlib.sha256(mapping.reference.tobytes()).hexdigest()[:16]
     frequency_truth = FrequencyTruth(cfg.loss.frequency, cfg.cache_folder / "frequency")
     coefficients = []
     # Every rank fills the cache for its share of the materials, then all read it.
     for phase in ("fill", "read"):
         mine = [i for i in range(len(names)) if phase == "read" or i % ranks.world == ranks.rank]
         for i in tqdm(mine, desc="true SH coefficients", disable=not (cfg.progress and ranks.main), leave=False):
-            key = f"{file_hash(files[names[i]])}-{reference_hash}"
+            key = frequency_truth.cache_key(file_hash(files[names[i]]), mapping)
             result = frequency_truth.coefficients(bank.mapped[i].numpy(), bank.valid[i].numpy(), key)
             if phase == "read":
                 coefficients.append(result)

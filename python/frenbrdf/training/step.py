@@ -21,6 +21,10 @@ class LossTerms:
 
     total: torch.Tensor
     logged: dict[str, float]
+    parts: dict[str, torch.Tensor]
+    """Each term as a tensor (``rec``, ``w``, ``z``, ``fre``), the weights applied except η."""
+    gradient_ratio: float | None = None
+    """‖∇(η·L_fre)‖ / ‖∇L_rec‖, where :func:`optimisation_step` was asked to measure it."""
 
     @property
     def not_finite(self) -> list[str]:
@@ -35,21 +39,38 @@ def loss_terms(network, frequency: FrequencyLoss | None, loss: LossConfig, conte
     z, params = network(context.encoder_input())
     terms = {
         "rec": reconstruction_loss(nbrdf_forward(params, query.coords), query.values, query.cos_in, loss.kind),
-        "w": loss.lambda_weights * weight_penalty(params),
+        "w": loss.lambda_weights * weight_penalty(params, loss.weight_penalty),
         "z": loss.lambda_latent * latent_penalty(z),
     }
     if frequency is not None and true_coefficients is not None:
         terms["fre"] = frequency(params, true_coefficients)
     total = terms["rec"] + terms["w"] + terms["z"] + loss.eta * terms.get("fre", 0.0)
-    return LossTerms(total, {name: float(value.detach()) for name, value in terms.items()})
+    return LossTerms(total, {name: float(value.detach()) for name, value in terms.items()}, terms)
+
+
+def gradient_norm_ratio(network, terms: LossTerms, eta: float) -> float:
+    """‖∇(η·L_fre)‖ / ‖∇L_rec‖ over the network's parameters: the strength η gives L_fre."""
+    params = [p for p in network.parameters() if p.requires_grad]
+    norms = []
+    for value in (eta * terms.parts["fre"], terms.parts["rec"]):
+        grads = torch.autograd.grad(value, params, retain_graph=True, allow_unused=True)
+        norms.append(math.sqrt(sum(float(g.square().sum()) for g in grads if g is not None)))
+    return norms[0] / norms[1] if norms[1] > 0 else math.inf
 
 
 def optimisation_step(network, frequency: FrequencyLoss | None, optimizer: torch.optim.Optimizer, loss: LossConfig,
-                      grad_clip: float, context, query, true_coefficients: torch.Tensor | None) -> LossTerms:
-    """Computes the loss and, when every term is finite, takes one optimiser step (else none)."""
+                      grad_clip: float, context, query, true_coefficients: torch.Tensor | None, *,
+                      measure_gradients: bool = False) -> LossTerms:
+    """Computes the loss and, when every term is finite, takes one optimiser step (else none).
+
+    ``measure_gradients``: also set ``terms.gradient_ratio`` (two more backward passes) when
+    L_fre is part of the loss.
+    """
     terms = loss_terms(network, frequency, loss, context, query, true_coefficients)
     if terms.not_finite:
         return terms
+    if measure_gradients and "fre" in terms.parts and loss.eta > 0:
+        terms.gradient_ratio = gradient_norm_ratio(network, terms, loss.eta)
     optimizer.zero_grad(set_to_none=True)
     terms.total.backward()
     if grad_clip > 0:
