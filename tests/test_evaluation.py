@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from frenbrdf import cli
-from frenbrdf.evaluation import EvaluateConfig, edit_pairs, evaluate_runs, image_metrics
+from frenbrdf.evaluation import EvaluateConfig, edit_pairs, evaluate_runs, evaluate_seeds, image_metrics
 from frenbrdf.render import Scene, material_mask
 from frenbrdf.training import train
 
@@ -104,3 +104,20 @@ def test_demo_on_a_data_folder_writes_a_report(toy_materials, tmp_path, monkeypa
     for method in ("frenbrdf", "nbrdf", "hyperbrdf"):
         assert (tmp_path / "report" / "runs" / method / "best.pt").exists()
     assert (tmp_path / "report" / "evaluation" / "renders.png").exists()
+
+
+def test_evaluation_compares_runs_of_several_seeds(toy_materials, tmp_path):
+    runs = [str(train(tiny(method, toy_materials, tmp_path / method / f"seed-{seed}", epochs=1, seed=seed)).path)
+            for method in ("frenbrdf", "nbrdf") for seed in (0, 1)]
+    out = tmp_path / "eval"
+    config = EvaluateConfig(samples=200, edits=3, resolution=32, edit_resolution=16, progress=False)
+    evaluate_seeds(runs, out, config=config)
+    table = (out / "evaluation.md").read_text()
+    assert "2 seeds (0, 1)" in table and "nbrdf − frenbrdf (95 % CI)" in table
+    report = json.loads((out / "evaluation.json").read_text())
+    assert report["comparison"]["seeds"] == [0, 1] and set(report["seeds"]) == {"0", "1"}
+    psnr = report["comparison"]["metrics"]["psnr"]
+    by_seed = [report["seeds"][s]["summary"]["nbrdf"]["psnr"] - report["seeds"][s]["summary"]["frenbrdf"]["psnr"]
+               for s in ("0", "1")]
+    assert psnr["differences"]["nbrdf"]["mean"] == pytest.approx(np.mean(by_seed))
+    assert (out / "seed-0" / "evaluation.md").exists() and (out / "seed-1" / "renders.png").exists()

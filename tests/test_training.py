@@ -211,3 +211,15 @@ def test_ddp_on_two_cpu_processes_equals_one_process(toy_materials, tmp_path):
     # Same samples, same initialisation; only the order of the gradient sums differs.
     for name, tensor in a["model"].items():
         torch.testing.assert_close(b["model"][name], tensor, rtol=1e-4, atol=1e-5)
+
+
+def test_cli_trains_several_seeds_into_one_folder_each(toy_materials, tmp_path, capsys):
+    config_file = tmp_path / "tiny.json"
+    config_file.write_text(json.dumps(to_dict(tiny("nbrdf", toy_materials, tmp_path / "unused", epochs=1))))
+    assert cli.main(["train", "--config", str(config_file), "--out", str(tmp_path / "runs"), "--seeds", "0", "3",
+                     "--quiet", "--json"]) == 0
+    runs = [Run(tmp_path / "runs" / f"seed-{seed}") for seed in (0, 3)]
+    assert [run.config.seed for run in runs] == [0, 3] and runs[0].split != runs[1].split
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--data", str(toy_materials), "--out", str(tmp_path / "x"), "--seed", "1", "--seeds", "2"])
+    assert "not both" in capsys.readouterr().err

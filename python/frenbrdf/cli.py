@@ -9,7 +9,7 @@ import platform
 import sys
 from pathlib import Path
 
-from .presets import method_names
+from .presets import TRAINING, method_names
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -66,21 +66,29 @@ def _import_nbrdf(args: argparse.Namespace) -> int:
 def _train(args: argparse.Namespace) -> int:
     from .training import config_for, load_config, train
 
-    overrides = {"method": args.method, "data": args.data, "out": args.out, "epochs": args.epochs,
-                 "seed": args.seed, "device": args.device}
-    if args.config:
-        cfg = load_config(args.config, **overrides)
-    else:
-        cfg = config_for(args.method or "frenbrdf", **{k: v for k, v in overrides.items()
-                                                        if v is not None and k != "method"})
-    cfg.progress = not args.quiet
-    run = train(cfg, resume=args.resume)
-    summary = {"run_dir": str(run.path), "method": cfg.method, "best_epoch": run.best_epoch,
-               "best_val_rec": run.best_val, "seconds": round(run.seconds, 1)}
-    if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
-        print(json.dumps(summary, indent=2) if args.json else
-              f"{cfg.method}: best validation L_rec {run.best_val:.4g} at epoch {run.best_epoch}; "
-              f"{run.seconds:.0f} s; run folder {run.path}")
+    if args.config and args.training:
+        raise ValueError("--training sets a preset's length; with --config the file says everything")
+    if args.seeds is not None and args.seed is not None:
+        raise ValueError("give --seed or --seeds, not both")
+    if args.seeds is not None and not args.out:
+        raise ValueError("--seeds needs --out: each seed trains into OUT/seed-S")
+    for seed in args.seeds if args.seeds is not None else [args.seed]:
+        out = str(Path(args.out) / f"seed-{seed}") if args.seeds is not None else args.out
+        overrides = {"method": args.method, "data": args.data, "out": out, "epochs": args.epochs, "seed": seed,
+                     "device": args.device}
+        if args.config:
+            cfg = load_config(args.config, **overrides)
+        else:
+            cfg = config_for(args.method or "frenbrdf", training=args.training,
+                             **{k: v for k, v in overrides.items() if v is not None and k != "method"})
+        cfg.progress = not args.quiet
+        run = train(cfg, resume=args.resume)
+        summary = {"run_dir": str(run.path), "method": cfg.method, "seed": cfg.seed, "best_epoch": run.best_epoch,
+                   "best_val_rec": run.best_val, "seconds": round(run.seconds, 1)}
+        if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
+            print(json.dumps(summary, indent=2) if args.json else
+                  f"{cfg.method} (seed {cfg.seed}): best validation L_rec {run.best_val:.4g} at epoch "
+                  f"{run.best_epoch}; {run.seconds:.0f} s; run folder {run.path}")
     return 0
 
 
@@ -103,16 +111,16 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from .evaluation import EvaluateConfig, evaluate_runs
+    from .evaluation import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
 
     config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
                             progress=not args.quiet)
     if args.quick:
         config.edits, config.edit_resolution = min(args.edits, 120), 96
-    report = evaluate_runs(args.runs, args.out, data=args.data, config=config)
-    print((Path(args.out) / "evaluation.md").read_text())
+    report = evaluate_seeds(args.runs, args.out, data=args.data, config=config)
+    print(seeds_markdown(report) if "comparison" in report else report_markdown(report))
     if args.json:
-        print(json.dumps(report["summary"], indent=2))
+        print(json.dumps(report.get("comparison", report.get("summary")), indent=2))
     return 0
 
 
@@ -197,6 +205,10 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--config", help="JSON file with any TrainConfig keys, over the method's preset")
     train.add_argument("--epochs", type=int)
     train.add_argument("--seed", type=int)
+    train.add_argument("--seeds", type=int, nargs="+", metavar="S",
+                       help="train once per seed (each its own split and initialisation) into OUT/seed-S")
+    train.add_argument("--training", choices=sorted(TRAINING),
+                       help="a training length of frenbrdf.presets over the method's preset (default: the full one)")
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -214,7 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
     fit.set_defaults(run=_fit_nbrdf)
 
     evaluate = commands.add_parser("evaluate", help="reconstruction and editing tables and figures for runs")
-    evaluate.add_argument("runs", nargs="+", help="run folders (one per method, same data and split)")
+    evaluate.add_argument("runs", nargs="+", help="run folders: one per method, of one seed or of several "
+                          "(grouped by their split; several seeds give mean ± sd and paired intervals)")
     evaluate.add_argument("--out", required=True, help="folder for the tables and figures")
     evaluate.add_argument("--data", help="folder of MERL files (default: the one the runs were trained on)")
     evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")

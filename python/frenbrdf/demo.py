@@ -72,6 +72,10 @@ def _write_readme(out: Path, data, runs: list[Run], report: dict, timings: dict)
         f"{DEMO_EVALUATION.edits} interpolations for editing (renders {DEMO_EVALUATION.resolution}² and "
         f"{DEMO_EVALUATION.edit_resolution}²).", "",
         "## Results", "", table, "",
+        "**One seed: this ranking is within noise.** Training noise between seeds is as large as the "
+        "differences between the methods here (about ±1 dB of PSNR); only a comparison over several seeds "
+        "with intervals that exclude 0 decides (`frenbrdf train --seeds 0 1 2`, then `frenbrdf evaluate` on "
+        "all the runs; the README's result tables are made so).", "",
         "The paper's columns come from its own protocol on measured MERL data with far longer training; "
         "this demo trains for minutes on analytic materials, so compare the methods with each other, not "
         "with the paper.", "",
