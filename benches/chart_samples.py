@@ -14,8 +14,8 @@ Each test material of the runs' common split is encoded from N random measured b
 decoded, rendered and compared with the render of its true table, exactly as
 ``frenbrdf evaluate`` does it (:func:`frenbrdf.evaluation.sample_bins`,
 :func:`~frenbrdf.evaluation.reconstruct`, :func:`~frenbrdf.evaluation.image_metrics`:
-PSNR, SSIM and RMSE of the tone-mapped sphere renders). Every N below ``all`` is drawn
-``--seeds`` times, with the same bins for every method. A point of the chart is the mean
+PSNR, SSIM and RMSE of the tone-mapped sphere renders over the lit material pixels).
+Every N below ``all`` is drawn ``--seeds`` times, with the same bins for every method. A point of the chart is the mean
 over the test materials, averaged over the draws; the band is ± one standard deviation
 of that mean over the draws (``all`` has a single, exact draw).
 
@@ -37,7 +37,7 @@ from tqdm.auto import tqdm
 
 from frenbrdf.evaluation import image_metrics, load_runs, reconstruct, sample_bins
 from frenbrdf.merl import read_merl, valid_mask
-from frenbrdf.render import Scene, render_linear, tonemap
+from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
 from common import pyplot, run_metadata, save_chart, save_figure  # noqa: E402
@@ -84,6 +84,7 @@ def samples_chart(run_dirs, out_dir, *, data: str | None = None, counts=DEFAULT_
         raise ValueError(f"need seeds ≥ 1 and counts ≥ 1 (or None for all), got seeds={seeds}, counts={counts}")
     runs = load_runs(run_dirs, data, max_materials)
     scene = Scene(resolution=resolution)
+    mask = material_mask(scene)  # the lit material pixels, as frenbrdf evaluate measures
     rows, valid_bins = [], {}
     with tqdm(total=len(runs.test) * len(counts), desc="samples chart", disable=not progress) as bar:
         for index, material in enumerate(runs.test):
@@ -99,7 +100,7 @@ def samples_chart(run_dirs, out_dir, *, data: str | None = None, counts=DEFAULT_
                     for method, model in runs.models.items():
                         _, image = reconstruct(model, table, bins, scene)
                         rows.append({"method": method, "samples": label(count), "seed": seed, "material": material,
-                                     **image_metrics(truth, image)})
+                                     **image_metrics(truth, image, mask)})
                 bar.update()
 
     summary = summarise(rows, list(runs.models), counts, valid_bins)
