@@ -66,3 +66,15 @@ def test_rendering_chart_writes_png_csv_and_json(tmp_path):
     assert saved["rows"][0]["display_rmse"] == pytest.approx(float(rows[0]["display_rmse"]))
     assert saved["materials"]["gold"]["sampling"]["lobes"]  # a metal: fitted GGX lobes
     assert (tmp_path / "rendering.png").stat().st_size > 0
+
+
+def test_eta_chart_pairs_each_eta_with_eta_zero_of_the_same_seed(tmp_path):
+    chart = load_script("chart_eta")
+    runs = [{"eta": eta, "seed": seed, "psnr": 25.0 + seed + (0.5 if eta else 0.0), "ssim": 0.9, "rmse": 0.05,
+             "lfre": 1.0 - eta, "ratio_first": eta * 10, "ratio_last": eta * 5}
+            for eta in (0.0, 0.05) for seed in (0, 1, 2)]
+    rows = chart.summarise(runs, [0.0, 0.05], [0, 1, 2])
+    assert rows[1]["psnr_vs_0"] == pytest.approx(0.5) and rows[0]["psnr_vs_0"] == 0
+    assert rows[1]["psnr_sd"] == pytest.approx(1.0)  # seeds differ by 1 dB; the pairing removes it
+    chart.draw(rows, tmp_path / "chart6.png", "test")
+    assert (tmp_path / "chart6.png").stat().st_size > 10_000
