@@ -18,7 +18,12 @@ settings.register_profile("ci", derandomize=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
 
-SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SHARED_DATA = Path(os.environ.get("FRENBRDF_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+#: The published NBRDF fits (Keras .h5) of 80 MERL materials, when ../shared is beside the checkout.
+PUBLISHED_DIR = SHARED_DATA / "merl-nbrdf"
+PUBLISHED = sorted(PUBLISHED_DIR.glob("*.h5"))
+needs_published = pytest.mark.skipif(
+    not PUBLISHED, reason=f"published NBRDF weights not found in {PUBLISHED_DIR} (set FRENBRDF_SHARED_DATA)")
 BENCHES = Path(__file__).resolve().parents[1] / "benches"
 
 
@@ -106,3 +111,42 @@ def tiny(method: str, data: Path, out: Path, **overrides):
     cfg.model.decoder.hidden = (32,)
     cfg.loss.frequency.lmax, cfg.loss.frequency.slices = 11, (0, 30, 60)
     return cfg
+
+
+def write_keras_h5(path: Path, layers, names=None) -> Path:
+    """Writes ``(kernel, bias)`` pairs in Keras' layout, as float32 like Keras does."""
+    import h5py
+
+    names = names or [f"dense_{i + 1}" for i in range(len(layers))]
+    with h5py.File(path, "w") as file:
+        for name, (kernel, bias) in zip(names, layers):
+            group = file.create_group(f"{name}/{name}")
+            group["kernel:0"] = np.asarray(kernel, dtype=np.float32)
+            group["bias:0"] = np.asarray(bias, dtype=np.float32)
+        file.create_group("lambda_1")  # the exp(x) − 1 layer: no weights
+    return path
+
+
+def random_layers(sizes, seed=0):
+    """Random Keras-layout layers ``(kernel (in, out), bias (out,))`` of the given widths."""
+    rng = np.random.default_rng(seed)
+    return [(rng.normal(0, 0.5, (n_in, n_out)), rng.normal(0, 0.1, n_out)) for n_in, n_out in zip(sizes, sizes[1:])]
+
+
+def constant_table(value: float) -> np.ndarray:
+    """A MERL table of one constant reflectance, missing below the horizon."""
+    import frenbrdf
+
+    table = np.full((3, 90, 90, 180), value)
+    table[:, ~frenbrdf.merl_above_horizon()] = -1.0
+    return table
+
+
+def random_nbrdf_params(hidden=(8,), seed: int = 0):
+    """Random weights of one small NBRDF (a leading batch of 1), as :class:`frenbrdf.NBRDF` takes them."""
+    import torch
+
+    from frenbrdf.models import NBRDFConfig
+
+    generator = torch.Generator().manual_seed(seed)
+    return [torch.randn(1, *s, generator=generator) * 0.3 for s in NBRDFConfig(hidden).shapes()]

@@ -15,11 +15,7 @@ from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
 from frenbrdf.render import Scene, render
 
-from .conftest import SHARED_DATA
-from .test_nbrdf_import import random_layers, write_keras_h5
-from .test_render import _random_params, constant_table
-
-PUBLISHED = sorted((SHARED_DATA / "merl-nbrdf").glob("*.h5"))
+from .conftest import PUBLISHED, constant_table, needs_published, random_layers, random_nbrdf_params, write_keras_h5
 
 
 def test_each_format_loads_as_a_table_or_an_nbrdf(tmp_path):
@@ -28,7 +24,7 @@ def test_each_format_loads_as_a_table_or_an_nbrdf(tmp_path):
     np.testing.assert_array_equal(load_material_file(tmp_path / "grey.binary"),
                                   frenbrdf.read_merl(tmp_path / "grey.binary"))
 
-    nbrdf = NBRDF(_random_params(), LogRelativeMapping(np.full(3, 0.1)))
+    nbrdf = NBRDF(random_nbrdf_params(), LogRelativeMapping(np.full(3, 0.1)))
     save_nbrdf(tmp_path / "fit.pt", nbrdf)
     (tmp_path / "fit.weights").write_bytes((tmp_path / "fit.pt").read_bytes())  # other names: by content
     for name in ("fit.pt", "fit.weights"):
@@ -68,8 +64,7 @@ def test_render_an_h5_without_mitsuba(tmp_path, capsys):
     assert expected.max() > 0
 
 
-@pytest.mark.skipif(not PUBLISHED, reason=f"the published NBRDF weights are not in {SHARED_DATA / 'merl-nbrdf'} "
-                    "(a checkout without ../shared/data)")
+@needs_published
 def test_render_a_published_h5_without_mitsuba(tmp_path):
     out = tmp_path / "published.png"
     assert main(["render", str(PUBLISHED[0]), "--out", str(out), "--resolution", "32"]) == 0

@@ -156,7 +156,7 @@ def test_keras_h5_file_eval_equals_the_reference(mi, tmp_path):
     """A Keras .h5 read by the plugin (frenbrdf.materials) evaluates as its NBRDF (the reference forward pass)."""
     from frenbrdf.nbrdf_import import keras_nbrdf
 
-    from .test_nbrdf_import import random_layers, write_keras_h5
+    from .conftest import random_layers, write_keras_h5
 
     layers = [(k.astype(np.float32).astype(np.float64), b.astype(np.float32).astype(np.float64))
               for k, b in random_layers([6, 8, 8, 3], seed=9)]

@@ -4,8 +4,6 @@ MERL's missing markers, and clean errors on bad weight files."""
 from __future__ import annotations
 
 import math
-import os
-from pathlib import Path
 
 import h5py
 import numpy as np
@@ -16,32 +14,10 @@ from frenbrdf.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models.nbrdf import nbrdf_coordinates
 from frenbrdf.nbrdf_import import evaluate_keras_nbrdf, import_nbrdf, keras_nbrdf, load_keras_nbrdf, nbrdf_merl_table
 
-NBRDF_DATA = Path(os.environ.get("FRENBRDF_SHARED_DATA",
-                                 Path(__file__).resolve().parents[2] / "shared" / "data")) / "merl-nbrdf"
-PUBLISHED = sorted(NBRDF_DATA.glob("*.h5"))
-needs_published = pytest.mark.skipif(
-    not PUBLISHED, reason=f"published NBRDF weights not found in {NBRDF_DATA} (set FRENBRDF_SHARED_DATA)")
-
+from .conftest import PUBLISHED, PUBLISHED_DIR, needs_published, random_layers, write_keras_h5
 
 # ---------------------------------------------------------------------------------------
-# Helpers: Keras-layout files written with h5py, and an evaluation written out by hand.
-
-def write_keras_h5(path: Path, layers, names=None) -> Path:
-    """Writes ``(kernel, bias)`` pairs in Keras' layout, as float32 like Keras does."""
-    names = names or [f"dense_{i + 1}" for i in range(len(layers))]
-    with h5py.File(path, "w") as file:
-        for name, (kernel, bias) in zip(names, layers):
-            group = file.create_group(f"{name}/{name}")
-            group["kernel:0"] = np.asarray(kernel, dtype=np.float32)
-            group["bias:0"] = np.asarray(bias, dtype=np.float32)
-        file.create_group("lambda_1")  # the exp(x) − 1 layer: no weights
-    return path
-
-
-def random_layers(sizes, seed=0):
-    rng = np.random.default_rng(seed)
-    return [(rng.normal(0, 0.5, (n_in, n_out)), rng.normal(0, 0.1, n_out)) for n_in, n_out in zip(sizes, sizes[1:])]
-
+# Helpers: an evaluation written out by hand (Keras-layout files: conftest.write_keras_h5).
 
 def reference_rgb(kernels, biases, i: int, j: int, k: int) -> np.ndarray:
     """The network at MERL bin (i, j, k), from the angles of docs/method.md §1 and explicit products."""
@@ -69,9 +45,9 @@ def both_above_horizon(i: int, j: int, k: int) -> bool:
 @pytest.fixture(scope="module")
 def imported(tmp_path_factory):
     """One published material imported through import_nbrdf, and its weight file."""
-    weights = NBRDF_DATA / "gold-paint.h5"
+    weights = PUBLISHED_DIR / "gold-paint.h5"
     if not weights.exists():
-        pytest.skip(f"published NBRDF weights not found in {NBRDF_DATA} (set FRENBRDF_SHARED_DATA)")
+        pytest.skip(f"published NBRDF weights not found in {PUBLISHED_DIR} (set FRENBRDF_SHARED_DATA)")
     (written,) = import_nbrdf([weights], tmp_path_factory.mktemp("merl"), progress=False)
     return weights, written
 
@@ -115,7 +91,7 @@ def test_missing_bins_are_exactly_those_below_the_horizon(imported):
 
 @needs_published
 def test_every_published_file_loads_as_6_21_21_3():
-    assert len(PUBLISHED) == 80, f"expected the 80 published materials in {NBRDF_DATA}"
+    assert len(PUBLISHED) == 80, f"expected the 80 published materials in {PUBLISHED_DIR}"
     for path in PUBLISHED:
         layers = load_keras_nbrdf(path)
         assert [kernel.shape for kernel, _ in layers] == [(6, 21), (21, 21), (21, 3)], path

@@ -17,7 +17,7 @@ from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import fold_difference, nbrdf_coordinates
 from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
 
-from .test_nbrdf_import import PUBLISHED, needs_published, random_layers
+from .conftest import PUBLISHED, needs_published, random_layers
 
 
 def upper_hemisphere(rng: np.random.Generator, n: int) -> np.ndarray:

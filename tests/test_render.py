@@ -5,18 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import frenbrdf
-from frenbrdf.models import NBRDF, NBRDFConfig
+from frenbrdf.models import NBRDF
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.render import Scene, environment_radiance, render, render_linear, save_png, tonemap
 
+from .conftest import constant_table, random_nbrdf_params
+
 SMALL = Scene(resolution=24, environment_samples=16)
-
-
-def constant_table(value: float) -> np.ndarray:
-    table = np.full((3, 90, 90, 180), value)
-    table[:, ~frenbrdf.merl_above_horizon()] = -1.0
-    return table
 
 
 def test_constant_brdf_matches_a_direct_sum_over_lights():
@@ -50,16 +45,9 @@ def test_rendering_is_linear_in_the_brdf():
 
 
 def test_nbrdf_render_equals_rendering_its_callable():
-    nbrdf = NBRDF([p for p in _random_params()], LogRelativeMapping(np.full(3, 0.1)))
+    nbrdf = NBRDF([p for p in random_nbrdf_params()], LogRelativeMapping(np.full(3, 0.1)))
     np.testing.assert_allclose(render_linear(nbrdf, SMALL), render_linear(lambda wi, wo: nbrdf(wi, wo), SMALL),
                                rtol=1e-6)
-
-
-def _random_params():
-    import torch
-
-    generator = torch.Generator().manual_seed(0)
-    return [torch.randn(1, *s, generator=generator) * 0.3 for s in NBRDFConfig((8,)).shapes()]
 
 
 def test_display_image_and_errors(tmp_path):
