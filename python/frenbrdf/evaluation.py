@@ -29,6 +29,7 @@ from .data import list_materials
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
 from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
+from .presets import method_names
 from .render import Scene, material_mask, render_linear, save_figure, tonemap
 from .statistics import compare_seeds, markdown
 from .training.run import Run
@@ -172,7 +173,7 @@ class RunSet:
     """Trained runs of one split and their test materials (see :func:`load_runs`)."""
 
     runs: list[Path]
-    """The run folders, in the order given."""
+    """The run folders, in the order of the method registry (:func:`frenbrdf.presets.method_names`)."""
     models: dict[str, Model]
     """Method → model; the run folder's name is added when a method repeats."""
     data: Path
@@ -205,6 +206,8 @@ def load_runs(run_dirs, data: str | None = None, max_materials: int = 0) -> RunS
     runs = [Run(r) for r in run_dirs]
     if not runs:
         raise ValueError("give at least one run folder")
+    order = method_names()  # tables list the methods in the registry's order, whatever order they came in
+    runs.sort(key=lambda run: order.index(run.method) if run.method in order else len(order))
     models, test_sets, data_dirs = {}, [], set()
     for run in runs:
         model = run.model()
