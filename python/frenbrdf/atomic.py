@@ -43,12 +43,6 @@ def write_text(path: str | os.PathLike, text: str) -> None:
         temporary.write_text(text, encoding="utf-8")
 
 
-def write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Writes bytes atomically."""
-    with atomic_path(path) as temporary:
-        temporary.write_bytes(data)
-
-
 def save_json(path: str | os.PathLike, data) -> None:
     """Writes JSON (indented, newline-terminated) atomically."""
     write_text(path, json.dumps(data, indent=2) + "\n")
