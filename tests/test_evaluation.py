@@ -24,6 +24,22 @@ def test_image_metrics():
     assert shifted["ssim"] < 1.0
 
 
+def test_delta_e_sees_hue_not_noise():
+    """ΔE is 0 for identical images, below 1 for a 1 % brightness change, and large when a purple
+    comes back beige (the failure the colour issue is about)."""
+    mask = np.ones((8, 8), dtype=bool)
+    purple = np.broadcast_to([0.55, 0.25, 0.60], (8, 8, 3)).copy()
+    beige = np.broadcast_to([0.60, 0.52, 0.45], (8, 8, 3)).copy()
+    assert image_metrics(purple, purple, mask)["delta_e"] == 0.0
+    assert image_metrics(purple, purple * 1.01, mask)["delta_e"] < 1.0
+    assert image_metrics(purple, beige, mask)["delta_e"] > 20.0
+    half = mask.copy()
+    half[:, 4:] = False  # only the masked pixels count
+    mixed = purple.copy()
+    mixed[:, 4:] = beige[:, 4:]
+    assert image_metrics(purple, mixed, half)["delta_e"] == 0.0
+
+
 def test_image_metrics_measure_the_material_not_the_background():
     scene = Scene(resolution=32, environment_samples=8)
     mask = material_mask(scene)

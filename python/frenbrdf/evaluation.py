@@ -47,11 +47,12 @@ ROWS = [("rmse_x100", "Recon RMSE×10² ↓"), ("psnr", "Recon PSNR ↑"), ("ssi
 
 
 def image_metrics(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray | None = None) -> dict[str, float]:
-    """RMSE, PSNR and SSIM of two display images in [0, 1] ``(H, W, 3)`` over the pixels of ``mask``
-    ``(H, W)`` (default: all; evaluation passes :func:`frenbrdf.render.material_mask`).
+    """RMSE, PSNR, SSIM and colour difference ΔE of two display images in [0, 1] ``(H, W, 3)`` over
+    the pixels of ``mask`` ``(H, W)`` (default: all; evaluation passes :func:`frenbrdf.render.material_mask`).
 
     RMSE and PSNR (data range 1) are those of the masked pixels; SSIM is scikit-image's SSIM
-    map averaged over them (its 7×7 windows near the silhouette still see some background).
+    map averaged over them (its 7×7 windows near the silhouette still see some background);
+    ``delta_e`` is :func:`delta_e`.
     """
     from skimage.metrics import structural_similarity
 
@@ -62,7 +63,20 @@ def image_metrics(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray | 
     mse = float(np.mean((truth[mask] - prediction[mask]) ** 2))
     psnr = 10 * np.log10(1.0 / mse) if mse > 0 else float("inf")
     _, ssim_map = structural_similarity(truth, prediction, data_range=1.0, channel_axis=-1, full=True)
-    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim_map[mask].mean())}
+    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim_map[mask].mean()),
+            "delta_e": delta_e(truth, prediction, mask)}
+
+
+def delta_e(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray) -> float:
+    """Mean CIEDE2000 colour difference of two display images in [0, 1] ``(H, W, 3)`` over ``mask``.
+
+    The images are read as sRGB (scikit-image's ``rgb2lab``, D65); ours are gamma 2.2, which
+    sRGB's curve follows to within a few per cent. ΔE ≈ 1 is the smallest difference a person
+    sees side by side; above ~5 the colours read as different.
+    """
+    from skimage.color import deltaE_ciede2000, rgb2lab
+
+    return float(deltaE_ciede2000(rgb2lab(truth[mask]), rgb2lab(prediction[mask])).mean())
 
 
 @dataclass
