@@ -114,6 +114,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     from .evaluation import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
 
     config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
+                            max_materials=args.max_materials, all_materials=args.all_materials,
                             progress=not args.quiet)
     if args.quick:
         config.edits, config.edit_resolution = min(args.edits, 120), 96
@@ -229,7 +230,13 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("runs", nargs="+", help="run folders: one per method, of one seed or of several "
                           "(grouped by their split; several seeds give mean ± sd and paired intervals)")
     evaluate.add_argument("--out", required=True, help="folder for the tables and figures")
-    evaluate.add_argument("--data", help="folder of MERL files (default: the one the runs were trained on)")
+    evaluate.add_argument("--data", metavar="DIR", help="folder of MERL files (default: the one the runs were "
+                          "trained on); with --all, the folder whose materials to evaluate")
+    evaluate.add_argument("--all", dest="all_materials", action="store_true",
+                          help="evaluate every material of --data DIR that no run trained or validated on "
+                          "(out-of-distribution), not the runs' test split")
+    evaluate.add_argument("--max-materials", type=int, default=0, metavar="N",
+                          help="evaluate only the first N materials by name (default: all)")
     evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")
     evaluate.add_argument("--edits", type=int, default=2000, help="interpolations for editing (default 2000)")
     evaluate.add_argument("--resolution", type=int, default=256, help="render size of the reconstruction table")

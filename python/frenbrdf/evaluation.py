@@ -2,20 +2,24 @@
 
 - Reconstruction: each test material is encoded from N random valid bins (default 4000,
   the same bins for every method), decoded, rendered and compared with the render of the
-  true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) over the lit material pixels
-  (:func:`frenbrdf.render.material_mask`), and the frequency loss.
+  true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the colour difference ΔE
+  (CIEDE2000) over the lit material pixels (:func:`frenbrdf.render.material_mask`), and the
+  frequency loss.
 - Editing: each unordered pair (a, b) of test materials at most once and interior
   t ∈ {0.25, 0.5, 0.75}; the truth is
   the table (1 − t)·a + t·b (its render is the same blend of the linear renders, since
   rendering is linear in the BRDF), the prediction decode((1 − t)·z_a + t·z_b).
 
 ``evaluate_runs`` does both for several runs side by side and writes Markdown, JSON and
-PNG figures; ``frenbrdf evaluate`` is its command line.
+PNG figures (:mod:`frenbrdf.figures`); ``frenbrdf evaluate`` is its command line. The
+materials are the runs' test split, or (``EvaluateConfig.all_materials``, ``--all``) every
+material of a folder that no run trained or validated on: an out-of-distribution test.
 """
 
 from __future__ import annotations
 
 import itertools
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,24 +30,17 @@ from tqdm.auto import tqdm
 
 from .atomic import save_json, write_text
 from .data import list_materials
+from .figures import rendered_materials, write_figures
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
 from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
 from .presets import method_names
-from .render import Scene, material_mask, render_linear, save_figure, tonemap
-from .statistics import compare_seeds, markdown
+from .render import Scene, material_mask, render_linear, tonemap
+from .statistics import compare_seeds
+from .tables import PAPER as PAPER  # re-exported: frenbrdf.evaluation keeps its public names
+from .tables import ROWS, colour_losses, report_markdown, seeds_markdown
+from .tables import markdown_table as markdown_table
 from .training.run import Run
-
-#: The paper's numbers (MERL, their protocol), docs/method.md §7.
-#: Its L_fre (×10³: hyperbrdf 6.74, nbrdf 6.80, frenbrdf 0.23) is a mean over coefficients on its own
-#: data and settings, not comparable with ours (normalised on the sphere), so it is not listed.
-PAPER = {
-    "hyperbrdf": {"rmse_x100": 6.89, "psnr": 26.3, "ssim_x10": 9.26, "edit_psnr": 22.4, "edit_ssim_x10": 9.13},
-    "nbrdf": {"rmse_x100": 6.60, "psnr": 29.2, "ssim_x10": 9.50, "edit_psnr": 27.6, "edit_ssim_x10": 9.42},
-    "frenbrdf": {"rmse_x100": 6.74, "psnr": 29.9, "ssim_x10": 9.88, "edit_psnr": 30.1, "edit_ssim_x10": 9.82},
-}
-ROWS = [("rmse_x100", "Recon RMSE×10² ↓"), ("psnr", "Recon PSNR ↑"), ("ssim_x10", "Recon SSIM×10 ↑"),
-        ("lfre", "Recon L_fre ↓"), ("edit_psnr", "Edit PSNR ↑"), ("edit_ssim_x10", "Edit SSIM×10 ↑")]
 
 
 def image_metrics(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray | None = None) -> dict[str, float]:
@@ -96,7 +93,10 @@ class EvaluateConfig:
     edit_resolution: int = 128
     """Render size of the editing table (thousands of renders)."""
     max_materials: int = 0
-    """Evaluate at most this many test materials (0: all)."""
+    """Evaluate at most this many materials, the first by name (0: all)."""
+    all_materials: bool = False
+    """Evaluate every material of the data folder that no run trained or validated on (out-of-distribution),
+    instead of the runs' test split; needs the folder (``data``)."""
     progress: bool = True
 
 
@@ -162,7 +162,7 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
 
     Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
     order of ``files``, as :func:`evaluate_runs` draws them), decoded, rendered and compared
-    with the render of the true table: RMSE, PSNR, SSIM and L_fre (``frequency_metric``:
+    with the render of the true table: RMSE, PSNR, SSIM, ΔE and L_fre (``frequency_metric``:
     None for the default one, an instance to reuse across calls, False for no L_fre).
     """
     rng = np.random.default_rng(seed)
@@ -183,8 +183,92 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
 
 
 @dataclass
+class EvaluationSet:
+    """The materials a report evaluates, and where they come from (:func:`evaluation_set`)."""
+
+    data: Path
+    """The folder the materials are read from."""
+    names: list[str]
+    """The evaluated materials, sorted by name."""
+    files: dict[str, Path]
+    """Every material of ``data``: name → MERL file."""
+    out_of_distribution: bool
+    """True: the materials of ``data`` that no run saw; False: the runs' test split."""
+    trained_on: list[str]
+    """The data folders the runs were trained on."""
+    excluded: list[str]
+    """Out of distribution: the materials of ``data`` left out because a run trained or validated on them."""
+    available: int
+    """How many materials could be evaluated (``names`` keeps the first ``max_materials`` of them)."""
+
+    def describe(self) -> str:
+        """What was evaluated, in words."""
+        if not self.out_of_distribution:
+            return f"the test split of the training data ({self.data})"
+        which = (f"all {len(self.names)}" if len(self.names) == self.available
+                 else f"the first {len(self.names)} (by name) of the {self.available}")
+        return f"{which} materials of {self.data} that no run saw (out-of-distribution)"
+
+    def to_json(self) -> dict:
+        return {"out_of_distribution": self.out_of_distribution, "description": self.describe(),
+                "data": str(self.data), "trained_on": self.trained_on, "materials": len(self.names),
+                "excluded": self.excluded}
+
+
+def evaluation_set(runs: list[Run], data: str | os.PathLike | None = None, *, all_materials: bool = False,
+                   max_materials: int = 0) -> EvaluationSet:
+    """The materials to evaluate runs on.
+
+    Parameters
+    ----------
+    runs
+        The opened runs.
+    data
+        The materials' folder. For the test split, by default the one the runs were trained on.
+    all_materials
+        Every material of ``data`` whose name is in no run's training or validation split (out of
+        distribution), instead of the runs' common test split.
+    max_materials
+        Keep at most this many, the first by name (0: all).
+
+    Raises
+    ------
+    FileNotFoundError
+        The folder does not exist, or a test material is not in it.
+    ValueError
+        The folder holds no MERL file; ``all_materials`` without ``data`` or with nothing left; runs of
+        different splits (test split); a negative ``max_materials``.
+    """
+    if max_materials < 0:
+        raise ValueError(f"max_materials must be ≥ 0 (0: all), got {max_materials}")
+    trained_on = sorted({str(run.data) for run in runs})
+    if all_materials:
+        if not data:
+            raise ValueError("evaluating every material of a folder (--all) needs that folder: give it with --data DIR")
+        folder = Path(data)
+        files = {path.stem: path for path in list_materials(folder)}
+        seen = {name for run in runs for name in (*run.split.train, *run.split.val)}
+        unseen = sorted(set(files) - seen)
+        if not unseen:
+            raise ValueError(f"all {len(files)} materials of {folder} are in a run's training or validation split: "
+                             "none is left to evaluate")
+        return EvaluationSet(folder, unseen[: max_materials or None], files, True, trained_on,
+                             sorted(seen & set(files)), len(unseen))
+    if len({run.split.test for run in runs}) != 1:
+        raise ValueError("the runs were trained on different splits; evaluate runs of the same data and seed together")
+    folder = Path(data) if data else runs[0].data
+    files = {path.stem: path for path in list_materials(folder)}
+    test = sorted(runs[0].split.test)
+    names = test[: max_materials or None]
+    missing = [n for n in names if n not in files]
+    if missing:
+        raise FileNotFoundError(f"test materials {missing[:3]} not found in {folder}")
+    return EvaluationSet(folder, names, files, False, trained_on, [], len(test))
+
+
+@dataclass
 class RunSet:
-    """Trained runs of one split and their test materials (see :func:`load_runs`)."""
+    """Trained runs of one split and the materials to evaluate them on (see :func:`load_runs`)."""
 
     runs: list[Path]
     """The run folders, in the order of the method registry (:func:`frenbrdf.presets.method_names`)."""
@@ -193,58 +277,66 @@ class RunSet:
     data: Path
     """The materials' folder."""
     test: list[str]
-    """Names of the test materials, sorted (at most ``max_materials``)."""
+    """Names of the evaluated materials, sorted (the test split, or the unseen ones of ``data``)."""
     files: dict[str, Path]
     """Every material of ``data``: name → MERL file."""
+    materials: EvaluationSet
+    """What is evaluated and why."""
 
 
-def load_runs(run_dirs, data: str | None = None, max_materials: int = 0) -> RunSet:
-    """Loads runs (one per method) trained on the same split and finds their test materials.
+def load_runs(run_dirs, data: str | None = None, max_materials: int = 0, *, all_materials: bool = False,
+              materials: EvaluationSet | None = None) -> RunSet:
+    """Loads runs (one per method) and finds the materials to evaluate them on.
 
     Parameters
     ----------
     run_dirs
         Training run folders (each with ``best.pt``, ``config.json`` and ``split.json``).
-    data
-        The materials' folder; by default the one recorded in the runs' ``config.json``.
-    max_materials
-        Keep at most this many test materials (0: all).
+    data, max_materials, all_materials
+        Which materials: see :func:`evaluation_set`.
+    materials
+        The materials, when chosen already (:func:`evaluate_seeds` gives every seed the same ones).
 
     Raises
     ------
     FileNotFoundError
         A folder is not a run, or a test material is not in the data folder.
     ValueError
-        No runs, or runs trained on different splits.
+        No runs, runs trained on different splits (test split), no material to evaluate.
     """
     runs = [Run(r) for r in run_dirs]
     if not runs:
         raise ValueError("give at least one run folder")
     order = method_names()  # tables list the methods in the registry's order, whatever order they came in
     runs.sort(key=lambda run: order.index(run.method) if run.method in order else len(order))
-    models, test_sets, data_dirs = {}, [], set()
+    materials = materials or evaluation_set(runs, data, all_materials=all_materials, max_materials=max_materials)
+    models = {}
     for run in runs:
         model = run.model()
-        name = model.method if model.method not in models else f"{model.method} ({run.path.name})"
-        models[name] = model
-        test_sets.append(run.split.test)
-        data_dirs.add(run.data)
-    if len(set(test_sets)) != 1:
-        raise ValueError("the runs were trained on different splits; evaluate runs of the same data and seed together")
-    data_dir = Path(data) if data else Path(data_dirs.pop())
-    files = {path.stem: path for path in list_materials(data_dir)}
-    names = sorted(test_sets[0])[: max_materials or None]
-    missing = [n for n in names if n not in files]
-    if missing:
-        raise FileNotFoundError(f"test materials {missing[:3]} not found in {data_dir}")
-    return RunSet([run.path for run in runs], models, data_dir, names, files)
+        models[model.method if model.method not in models else f"{model.method} ({run.path.name})"] = model
+    return RunSet([run.path for run in runs], models, materials.data, materials.names, materials.files, materials)
 
 
-def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig()) -> dict:
-    """Evaluates runs (one per method) on their common test split; writes tables and figures to ``out_dir``."""
+def _summary(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
+    """The table's numbers (:data:`ROWS`) of one method: means over materials and over edits."""
+    def mean(values, key, scale=1.0):
+        return scale * float(np.mean([r[key] for r in values])) if values else float("nan")
+
+    return {"rmse_x100": mean(rows, "rmse", 100), "psnr": mean(rows, "psnr"), "ssim_x10": mean(rows, "ssim", 10),
+            "lfre": mean(rows, "lfre"), "delta_e": mean(rows, "delta_e"), "edit_psnr": mean(edit_rows, "psnr"),
+            "edit_ssim_x10": mean(edit_rows, "ssim", 10), "edit_delta_e": mean(edit_rows, "delta_e")}
+
+
+def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig(),
+                  materials: EvaluationSet | None = None) -> dict:
+    """Evaluates runs (one per method) on their common test split, or with ``config.all_materials`` on every
+    material of ``data`` they never saw; writes tables and figures to ``out_dir``.
+
+    ``materials``: the materials, when chosen already (see :func:`load_runs`).
+    """
     start = time.perf_counter()
-    loaded = load_runs(run_dirs, data, config.max_materials)
-    runs, models, data_dir, names, files = loaded.runs, loaded.models, loaded.data, loaded.test, loaded.files
+    loaded = load_runs(run_dirs, data, config.max_materials, all_materials=config.all_materials, materials=materials)
+    runs, models, names, files = loaded.runs, loaded.models, loaded.test, loaded.files
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(config.seed)
@@ -254,15 +346,14 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     show = config.progress
 
     # Reconstruction.
-    truth_linear, edit_truth_linear, latents = {}, {}, {m: {} for m in models}
+    edit_truth_linear, latents = {}, {m: {} for m in models}
     per_material = {m: [] for m in models}
     renders = {}
     for name in tqdm(names, desc="reconstruction", disable=not show):
         table = read_merl(files[name])
         bins = sample_bins(table, rng, config.samples)
-        truth_linear[name] = render_linear(table, scene)
         edit_truth_linear[name] = render_linear(table, edit_scene)
-        truth_image = tonemap(truth_linear[name])
+        truth_image = tonemap(render_linear(table, scene))
         renders[name] = {"truth": truth_image}
         for method, model in models.items():
             z, image = reconstruct(model, table, bins, scene)
@@ -286,25 +377,18 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
                     edits[method].append({"a": name_a, "b": name_b, "t": t, **image_metrics(truth_image, image, edit_mask)})
                     bar.update()
 
-    summary = {}
-    for method in models:
-        rows = per_material[method]
-        summary[method] = {
-            "rmse_x100": 100 * np.mean([r["rmse"] for r in rows]),
-            "psnr": np.mean([r["psnr"] for r in rows]),
-            "ssim_x10": 10 * np.mean([r["ssim"] for r in rows]),
-            "lfre": np.mean([r["lfre"] for r in rows]),
-            "edit_psnr": np.mean([r["psnr"] for r in edits[method]]) if edits[method] else float("nan"),
-            "edit_ssim_x10": 10 * np.mean([r["ssim"] for r in edits[method]]) if edits[method] else float("nan"),
-        }
-        summary[method] = {k: float(v) for k, v in summary[method].items()}
-    report = {"data": str(data_dir), "runs": [str(r) for r in runs], "test_materials": names,
+    first, hardest = rendered_materials(names, per_material)
+    report = {"data": str(loaded.data), "runs": [str(r) for r in runs], "test_materials": names,
+              "evaluation_set": loaded.materials.to_json(),
               "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(config).items()},
-              "summary": summary, "reconstruction": per_material, "editing": edits,
-              "seconds": time.perf_counter() - start}
+              "summary": {method: _summary(per_material[method], edits[method]) for method in models},
+              "colour": colour_losses(per_material), "rendered": {"first": first, "highest_delta_e": hardest},
+              "reconstruction": per_material, "editing": edits, "seconds": time.perf_counter() - start}
     save_json(out / "evaluation.json", report)
     write_text(out / "evaluation.md", report_markdown(report))
-    _figures(out, names, renders, per_material, models, latents, pairs, edit_truth_linear, config)
+    edit_pair = (names[pairs[0][0]], names[pairs[0][1]]) if pairs else None
+    write_figures(out, first + hardest, renders, per_material, models, latents, edit_pair, edit_truth_linear,
+                  config.weights, config.edit_resolution)
     return report
 
 
@@ -316,122 +400,35 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     :func:`evaluate_runs`. With several, each seed is evaluated into ``OUT/seed-S/`` and
     ``OUT/evaluation.{md,json}`` compare the methods over the seeds: mean ± sd and paired
     95 % t-intervals against FreNBRDF; the JSON keeps every per-material, per-seed number.
+    With ``config.all_materials`` every seed is evaluated on the same materials: those of
+    ``data`` that no run of any seed trained or validated on.
     """
+    runs = [Run(path) for path in run_dirs]
     groups: dict[int, list] = {}
     splits: dict[int, tuple] = {}
-    for run in map(Run, run_dirs):
+    for run in runs:
         split = run.split
         if split.seed in splits and splits[split.seed] != split.test:
             raise ValueError(f"runs of seed {split.seed} were trained on different splits")
         splits[split.seed] = split.test
         groups.setdefault(split.seed, []).append(run.path)
+    materials = (evaluation_set(runs, data, all_materials=True, max_materials=config.max_materials)
+                 if config.all_materials else None)
     if len(groups) == 1:
-        return evaluate_runs(next(iter(groups.values())), out_dir, data=data, config=config)
+        return evaluate_runs(next(iter(groups.values())), out_dir, data=data, config=config, materials=materials)
     out = Path(out_dir)
-    reports = {seed: evaluate_runs(runs, out / f"seed-{seed}", data=data, config=config)
-               for seed, runs in sorted(groups.items())}
-    comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, [key for key, _ in ROWS])
-    report = {"comparison": comparison, "seeds": {str(seed): r for seed, r in reports.items()},
+    reports = {seed: evaluate_runs(group, out / f"seed-{seed}", data=data, config=config, materials=materials)
+               for seed, group in sorted(groups.items())}
+    # A row without a finite value on every seed (editing of a single material) cannot be compared.
+    keys = [key for key, _ in ROWS if all(np.isfinite(v[key]) for r in reports.values() for v in r["summary"].values())]
+    comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, keys)
+    methods = reports[min(reports)]["reconstruction"]
+    all_rows = {m: [row for r in reports.values() for row in r["reconstruction"][m]] for m in methods}
+    evaluated = {**reports[min(reports)]["evaluation_set"], "trained_on": sorted({str(run.data) for run in runs})}
+    report = {"comparison": comparison, "evaluation_set": evaluated, "colour": colour_losses(all_rows),
+              "seeds": {str(seed): r for seed, r in reports.items()},
               "test_materials": sum(len(r["test_materials"]) for r in reports.values()),
               "seconds": sum(r["seconds"] for r in reports.values())}
     save_json(out / "evaluation.json", report)
     write_text(out / "evaluation.md", seeds_markdown(report))
     return report
-
-
-def seeds_markdown(report: dict) -> str:
-    """The over-seeds table of :func:`evaluate_seeds`, with what was measured."""
-    first = next(iter(report["seeds"].values()))
-    n_edits = sum(len(e) for e in first["editing"].values()) // max(1, len(first["summary"]))
-    return (f"Reconstruction on each seed's test materials ({report['test_materials']} in all); editing over "
-            f"{n_edits} interpolations per seed (each unordered pair of test materials at most once, "
-            "t ∈ {0.25, 0.5, 0.75}). RMSE, PSNR and SSIM over the lit material pixels (background excluded); "
-            "L_fre normalised on the sphere (docs/method.md §5). Per seed: `seed-S/evaluation.md`.\n\n"
-            + markdown(report["comparison"], dict(ROWS)))
-
-
-def report_markdown(report: dict) -> str:
-    """The Markdown table of a report of :func:`evaluate_runs`."""
-    n_edits = sum(len(e) for e in report["editing"].values()) // max(1, len(report["summary"]))
-    return markdown_table(report["summary"], len(report["test_materials"]), n_edits)
-
-
-def markdown_table(summary: dict, n_materials: int, n_edits: int) -> str:
-    """The reconstruction and editing table, methods side by side, with the paper's numbers."""
-    methods = list(summary)
-    header = "| | " + " | ".join(methods) + " | " + " | ".join(f"paper: {m}" for m in PAPER) + " |"
-    lines = [f"Reconstruction on {n_materials} test materials; editing over {n_edits} interpolations (each "
-             "unordered pair of test materials at most once, t ∈ {0.25, 0.5, 0.75}). RMSE, PSNR and SSIM over "
-             "the lit material pixels of the renders (background excluded); L_fre normalised on the sphere "
-             "(docs/method.md §5).", "",
-             header, "|---" * (1 + len(methods) + len(PAPER)) + "|"]
-    for key, label in ROWS:
-        ours = " | ".join(f"{summary[m][key]:.3g}" for m in methods)
-        paper = " | ".join(f"{PAPER[m].get(key, '–')}" for m in PAPER)
-        lines.append(f"| {label} | {ours} | {paper} |")
-    return "\n".join(lines) + "\n"
-
-
-def _figures(out: Path, names, renders, per_material, models, latents, pairs, edit_truth_linear, config) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    methods = list(models)
-    # Histograms per method and metric, with the mean (solid) and ± one standard deviation (dashed).
-    figure, axes = plt.subplots(len(methods), 3, figsize=(12, 3 * len(methods)), squeeze=False)
-    for row, method in enumerate(methods):
-        for col, metric in enumerate(("rmse", "psnr", "ssim")):
-            values = np.array([r[metric] for r in per_material[method]])
-            values = values[np.isfinite(values)]
-            axis = axes[row, col]
-            axis.hist(values, bins=20, color="#4c72b0", alpha=0.8)
-            if len(values):
-                mean, std = values.mean(), values.std()
-                axis.axvline(mean, color="k", linestyle="-")
-                for edge in (mean - std, mean + std):
-                    axis.axvline(edge, color="k", linestyle="--")
-            axis.set_title(f"{method}: {metric.upper()}")
-    figure.tight_layout()
-    save_figure(figure, out / "histograms.png")
-    plt.close(figure)
-
-    # A grid of renders: truth | each method, for up to 8 materials.
-    shown = names[:8]
-    figure, axes = plt.subplots(len(shown), 1 + len(methods), figsize=(2 * (1 + len(methods)), 2 * len(shown)),
-                                squeeze=False)
-    for row, name in enumerate(shown):
-        for col, key in enumerate(["truth", *methods]):
-            axes[row, col].imshow(renders[name][key])
-            axes[row, col].set_xticks([])
-            axes[row, col].set_yticks([])
-            if row == 0:
-                axes[row, col].set_title(key, fontsize=9)
-        axes[row, 0].set_ylabel(name, fontsize=7)
-    figure.tight_layout()
-    save_figure(figure, out / "renders.png")
-    plt.close(figure)
-
-    # Interpolation strips for the first pair: truth row, then each method.
-    if pairs:
-        a, b = names[pairs[0][0]], names[pairs[0][1]]
-        scene = Scene(resolution=config.edit_resolution)
-        strip = (0.0, *config.weights, 1.0)  # the end points too, for a person to see where edits go
-        figure, axes = plt.subplots(1 + len(methods), len(strip),
-                                    figsize=(1.6 * len(strip), 1.7 * (1 + len(methods))), squeeze=False)
-        for col, t in enumerate(strip):
-            axes[0, col].imshow(tonemap((1 - t) * edit_truth_linear[a] + t * edit_truth_linear[b]))
-            axes[0, col].set_title(f"t = {t:g}", fontsize=9)
-            for row, method in enumerate(methods, start=1):
-                z = (1 - t) * latents[method][a] + t * latents[method][b]
-                axes[row, col].imshow(tonemap(render_linear(models[method].decode(z)[0], scene)))
-        for row, label in enumerate(["truth", *methods]):
-            axes[row, 0].set_ylabel(label, fontsize=9)
-        for axis in axes.flat:
-            axis.set_xticks([])
-            axis.set_yticks([])
-        figure.suptitle(f"{a} → {b}", fontsize=9)
-        figure.tight_layout()
-        save_figure(figure, out / "interpolation.png")
-        plt.close(figure)

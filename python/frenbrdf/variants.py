@@ -6,7 +6,7 @@ training length of :mod:`frenbrdf.presets`). :func:`run_variant` trains one (or 
 it) and measures it:
 
 - on the **validation** split: encode each material from 4000 samples, decode, render,
-  compare with the render of the true table (PSNR, SSIM, RMSE; the code of
+  compare with the render of the true table (PSNR, SSIM, RMSE, ΔE; the code of
   :func:`frenbrdf.evaluation.reconstruction_rows`) and L_fre, always computed with the
   default :class:`~frenbrdf.losses.FrequencyLossConfig` so that variants compare;
 - the training-step time (:func:`frenbrdf.timing.time_training_step`), with and without
@@ -140,7 +140,7 @@ def _timing_data(data: Path, work: Path, n: int) -> Path:
     return folder
 
 
-SUMMARY_KEYS = ("psnr", "ssim", "rmse", "lfre")
+SUMMARY_KEYS = ("psnr", "ssim", "rmse", "delta_e", "lfre")
 
 
 def run_variant(variant: Variant, base: TrainConfig, work: str | os.PathLike,
