@@ -2,15 +2,26 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
 
 from frenbrdf import cli
-from frenbrdf.evaluation import EvaluateConfig, edit_pairs, evaluate_runs, evaluate_seeds, image_metrics
+from frenbrdf.evaluation import (
+    ROWS,
+    EvaluateConfig,
+    edit_pairs,
+    evaluate_runs,
+    evaluate_seeds,
+    evaluation_set,
+    image_metrics,
+)
+from frenbrdf.figures import rendered_materials
 from frenbrdf.render import Scene, material_mask
-from frenbrdf.training import train
+from frenbrdf.synth import write_bank
+from frenbrdf.training import Run, train
 
 from .conftest import tiny
 
@@ -89,6 +100,39 @@ def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
     table = (tmp_path / "eval" / "evaluation.md").read_text()
     assert "Recon PSNR" in table and "paper: frenbrdf" in table
     assert json.loads((tmp_path / "eval" / "evaluation.json").read_text())["summary"] == report["summary"]
+    assert "Evaluation set: the test split of the training data" in table
+
+
+def test_every_table_reports_colour_difference(tiny_runs, tmp_path):
+    config = EvaluateConfig(samples=300, edits=6, resolution=32, edit_resolution=16, progress=False)
+    report = evaluate_runs(tiny_runs, tmp_path / "eval", config=config)
+    table = (tmp_path / "eval" / "evaluation.md").read_text()
+    # The rows of the Markdown table: ours, then "–" for each of the paper's columns (the paper has no ΔE).
+    ours = " | ".join(f"{summary['delta_e']:.3g}" for summary in report["summary"].values())
+    assert f"| Recon ΔE ↓ | {ours} | – | – | – |" in table and "| Edit ΔE ↓ |" in table
+    for method, summary in report["summary"].items():
+        rows = report["reconstruction"][method]
+        assert summary["delta_e"] == pytest.approx(np.mean([r["delta_e"] for r in rows]))
+        assert summary["edit_delta_e"] == pytest.approx(np.mean([r["delta_e"] for r in report["editing"][method]]))
+        # Where colour is lost: the worst material first, with its ΔE and PSNR, and the count above 5.
+        worst = max(rows, key=lambda r: r["delta_e"])
+        above = sum(r["delta_e"] > 5 for r in rows)
+        assert (f"| {method} | {above} of {len(rows)} | {worst['material']} ({worst['delta_e']:.1f}, "
+                f"{worst['psnr']:.1f} dB)") in table
+    saved = json.loads((tmp_path / "eval" / "evaluation.json").read_text())
+    assert {"delta_e", "edit_delta_e"} <= set(saved["summary"]["frenbrdf"]) and "colour" in saved
+    assert "`renders.png` shows the first" in table
+
+
+def test_the_render_grid_shows_the_first_materials_and_the_worst_colours():
+    names = [f"m{i}" for i in range(10)]
+    delta_e = {"m0": 50, "m1": 1, "m2": 1, "m3": 1, "m4": 2, "m5": 9, "m6": 3, "m7": 30, "m8": 8, "m9": 0}
+    per_material = {"a": [{"material": n, "delta_e": delta_e[n]} for n in names],
+                    "b": [{"material": n, "delta_e": delta_e[n] + (20 if n == "m4" else 0)} for n in names]}
+    first, hardest = rendered_materials(names, per_material)
+    assert first == ["m0", "m1", "m2", "m3"]
+    assert hardest == ["m7", "m4", "m5", "m8"]  # by mean ΔE over the methods; m0 is shown once, among the first
+    assert rendered_materials(names[:5], per_material) == (names[:4], ["m4"])
 
 
 def test_evaluate_refuses_runs_of_different_splits(tiny_runs, toy_materials, tmp_path):
@@ -117,14 +161,29 @@ def test_demo_on_a_data_folder_writes_a_report(toy_materials, tmp_path, monkeypa
                      "--quiet"]) == 0
     readme = (tmp_path / "report" / "README.md").read_text()
     assert "## What was run" in readme and "Recon PSNR" in readme and "| total |" in readme
+    assert "Recon ΔE" in readme and "highest ΔE" in readme
     for method in ("frenbrdf", "nbrdf", "hyperbrdf"):
         assert (tmp_path / "report" / "runs" / method / "best.pt").exists()
     assert (tmp_path / "report" / "evaluation" / "renders.png").exists()
 
 
-def test_evaluation_compares_runs_of_several_seeds(toy_materials, tmp_path):
-    runs = [str(train(tiny(method, toy_materials, tmp_path / method / f"seed-{seed}", epochs=1, seed=seed)).path)
+@pytest.fixture(scope="module")
+def seed_runs(toy_materials, tmp_path_factory):
+    root = tmp_path_factory.mktemp("seed-runs")
+    return [str(train(tiny(method, toy_materials, root / method / f"seed-{seed}", epochs=1, seed=seed)).path)
             for method in ("frenbrdf", "nbrdf") for seed in (0, 1)]
+
+
+@pytest.fixture(scope="module")
+def other_bank(tmp_path_factory):
+    """Materials the runs never saw: a second, tiny synthetic bank."""
+    folder = tmp_path_factory.mktemp("other-bank")
+    write_bank(folder, n=3, seed=11, progress=False)
+    return folder
+
+
+def test_evaluation_compares_runs_of_several_seeds(seed_runs, tmp_path):
+    runs = seed_runs
     out = tmp_path / "eval"
     config = EvaluateConfig(samples=200, edits=3, resolution=32, edit_resolution=16, progress=False)
     evaluate_seeds(runs, out, config=config)
@@ -137,3 +196,85 @@ def test_evaluation_compares_runs_of_several_seeds(toy_materials, tmp_path):
                for s in ("0", "1")]
     assert psnr["differences"]["nbrdf"]["mean"] == pytest.approx(np.mean(by_seed))
     assert (out / "seed-0" / "evaluation.md").exists() and (out / "seed-1" / "renders.png").exists()
+    assert "| Recon ΔE ↓ |" in table and "| Edit ΔE ↓ |" in table and "highest ΔE" in table
+    assert set(report["comparison"]["metrics"]) == {key for key, _ in ROWS}
+
+
+def test_all_evaluates_every_material_of_another_folder(tiny_runs, other_bank, tmp_path):
+    config = EvaluateConfig(samples=200, edits=3, resolution=32, edit_resolution=16, progress=False,
+                            all_materials=True)
+    report = evaluate_runs(tiny_runs, tmp_path / "eval", data=str(other_bank), config=config)
+    bank = sorted(path.stem for path in other_bank.glob("*.binary"))
+    assert report["test_materials"] == bank
+    assert all([r["material"] for r in rows] == bank for rows in report["reconstruction"].values())
+    assert {r["a"] for rows in report["editing"].values() for r in rows} <= set(bank)  # edits among them
+    evaluated = report["evaluation_set"]
+    assert evaluated["out_of_distribution"] and evaluated["excluded"] == [] and evaluated["materials"] == 3
+    assert evaluated["trained_on"] == [str(Run(tiny_runs[0]).data)]
+    table = (tmp_path / "eval" / "evaluation.md").read_text()
+    assert f"all 3 materials of {other_bank} that no run saw (out-of-distribution)" in table
+    assert "Reconstruction on 3 materials" in table
+    assert f"No material of `{other_bank}` was left out" in table
+
+
+def test_all_on_the_training_folder_leaves_out_what_the_runs_saw(tiny_runs, toy_materials):
+    runs = [Run(path) for path in tiny_runs]
+    evaluated = evaluation_set(runs, toy_materials, all_materials=True)
+    seen = set(runs[0].split.train) | set(runs[0].split.val)
+    assert evaluated.excluded == sorted(seen) and evaluated.names == sorted(runs[0].split.test)
+    assert evaluation_set(runs, toy_materials, all_materials=True, max_materials=1).names == evaluated.names[:1]
+    assert "the first 1 (by name) of the 2" in evaluation_set(runs, toy_materials, all_materials=True,
+                                                              max_materials=1).describe()
+
+
+def test_all_over_seeds_evaluates_every_seed_on_the_same_materials(seed_runs, other_bank, toy_materials, tmp_path):
+    config = EvaluateConfig(samples=200, edits=3, resolution=32, edit_resolution=16, progress=False,
+                            all_materials=True, max_materials=2)
+    report = evaluate_seeds(seed_runs, tmp_path / "eval", data=str(other_bank), config=config)
+    first_two = sorted(path.stem for path in other_bank.glob("*.binary"))[:2]
+    assert [r["test_materials"] for r in report["seeds"].values()] == [first_two, first_two]
+    assert report["evaluation_set"]["out_of_distribution"] and report["comparison"]["seeds"] == [0, 1]
+    table = (tmp_path / "eval" / "evaluation.md").read_text()
+    assert "the same 2 materials for every seed" in table and "out-of-distribution" in table
+    # On the training folder: only what no seed trained or validated on, the same for both seeds.
+    runs = [Run(path) for path in seed_runs]
+    seen = {name for run in runs for name in (*run.split.train, *run.split.val)}
+    unseen = sorted({path.stem for path in toy_materials.glob("*.binary")} - seen)
+    assert len(unseen) == 1, "seeds 0 and 1 leave one toy material unseen"
+    on_training = evaluate_seeds(seed_runs, tmp_path / "eval-train", data=str(toy_materials),
+                                 config=dataclasses.replace(config, max_materials=0))
+    assert [r["test_materials"] for r in on_training["seeds"].values()] == [unseen, unseen]
+    assert on_training["evaluation_set"]["excluded"] == sorted(seen)
+    assert f"Left out {len(seen)} materials of `{toy_materials}` that a run trained or validated on: " \
+           f"{', '.join(sorted(seen))}." in (tmp_path / "eval-train" / "evaluation.md").read_text()
+    # One material has no pair to edit: the editing rows cannot be compared, and the table says so.
+    assert "edit_psnr" not in on_training["comparison"]["metrics"] and "delta_e" in on_training["comparison"]["metrics"]
+    assert "Left out, not finite on every seed: Edit PSNR ↑" in (tmp_path / "eval-train" / "evaluation.md").read_text()
+
+
+def test_all_errors_are_clear(tiny_runs, toy_materials, tmp_path, capsys):
+    base = ["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "eval"), "--quiet", "--all"]
+    for extra, message in (([], "needs that folder: give it with --data DIR"),
+                           (["--data", str(tmp_path / "nowhere")], "does not exist"),
+                           (["--data", str(tmp_path)], "holds no MERL files"),
+                           (["--data", str(tmp_path), "--max-materials", "-1"], "max_materials must be ≥ 0")):
+        with pytest.raises(SystemExit):
+            cli.main(base + extra)
+        assert message in capsys.readouterr().err, extra
+    assert not (tmp_path / "eval" / "evaluation.json").exists()
+    runs = [Run(path) for path in tiny_runs]
+    seen_only = tmp_path / "seen-only"
+    seen_only.mkdir()
+    for name in runs[0].split.train:
+        (seen_only / f"{name}.binary").symlink_to(toy_materials / f"{name}.binary")
+    with pytest.raises(ValueError, match=f"all {len(runs[0].split.train)} materials of .* none is left to evaluate"):
+        evaluation_set(runs, seen_only, all_materials=True)
+
+
+def test_cli_evaluate_all(tiny_runs, other_bank, tmp_path, capsys):
+    assert cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "eval"), "--data", str(other_bank),
+                     "--all", "--max-materials", "2", "--samples", "200", "--edits", "3", "--resolution", "32",
+                     "--quick", "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "out-of-distribution" in printed and "Recon ΔE" in printed
+    assert len(json.loads((tmp_path / "eval" / "evaluation.json").read_text())["test_materials"]) == 2

@@ -53,3 +53,20 @@ def test_seeds_must_hold_the_same_methods():
     del broken[1]["hyperbrdf"]
     with pytest.raises(ValueError, match="same methods"):
         compare_seeds(broken, ["psnr"])
+
+
+def test_colour_difference_is_compared_like_rmse():
+    """ΔE is lower-is-better like RMSE: its row is labelled ↓, and a steadily lower ΔE of a method is a
+    significant negative difference, shown exactly as the same RMSE numbers would be."""
+    from frenbrdf.evaluation import ROWS
+
+    labels = dict(ROWS)
+    assert labels["delta_e"].endswith("↓") and labels["edit_delta_e"].endswith("↓") and labels["rmse_x100"].endswith("↓")
+    values = summaries({0: -1.0, 1: -1.2, 2: -0.9}, {0: 0.1, 1: -0.2, 2: 0.1})
+    both = {s: {m: {"rmse_x100": v["psnr"], "delta_e": v["psnr"]} for m, v in by.items()} for s, by in values.items()}
+    comparison = compare_seeds(both, ["rmse_x100", "delta_e"])
+    lower = comparison["metrics"]["delta_e"]["differences"]["nbrdf"]
+    assert lower["significant"] and lower["high"] < 0
+    rmse_row, delta_e_row = markdown(comparison, labels).splitlines()[-2:]
+    assert rmse_row.startswith("| Recon RMSE×10² ↓ |") and delta_e_row.startswith("| Recon ΔE ↓ |")
+    assert rmse_row.split("|")[2:] == delta_e_row.split("|")[2:] and "**-1.03 [" in delta_e_row

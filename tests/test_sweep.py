@@ -123,6 +123,10 @@ def test_select_trains_candidates_smallest_first_and_writes_a_loadable_config(to
     selection = select_config(data, 1.0, tmp_path / "sel", base=base, variants=variants, measure=measure,
                               progress=False)
     assert selection.reached and selection.chosen["name"] == "small" and len(selection.considered) == 1
+    chosen = selection.chosen  # a mean ΔE wherever there is a mean PSNR
+    rows = chosen["per_material"]
+    assert chosen["delta_e"] == pytest.approx(sum(r["delta_e"] for r in rows) / len(rows)) and chosen["delta_e"] > 0
+    assert selection.summary["chosen"]["delta_e"] == chosen["delta_e"]
     config = load_config(selection.config_path)
     assert config.model.nbrdf.hidden == (8, 8) and config.model.encoder.latent == 8 and config.epochs == 1
     assert config.out == str(tmp_path / "sel" / "run")

@@ -207,7 +207,7 @@ class EvaluationSet:
             return f"the test split of the training data ({self.data})"
         which = (f"all {len(self.names)}" if len(self.names) == self.available
                  else f"the first {len(self.names)} (by name) of the {self.available}")
-        return f"{which} materials of {self.data} that no run saw (out-of-distribution)"
+        return f"{which} material{'s' * (self.available != 1)} of {self.data} that no run saw (out-of-distribution)"
 
     def to_json(self) -> dict:
         return {"out_of_distribution": self.out_of_distribution, "description": self.describe(),

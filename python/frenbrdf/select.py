@@ -132,7 +132,7 @@ def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfi
 
 def _brief(row: dict) -> dict:
     keys = ("name", "hidden", "nbrdf_weights", "bytes_per_material", "latent", "latent_bytes", "psnr", "ssim",
-            "lfre", "throughput_qps", "run")
+            "delta_e", "lfre", "throughput_qps", "run")
     return {k: row[k] for k in keys if k in row}
 
 

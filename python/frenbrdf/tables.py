@@ -69,10 +69,12 @@ def evaluation_set_markdown(evaluated: dict) -> str:
     """What a report evaluated (the ``evaluation_set`` of a report), in a sentence or two."""
     text = (f"Evaluation set: {evaluated['description']}. The runs were trained on "
             + ", ".join(f"`{folder}`" for folder in evaluated["trained_on"]) + ".")
-    if evaluated["out_of_distribution"]:
-        excluded = evaluated["excluded"]
-        text += (f" {len(excluded)} material(s) of `{evaluated['data']}` left out because a run trained or "
-                 "validated on them" + (": " + ", ".join(excluded) if excluded else "") + ".")
+    excluded = evaluated["excluded"]
+    if evaluated["out_of_distribution"] and excluded:
+        text += (f" Left out {len(excluded)} material{'s' * (len(excluded) != 1)} of `{evaluated['data']}` that a "
+                 f"run trained or validated on: {', '.join(excluded)}.")
+    elif evaluated["out_of_distribution"]:
+        text += f" No material of `{evaluated['data']}` was left out: no run trained or validated on any of them."
     return text
 
 
