@@ -210,6 +210,7 @@ class EvaluationSet:
         return f"{which} material{'s' * (self.available != 1)} of {self.data} that no run saw (out-of-distribution)"
 
     def to_json(self) -> dict:
+        """The report's ``evaluation_set``: what was evaluated, from which folder, what was left out."""
         return {"out_of_distribution": self.out_of_distribution, "description": self.describe(),
                 "data": str(self.data), "trained_on": self.trained_on, "materials": len(self.names),
                 "excluded": self.excluded}
