@@ -18,7 +18,7 @@ Samples come as arrays or from a file (:mod:`frenbrdf.measurements`): CSV or NPZ
 ``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b`` — unit directions in the local shading frame
 (z = the normal, z > 0), BRDF values in 1/sr (≥ 0, not multiplied by cos θ_i); or angle
 columns ``theta_i,phi_i,theta_o,phi_o`` (radians; ``…_deg`` in degrees); or a MERL file.
-:func:`frenbrdf.reconstruct_outputs.write_reconstruction` writes the result folder.
+:func:`frenbrdf.reconstruct_outputs.reconstruct_file` writes a result folder (``frenbrdf reconstruct``).
 
 Examples
 --------
