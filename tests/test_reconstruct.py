@@ -13,7 +13,7 @@ from frenbrdf import cli, pretrained
 from frenbrdf.measurements import read_measurements
 from frenbrdf.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
 
-from .conftest import tiny
+from .conftest import bench_module, tiny
 
 
 @pytest.fixture(scope="module")
@@ -210,6 +210,29 @@ def test_missing_or_foreign_packed_files_are_named(run_dir, tmp_path):
     (tmp_path / "packed" / "model.pt").write_bytes(b"garbage")
     with pytest.raises(ValueError, match=r"model\.pt: not a readable packed model"):
         frenbrdf.Model.pretrained(tmp_path / "packed")
+
+
+@pytest.mark.slow
+def test_chart_8_runs_on_a_tiny_run(run_dir, tmp_path):
+    report = bench_module("chart_refine").refine_chart(run_dir, tmp_path, latent_steps=(2,), full_latent_steps=2,
+                                                       weight_steps=(2,), fit_epochs=(), max_materials=1,
+                                                       resolution=32, progress=False)
+    assert {row["family"] for row in report["points"]} == {"encoder", "latent", "full"}
+    assert all((tmp_path / f"chart8_refine.{suffix}").exists() for suffix in ("png", "csv", "json"))
+
+
+@pytest.mark.slow  # trains, evaluates and packs: about 40 s on a shared 2-core machine
+def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
+    config = tmp_path / "tiny.json"
+    config.write_text(json.dumps({"epochs": 1, "batch_materials": 2, "context_samples": 128, "query_samples": 128,
+                                  "cache_dir": str(tmp_path / "cache"), "loss": {"eta": 0},
+                                  "model": {"nbrdf": {"hidden": [8]}, "encoder": {"hidden": [16], "latent": 4},
+                                            "decoder": {"hidden": [16]}}}))
+    card = bench_module("pretrained").build(str(config), [toy_materials], tmp_path / "work", tmp_path / "packed",
+                                            tmp_path / "card.md", progress=False)
+    assert frenbrdf.Model.pretrained(tmp_path / "packed").card["held_out"] == card["held_out"]
+    assert abs(card["held_out"]["packed"]["psnr"] - card["held_out"]["float32"]["psnr"]) < 0.1
+    assert "| PSNR (dB) |" in (tmp_path / "card.md").read_text()
 
 
 #: The PSNR (dB, metric renderer, refine="full") the shipped model must reach on a bank material.
