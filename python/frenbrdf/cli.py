@@ -178,6 +178,29 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reconstruct(args: argparse.Namespace) -> int:
+    from .reconstruct_outputs import reconstruct_file
+
+    report = reconstruct_file(args.input, args.out, model=args.model, samples=args.samples, refine=args.refine,
+                              seed=args.seed, progress=not args.quiet)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        metrics = report.get("metrics")
+        quality = f"; render PSNR {metrics['psnr']:.2f} dB, ΔE {metrics['delta_e']:.2f}" if metrics else ""
+        print(f"reconstructed {args.input} from {report['input']['samples']} samples "
+              f"({sum(report['timings_s'].values()):.1f} s){quality}; wrote {args.out}/")
+    return 0
+
+
+def _sample_count(text: str) -> int | None:
+    if text == "all":
+        return None
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive number or 'all', got {text!r}")
+    return int(text)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="frenbrdf", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -268,6 +291,23 @@ def build_parser() -> argparse.ArgumentParser:
     select.add_argument("--json", action="store_true", help="print the selection as JSON")
     select.add_argument("--quiet", action="store_true", help="no progress bars")
     select.set_defaults(run=_select)
+
+    rec = commands.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ of samples, or a "
+                              "MERL file): NBRDF, MERL table, render and report in one folder")
+    rec.add_argument("input", help="CSV or NPZ with columns wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b (or angles; see "
+                     "frenbrdf.measurements), or a MERL .binary file")
+    rec.add_argument("--out", required=True, help="result folder (created; files replaced atomically)")
+    rec.add_argument("--model", default="pretrained", help="training run folder, checkpoint, or 'pretrained' "
+                     "(the model shipped in the package; the default)")
+    rec.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
+                     help="MERL input: random valid bins given to the model (default 4000), or all")
+    rec.add_argument("--refine", choices=("none", "latent", "full"), default="latent",
+                     help="test-time refinement: none (encoder only), latent (optimise z; the default), "
+                     "full (then the NBRDF's weights)")
+    rec.add_argument("--seed", type=int, default=0, help="seeds the sampling and the refinement (default 0)")
+    rec.add_argument("--json", action="store_true", help="print the report as JSON")
+    rec.add_argument("--quiet", action="store_true", help="no progress bars")
+    rec.set_defaults(run=_reconstruct)
 
     demo = commands.add_parser("demo", help="the main job: synthesise data, train all methods, evaluate, report")
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")

@@ -87,7 +87,8 @@ def _initial_params(config: NBRDFConfig) -> list[torch.Tensor]:
 def save_nbrdf(path: str | os.PathLike, nbrdf: NBRDF) -> None:
     """Saves one NBRDF (weights and mapping) atomically."""
     with atomic_path(path) as temporary:
-        torch.save({"params": [p[0] for p in nbrdf.params], "reference": torch.from_numpy(nbrdf.mapping.reference),
+        torch.save({"params": [p[0] for p in nbrdf.params], # f_ref as float32, as run folders store it: a per-bin f_ref is then 17.5 MB, not 35
+                    "reference": torch.from_numpy(nbrdf.mapping.reference.astype(np.float32)),
                     "epsilon": nbrdf.mapping.epsilon, "offset": nbrdf.mapping.offset}, temporary)
 
 

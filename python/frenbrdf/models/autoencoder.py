@@ -16,7 +16,7 @@ from ..configs import from_dict
 from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .mapping import LogRelativeMapping, MappingConfig
-from .nbrdf import NBRDF, NBRDFConfig, nbrdf_coordinates
+from .nbrdf import NBRDF, NBRDFConfig, mapped_samples
 
 #: :meth:`Model.encode` passes larger sample sets through the encoder in chunks of this size.
 ENCODE_CHUNK = 16384
@@ -62,9 +62,15 @@ class Model:
     (N, 3)
     """
 
-    def __init__(self, network: AutoEncoder, mapping: LogRelativeMapping, config: ModelConfig, method: str = ""):
+    def __init__(self, network: AutoEncoder, mapping: LogRelativeMapping, config: ModelConfig, method: str = "",
+                 loss: dict | None = None):
         self.network = network.eval()
         self.mapping, self.config, self.method = mapping, config, method
+        #: The training config's loss settings (a dict of :class:`frenbrdf.losses.LossConfig` keys): the
+        #: objective :meth:`reconstruct` refines with. Empty: LossConfig's defaults.
+        self.loss = dict(loss or {})
+        #: The model card of a packaged model (:meth:`pretrained`); empty for run folders.
+        self.card: dict = {}
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Model:
@@ -73,11 +79,36 @@ class Model:
         if path.is_dir():
             path = path / "best.pt"
         checkpoint = checkpoints.load(path)
+        return cls.from_checkpoint(checkpoint, checkpoints.load_mapping(path, checkpoint))
+
+    @classmethod
+    def from_checkpoint(cls, checkpoint: dict, mapping_state: dict) -> Model:
+        """A model from a loaded checkpoint (weights, ``config``, ``method``) and its mapping's state."""
         config = ModelConfig.from_checkpoint(checkpoint)
         network = AutoEncoder(config)
-        network.load_state_dict(checkpoint["model"])
-        mapping = LogRelativeMapping.from_state(checkpoints.load_mapping(path, checkpoint))
-        return cls(network, mapping, config, checkpoint["method"])
+        network.load_state_dict({name: value.float() for name, value in checkpoint["model"].items()})
+        loss = json.loads(checkpoint["config"]).get("loss", {})
+        return cls(network, LogRelativeMapping.from_state(mapping_state), config, checkpoint["method"], loss)
+
+    @classmethod
+    def pretrained(cls, folder: str | os.PathLike | None = None) -> Model:
+        """The model shipped inside the package (``frenbrdf/pretrained/``; docs/pretrained.md).
+
+        ``folder``: a folder written by :func:`frenbrdf.pretrained.pack_pretrained` instead.
+
+        Raises
+        ------
+        FileNotFoundError
+            The package (or ``folder``) holds no packed model.
+        ValueError
+            A packed file is damaged or of another format (the message names it).
+        """
+        from ..pretrained import load_packed
+
+        checkpoint, mapping_state, card = load_packed(folder)
+        model = cls.from_checkpoint(checkpoint, mapping_state)
+        model.card = card
+        return model
 
     @torch.no_grad()
     def encode(self, values, directions) -> np.ndarray:
@@ -95,16 +126,8 @@ class Model:
         numpy.ndarray
             ``(latent,)``.
         """
-        values = np.asarray(values, dtype=np.float64)
-        wi, wo = (np.asarray(d, dtype=np.float64) for d in directions)
-        if values.ndim != 2 or values.shape[1] != 3 or len(values) == 0:
-            raise ValueError(f"values must have shape (N, 3) with N ≥ 1, got {values.shape}")
-        if wi.shape != values.shape or wo.shape != values.shape:
-            raise ValueError(f"wi and wo must have the shape of values {values.shape}, got {wi.shape} and {wo.shape}")
-        if not np.all(np.isfinite(values)) or values.min() < 0:
-            raise ValueError("values must be finite and ≥ 0 (leave missing samples out)")
-        mapped = self.mapping.forward(values, self.mapping.reference_at(wi, wo))
-        samples = torch.from_numpy(np.concatenate([mapped, nbrdf_coordinates(wi, wo)], axis=-1).astype(np.float32))
+        mapped, coords, _ = mapped_samples(self.mapping, values, directions)
+        samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
         if len(samples) <= ENCODE_CHUNK:
             return self.network.encoder(samples[None])[0].numpy().astype(np.float64)
         # The encoder is a per-sample MLP and a mean: a large set (all 1.1 million bins of a
@@ -120,6 +143,16 @@ class Model:
         if z.shape[-1:] != (latent,) or z.ndim > 2 or not np.all(np.isfinite(z)):
             raise ValueError(f"z must be finite with shape ({latent},) or (B, {latent}), got {z.shape}")
         return NBRDF(self.network.decoder(torch.from_numpy(z.reshape(-1, latent))), self.mapping)
+
+    def reconstruct(self, values, directions, *, refine="latent"):
+        """Encodes samples, then refines the result on them (:func:`frenbrdf.reconstruct.reconstruct`).
+
+        ``refine``: ``"none"``, ``"latent"``, ``"full"`` or a :class:`frenbrdf.reconstruct.RefineConfig`.
+        Returns a :class:`frenbrdf.reconstruct.Reconstruction` (``.z``, ``.nbrdf``, ``.timings``, ``.losses``).
+        """
+        from ..reconstruct import reconstruct
+
+        return reconstruct(self, values, directions, refine=refine)
 
 
 def interpolate(z_a, z_b, t, *, extrapolate: bool = False) -> np.ndarray:

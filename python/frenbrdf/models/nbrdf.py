@@ -137,6 +137,34 @@ def nbrdf_coordinates(wi, wo) -> np.ndarray:
     return np.concatenate([h_isotropic, fold_difference(d)], axis=-1)
 
 
+def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One material's samples checked and prepared for a model: what the encoder reads and the loss compares.
+
+    Parameters
+    ----------
+    values
+        Reflectance ``(N, 3)`` (physical units, ≥ 0; leave missing samples out).
+    directions
+        ``(wi, wo)``, unit vectors ``(N, 3)`` each, above the surface.
+
+    Returns
+    -------
+    tuple
+        Mapped values ``(N, 3)``, NBRDF inputs ``(N, 6)`` (:func:`nbrdf_coordinates`) and
+        cos θ_i clamped to [0, 1] ``(N,)``, all float64.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    wi, wo = (np.asarray(d, dtype=np.float64) for d in directions)
+    if values.ndim != 2 or values.shape[1] != 3 or len(values) == 0:
+        raise ValueError(f"values must have shape (N, 3) with N ≥ 1, got {values.shape}")
+    if wi.shape != values.shape or wo.shape != values.shape:
+        raise ValueError(f"wi and wo must have the shape of values {values.shape}, got {wi.shape} and {wo.shape}")
+    if not np.all(np.isfinite(values)) or values.min() < 0:
+        raise ValueError("values must be finite and ≥ 0 (leave missing samples out)")
+    mapped = mapping.forward(values, mapping.reference_at(wi, wo))
+    return mapped, nbrdf_coordinates(wi, wo), np.clip(wi[:, 2], 0.0, 1.0)
+
+
 def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Tensor:
     """Evaluates B NBRDFs: ``params`` as from :meth:`NBRDFConfig.shapes` with a leading B,
     ``coords`` ``(B, N, 6)`` → mapped RGB ``(B, N, 3)``."""

@@ -1,0 +1,129 @@
+"""Regenerates the model shipped in the package (python/frenbrdf/pretrained/) and its card (docs/pretrained.md).
+
+    frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/
+    frenbrdf synth bank/
+    python benches/pretrained.py --merl merl/ --bank bank/ --config pretrained.json --work pretrained-work/
+
+Trains one model (``frenbrdf train`` with ``--config``: any TrainConfig keys over the
+method's preset; ``data``, ``out`` and ``seed`` are set here) on the MERL files and the
+bank together (a folder of links to both), evaluates its held-out test split
+(:func:`frenbrdf.evaluation.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
+material pixels, encoder only), packs it (:func:`frenbrdf.pretrained.pack_pretrained`:
+float16 weights, compact f_ref), measures what float16 costs (the same test split through
+the packed model), and writes the card (``card.json`` beside the files, ``docs/pretrained.md``).
+``--dest`` and ``--card`` default to the package folder and docs/pretrained.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from frenbrdf import Model, pretrained
+from frenbrdf.atomic import write_text
+from frenbrdf.data import list_materials
+from frenbrdf.evaluation import reconstruction_rows
+from frenbrdf.training import load_config, train
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import run_metadata  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+METRICS = ("rmse", "psnr", "ssim", "delta_e")
+
+
+def linked_data(folders: list[Path], data: Path) -> list[str]:
+    """A folder of links to every MERL file of ``folders`` (names must not repeat); returns the sources' names."""
+    data.mkdir(parents=True, exist_ok=True)
+    for folder in folders:
+        for path in list_materials(folder):
+            link = data / path.name
+            if link.exists() and link.resolve() != path.resolve():
+                raise ValueError(f"{path.name} is in two of the folders {[str(f) for f in folders]}")
+            if not link.exists():
+                link.symlink_to(path.resolve())
+    return [str(folder) for folder in folders]
+
+
+def summary(rows: list[dict]) -> dict[str, float]:
+    return {key: float(np.mean([row[key] for row in rows])) for key in METRICS}
+
+
+def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
+          progress: bool = True) -> dict:
+    """Trains, evaluates, packs and documents the shipped model; returns the card."""
+    sources = linked_data(folders, work / "data")
+    cfg = load_config(config_path, data=str(work / "data"), out=str(work / "run"), seed=seed)
+    cfg.progress = progress
+    run = train(cfg)
+    test = [work / "data" / f"{name}.binary" for name in sorted(run.split.test)]
+    held_out = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, progress=progress)
+    card = {"version": pretrained.VERSION, "command": run_metadata()["command"],
+            "training_config": json.loads(Path(config_path).read_text()), "data": sources,
+            "materials": {"train": len(run.split.train), "validation": len(run.split.val), "test": len(test)},
+            "seed": seed, "best_epoch": run.best_epoch, "training_seconds": round(run.seconds or 0.0, 1),
+            "held_out": {"float32": summary(held_out)}}
+    sizes = pretrained.pack_pretrained(run.path, dest, card=card)
+    packed = Model.pretrained(dest)
+    card["held_out"]["packed"] = summary(reconstruction_rows(packed, test, seed=seed, frequency_metric=False,
+                                                             progress=progress))
+    card["bytes"] = sizes
+    sizes = pretrained.pack_pretrained(run.path, dest, card=card)  # the card now says what packing cost
+    write_text(card_path, card_markdown({**card, "bytes": sizes}))
+    return card
+
+
+def card_markdown(card: dict) -> str:
+    """docs/pretrained.md: what the shipped model is, how it was made, how well it reconstructs."""
+    table = "\n".join(f"| {name} | {card['held_out']['float32'][key]:.4g} | {card['held_out']['packed'][key]:.4g} |"
+                      for key, name in zip(METRICS, ("RMSE", "PSNR (dB)", "SSIM", "ΔE")))
+    return f"""# The pretrained model (version {card['version']})
+
+`frenbrdf reconstruct INPUT --out DIR` and `frenbrdf.Model.pretrained()` load the model
+packed in `python/frenbrdf/pretrained/` ({sum(card['bytes'].values()) / 1e6:.2f} MB:
+{', '.join(f'`{k}` {v / 1e6:.2f} MB' for k, v in card['bytes'].items())}).
+
+- **Data**: {', '.join(f'`{d}`' for d in card['data'])}: {card['materials']['train']} training,
+  {card['materials']['validation']} validation and {card['materials']['test']} held-out test materials
+  (split from seed {card['seed']}).
+- **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
+  {card['best_epoch']}, {card['training_seconds']} s.
+- **Regenerate**: `{card['command']}`.
+- **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
+  compressed (relative error of f_ref + ε below 1e-4).
+
+Held-out test materials, encoder only (4000 random valid bins each), render metrics over the lit
+material pixels, as trained (float32) and as shipped (packed):
+
+| metric | float32 | packed |
+|---|---|---|
+{table}
+"""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--merl", help="folder of MERL files (frenbrdf import-nbrdf)")
+    parser.add_argument("--bank", help="folder of bank MERL files (frenbrdf synth)")
+    parser.add_argument("--config", required=True, help="training config JSON (any TrainConfig keys)")
+    parser.add_argument("--work", default="pretrained-work", help="folder of the linked data and the run")
+    parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR), help="where the packed files go")
+    parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"), help="the model card (Markdown)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--quiet", action="store_true")
+    args = parser.parse_args(argv)
+    folders = [Path(f) for f in (args.merl, args.bank) if f]
+    if not folders:
+        parser.error("give --merl, --bank or both")
+    card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
+                 progress=not args.quiet)
+    print(json.dumps(card["held_out"], indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

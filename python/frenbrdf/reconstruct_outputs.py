@@ -1,0 +1,150 @@
+"""``frenbrdf reconstruct``'s work: a measurement file in, a result folder out.
+
+:func:`reconstruct_file` reads the samples (:mod:`frenbrdf.measurements`), loads the model
+(a run folder, a checkpoint, or the packaged one), reconstructs and refines
+(:func:`frenbrdf.reconstruct.reconstruct`), computes everything, and only then writes the
+folder, all of it or nothing:
+
+``material.pt``
+    The NBRDF (:func:`frenbrdf.fitting.save_nbrdf`), which ``frenbrdf render`` and the
+    Mitsuba plugin load.
+``material.binary``
+    Its MERL table.
+``render.png``
+    The reconstruction on the metric renderer's sphere; with a MERL input also
+    ``truth.png`` and ``comparison.png`` (truth | reconstruction).
+``reconstruction.json``
+    The input, the model, the refinement, the latent, seconds and loss per stage, and with a
+    MERL input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
+    material pixels, :func:`frenbrdf.evaluation.image_metrics`) and L_fre.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import shutil
+import uuid
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import save_json
+from .fitting import save_nbrdf
+from .measurements import Measurements, read_measurements
+from .merl import write_merl
+from .models.autoencoder import Model
+from .reconstruct import Reconstruction, refine_config
+from .render import Scene, material_mask, render, save_png
+
+#: The file names of the result folder.
+FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.png", "truth": "truth.png",
+         "comparison": "comparison.png", "report": "reconstruction.json"}
+
+
+def load_model(model: str | os.PathLike) -> Model:
+    """``"pretrained"`` (the packaged model, :meth:`Model.pretrained`), a run folder or a checkpoint file."""
+    if str(model) == "pretrained":
+        return Model.pretrained()
+    path = Path(model)
+    if not path.exists():
+        raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file "
+                                "or 'pretrained')")
+    return Model.load(path)
+
+
+def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
+                     samples: int | None = 4000, refine: str = "latent", seed: int = 0, resolution: int = 256,
+                     progress: bool = True) -> dict:
+    """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
+
+    Parameters
+    ----------
+    source
+        A CSV or NPZ of samples, or a MERL file (:func:`frenbrdf.measurements.read_measurements`).
+    out_dir
+        The result folder: created whole, or its files replaced one by one (each atomically) when it exists.
+    model
+        ``"pretrained"``, a run folder or a checkpoint.
+    samples
+        MERL input: random valid bins given to the model (None: all).
+    refine
+        ``"none"``, ``"latent"`` or ``"full"`` (:data:`frenbrdf.reconstruct.BUDGETS`).
+    seed
+        Seeds the MERL sampling and the refinement's mini-batches.
+
+    Returns
+    -------
+    dict
+        What ``reconstruction.json`` holds.
+    """
+    measurements = read_measurements(source, samples=samples, seed=seed)
+    loaded = load_model(model)
+    config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress)
+    result = loaded.reconstruct(measurements.values, (measurements.wi, measurements.wo), refine=config)
+    scene = Scene(resolution=resolution)
+    images = {"render": render(result.nbrdf, scene)}
+    report = {"input": {"path": str(source), "kind": measurements.kind, "samples": len(measurements)},
+              "model": {"path": str(model), "method": loaded.method, **({"version": loaded.card.get("version")}
+                                                                          if loaded.card else {})},
+              "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary()}
+    if measurements.table is not None:
+        images["truth"] = render(measurements.table, scene)
+        images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
+        report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
+    report["files"] = sorted(FILES[name] for name in ["nbrdf", "merl", "report", *images])
+    table = result.nbrdf.merl_table()
+    _write_folder(Path(out_dir), result, table, images, report)
+    return report
+
+
+def truth_metrics(model: Model, result: Reconstruction, measurements: Measurements, truth_image: np.ndarray,
+                  image: np.ndarray, scene: Scene) -> dict[str, float]:
+    """RMSE, PSNR, SSIM and ΔE of the renders over the lit material pixels, and L_fre against the true table."""
+    from .evaluation import FrequencyMetric, image_metrics
+
+    metrics = image_metrics(truth_image, image, material_mask(scene))
+    metrics["lfre"] = frequency_distance(FrequencyMetric(), model, measurements.table, result.nbrdf)
+    return metrics
+
+
+def frequency_distance(metric, model: Model, table: np.ndarray, nbrdf) -> float:
+    """L_fre of a true table and an NBRDF in the model's mapped space, as :class:`frenbrdf.evaluation.FrequencyMetric`
+    measures a decoded latent, but of the NBRDF's own weights (refined ones are no decoder output)."""
+    import torch
+
+    from .losses import spectral_distance
+    from .merl import N_BINS
+
+    flat = table.reshape(3, N_BINS)
+    valid = np.all(flat >= 0, axis=0)
+    with np.errstate(invalid="ignore"):
+        mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
+    true = metric.truth.coefficients(np.nan_to_num(mapped).T, valid)
+    with torch.no_grad():
+        predicted = metric.loss.predicted_coefficients(nbrdf.params)[0].numpy()
+    return float(spectral_distance(predicted, true))
+
+
+def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: dict, report: dict) -> None:
+    """Writes the result into a hidden folder beside ``out``, then moves it into place (nothing half-written)."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = out.parent / f".{out.name}.partial-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    staging.mkdir()
+    try:
+        save_nbrdf(staging / FILES["nbrdf"], result.nbrdf)
+        write_merl(staging / FILES["merl"], table)
+        for name, image in images.items():
+            save_png(staging / FILES[name], image)
+        save_json(staging / FILES["report"], report)
+        if not out.exists():
+            os.replace(staging, out)
+            return
+        if not out.is_dir():
+            raise NotADirectoryError(f"{out} exists and is not a folder")
+        for path in staging.iterdir():
+            os.replace(path, out / path.name)
+        for stale in set(FILES.values()) - set(report["files"]):  # e.g. truth.png of an earlier MERL input
+            (out / stale).unlink(missing_ok=True)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
