@@ -51,7 +51,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
 
     checkpoint = checkpoints.load(run_dir / "last.pt") if resume else None
     split = _resumed_split(checkpoint, cfg, files, run_dir) if checkpoint else split_materials(files, cfg.seed,
-                                                                                               cfg.split)
+                                                                                               cfg.split, cfg.holdout)
     # Full batches only (the last partial one is dropped; each epoch reshuffles), so that
     # every step's batch splits evenly across ranks.
     batch_size = min(cfg.batch_materials, len(split.train))
