@@ -173,6 +173,10 @@ class MaterialBank:
     def __len__(self) -> int:
         return len(self.names)
 
+    def valid_bins(self, material: int) -> torch.Tensor:
+        """Flat indices of a material's valid bins."""
+        return self._valid_bins[material]
+
     def sample(self, materials, n: int, generator: torch.Generator) -> SampleBatch:
         """``n`` random valid bins (with replacement) of each listed material index."""
         if n < 1:
@@ -206,9 +210,9 @@ def mapped_bank(names, tables: np.ndarray, mapping: LogRelativeMapping) -> Mater
     return MaterialBank(names, torch.from_numpy(mapped), torch.from_numpy(valid))
 
 
-#: Incident angles (degrees) at which :func:`max_directional_albedo` integrates; MERL's
-#: grazing bins (θ_i > 75°) are noisy in measured files and left out.
-ALBEDO_INCIDENT_DEGREES = (0.0, 15.0, 30.0, 45.0, 60.0, 75.0)
+#: Incident angles (degrees) at which :func:`max_directional_albedo` integrates (Fresnel makes
+#: glossy materials brightest near grazing, so the last is close to it).
+ALBEDO_INCIDENT_DEGREES = (0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0)
 
 
 def max_directional_albedo(bank: MaterialBank, mapping: LogRelativeMapping, materials=None, *,
@@ -219,7 +223,9 @@ def max_directional_albedo(bank: MaterialBank, mapping: LogRelativeMapping, mate
     :data:`ALBEDO_INCIDENT_DEGREES`, by a fixed product rule: Gauss–Legendre in cos θ_o
     (``nodes`` points) times ``2 · nodes`` midpoints in φ_o. f is read from the bank (un-mapped)
     in the MERL bin holding each direction pair (:func:`frenbrdf.merl.merl_angles_to_bin`, as
-    ``merl_lookup_directions(method="nearest")`` does); missing bins count as 0.
+    ``merl_lookup_directions(method="nearest")`` does); missing bins count as 0. Measured
+    against a fine quadrature of analytic materials (tests/test_augment.py): within 5 % at
+    these angles, and at most ~3 % below the largest albedo at any incidence.
     """
     from .coords import directions_to_rusinkiewicz
     from .merl import merl_angles_to_bin
