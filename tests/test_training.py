@@ -223,3 +223,76 @@ def test_cli_trains_several_seeds_into_one_folder_each(toy_materials, tmp_path, 
     with pytest.raises(SystemExit):
         cli.main(["train", "--data", str(toy_materials), "--out", str(tmp_path / "x"), "--seed", "1", "--seeds", "2"])
     assert "not both" in capsys.readouterr().err
+
+
+def test_holdout_makes_the_matching_family_the_test_split(toy_materials, tmp_path, capsys):
+    names = [path.stem for path in list_materials(toy_materials)]
+    split = split_materials(names, 0, (0.7, 0.1, 0.2), holdout=["toy-0[01]", "*-07"])
+    assert split.test == ("toy-00", "toy-01", "toy-07")
+    assert sorted(split.train + split.val) == sorted(set(names) - set(split.test)) and len(split.val) == 1
+    with pytest.raises(ValueError, match="matches none"):
+        split_materials(names, 0, holdout=["*fabric*"])
+    with pytest.raises(ValueError, match="leaving 1 for training"):
+        split_materials(names, 0, holdout=["toy-0[0-6]"])
+    out = tmp_path / "run"
+    config_file = tmp_path / "tiny.json"
+    config_file.write_text(json.dumps(to_dict(tiny("nbrdf", toy_materials, out, epochs=1))))
+    assert cli.main(["train", "--config", str(config_file), "--holdout", "toy-0[01]", "--quiet", "--json"]) == 0
+    capsys.readouterr()
+    run = Run(out)
+    assert run.config.holdout == ("toy-0[01]",) and run.split.test == ("toy-00", "toy-01")
+
+
+def test_a_tiny_run_with_every_augmentation_and_regulariser_logs_finite_losses(toy_materials, tmp_path):
+    cfg = tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=2, split=(0.75, 0.125, 0.125),
+               weight_decay=1e-2, context_jitter=0.5, patience=5,
+               augment={"mix": 0.3, "gain": 0.3, "procedural": 0.3, "preset": "custom"})
+    cfg.model.encoder.dropout = 0.1
+    run = train(cfg)
+    assert len(run.history) == 3
+    assert all(math.isfinite(value) for epoch in run.history for value in epoch.values())
+    assert run.config.augment.procedural == 0.3 and run.config.model.encoder.dropout == 0.1
+    checkpoint = load_checkpoint(run.path / "last.pt")
+    assert "weight_decay" in checkpoint["optimizer"]["param_groups"][0]  # AdamW's state
+    assert checkpoint["optimizer"]["param_groups"][0]["weight_decay"] == 1e-2
+    assert frenbrdf.Model.load(run.path).config.encoder.dropout == 0.1
+
+
+def test_patience_stops_when_validation_stops_improving(toy_materials, tmp_path):
+    # A learning rate too small to move a float32 weight: no epoch improves on the first.
+    run = train(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=10, lr=1e-30, patience=2))
+    assert [entry["epoch"] for entry in run.history] == [-1, 0, 1, 2]
+
+
+def test_dropout_and_weight_decay_change_nothing_when_off(toy_materials, tmp_path):
+    from frenbrdf.models.autoencoder import AutoEncoder
+    from frenbrdf.training.loop import make_optimizer
+
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "run")
+    plain = AutoEncoder(cfg.model)
+    assert type(make_optimizer(plain, cfg)) is torch.optim.Adam
+    cfg.model.encoder.dropout = 0.5
+    dropped = AutoEncoder(cfg.model)
+    assert set(dropped.state_dict()) != set(plain.state_dict())  # dropout layers shift the indices
+    samples = torch.randn(2, 50, 9)
+    dropped.train()
+    assert not torch.equal(dropped.encoder(samples), dropped.encoder(samples))
+    dropped.eval()
+    assert torch.equal(dropped.encoder(samples), dropped.encoder(samples))
+
+
+def test_configs_and_run_folders_from_before_augmentation_still_load(toy_materials, tmp_path):
+    run = train(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1))
+    saved = json.loads((run.path / "config.json").read_text())
+    assert saved["augment"]["preset"] == "paper" and saved["holdout"] == []
+    for key in ("augment", "holdout", "weight_decay", "context_jitter", "patience"):
+        del saved[key]
+    del saved["model"]["encoder"]["dropout"]
+    (run.path / "config.json").write_text(json.dumps(saved))
+    old = Run(run.path).config
+    assert old.augment == training.config.AugmentConfig() and not old.augment.active
+    assert (old.holdout, old.weight_decay, old.context_jitter, old.patience, old.model.encoder.dropout) == ((), 0, 0, 0,
+                                                                                                          0)
+    assert frenbrdf.Model.load(run.path).config.encoder.dropout == 0.0
+    augmented = config_for("hyperbrdf", augmentation="augmented")
+    assert augmented.augment.mix == presets.AUGMENTATION["augmented"]["mix"] and augmented.lr == 5e-5

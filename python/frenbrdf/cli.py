@@ -9,7 +9,7 @@ import platform
 import sys
 from pathlib import Path
 
-from .presets import TRAINING, method_names
+from .presets import AUGMENTATION, TRAINING, method_names
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -66,8 +66,8 @@ def _import_nbrdf(args: argparse.Namespace) -> int:
 def _train(args: argparse.Namespace) -> int:
     from .training import config_for, load_config, train
 
-    if args.config and args.training:
-        raise ValueError("--training sets a preset's length; with --config the file says everything")
+    if args.config and (args.training or args.augmentation):
+        raise ValueError("--training and --augmentation set presets; with --config the file says everything")
     if args.seeds is not None and args.seed is not None:
         raise ValueError("give --seed or --seeds, not both")
     if args.seeds is not None and not args.out:
@@ -75,11 +75,11 @@ def _train(args: argparse.Namespace) -> int:
     for seed in args.seeds if args.seeds is not None else [args.seed]:
         out = str(Path(args.out) / f"seed-{seed}") if args.seeds is not None else args.out
         overrides = {"method": args.method, "data": args.data, "out": out, "epochs": args.epochs, "seed": seed,
-                     "device": args.device}
+                     "device": args.device, "holdout": args.holdout}
         if args.config:
             cfg = load_config(args.config, **overrides)
         else:
-            cfg = config_for(args.method or "frenbrdf", training=args.training,
+            cfg = config_for(args.method or "frenbrdf", training=args.training, augmentation=args.augmentation,
                              **{k: v for k, v in overrides.items() if v is not None and k != "method"})
         cfg.progress = not args.quiet
         run = train(cfg, resume=args.resume)
@@ -173,7 +173,7 @@ def _select(args: argparse.Namespace) -> int:
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    out = run_demo(args.out, args.data, epochs=args.epochs, progress=not args.quiet)
+    out = run_demo(args.out, args.data, epochs=args.epochs, augmentation=args.augmentation, progress=not args.quiet)
     print(f"report: {out / 'README.md'}")
     return 0
 
@@ -233,6 +233,12 @@ def build_parser() -> argparse.ArgumentParser:
                        help="train once per seed (each its own split and initialisation) into OUT/seed-S")
     train.add_argument("--training", choices=sorted(TRAINING),
                        help="a training length of frenbrdf.presets over the method's preset (default: the full one)")
+    train.add_argument("--augmentation", choices=sorted(AUGMENTATION),
+                       help="what the batches hold beyond the tables (frenbrdf.presets.AUGMENTATION; default: paper, "
+                       "the tables only)")
+    train.add_argument("--holdout", nargs="+", metavar="PATTERN",
+                       help="glob patterns over material names: the matching materials are the test split "
+                       "(a held-out family), the others train and validate")
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -313,6 +319,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")
     demo.add_argument("--data", help="folder of MERL files instead of the synthetic bank")
     demo.add_argument("--epochs", type=int, help="training epochs per method (default: the demo's)")
+    demo.add_argument("--augmentation", choices=sorted(AUGMENTATION), default="paper",
+                      help="what the batches hold beyond the tables (default: paper, the tables only)")
     demo.add_argument("--quiet", action="store_true", help="no progress bars")
     demo.set_defaults(run=_demo)
     return parser

@@ -26,8 +26,9 @@ DEMO_EVALUATION = EvaluateConfig(samples=4000, edits=120, edit_resolution=96)
 
 
 def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, *, epochs: int | None = None,
-             progress: bool = True) -> Path:
-    """Runs the main job; returns the report folder."""
+             augmentation: str = "paper", progress: bool = True) -> Path:
+    """Runs the main job; returns the report folder. ``augmentation``: a
+    :data:`frenbrdf.presets.AUGMENTATION` entry, the same for every method."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {}
@@ -43,7 +44,7 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
     for method in method_names():
         begin = time.perf_counter()
         # The report folder holds everything the demo made, the coefficient cache too.
-        cfg = config_for(method, training="demo", data=str(data), out=str(out / "runs" / method),
+        cfg = config_for(method, training="demo", augmentation=augmentation, data=str(data), out=str(out / "runs" / method),
                          cache_dir=str(out / "cache"), progress=progress, **({"epochs": epochs} if epochs else {}))
         runs.append(train(cfg))
         timings[f"train {method}"] = time.perf_counter() - begin
@@ -66,7 +67,8 @@ def _write_readme(out: Path, data, runs: list[Run], report: dict, timings: dict)
         f"{runs[0].config.seed}).",
         f"- Training: FreNBRDF, NBRDF (η = 0) and HyperBRDF settings, each with {json.dumps(TRAINING['demo'])} over "
         "its preset: the same number of optimisation steps for every method, each at its own learning rate "
-        "(HyperBRDF's 5e-5 is tuned for far longer training, so its row is undertrained here). Run folders: "
+        "(HyperBRDF's 5e-5 is tuned for far longer training, so its row is undertrained here); augmentation "
+        f"`{runs[0].config.augment.preset}` (docs/data.md). Run folders: "
         + ", ".join(f"`{r.path}`" for r in runs) + ".",
         f"- Evaluation: encoder given {DEMO_EVALUATION.samples} samples per test material, "
         f"{DEMO_EVALUATION.edits} interpolations for editing (renders {DEMO_EVALUATION.resolution}² and "

@@ -14,6 +14,9 @@ Training lengths are top-level overrides for a whole comparison, the same for ev
 method, so that every method takes the same number of optimisation steps: the paper's
 protocol uses the defaults; ``demo`` fits ``frenbrdf demo`` in minutes on 2 cores;
 ``sweep`` is half the demo, for the many runs of the chart sweeps and ``frenbrdf select``.
+
+Augmentations (:data:`AUGMENTATION`) say what data a comparison trained on, the same for every
+method: the tables only (``paper``) or with mixes, gains and procedural materials.
 """
 
 from __future__ import annotations
@@ -35,6 +38,23 @@ TRAINING: dict[str, dict] = {
     "sweep": {"epochs": 50, "batch_materials": 8, "context_samples": 2000, "query_samples": 2000},
 }
 """Training length → top-level overrides, the same for every method."""
+
+
+AUGMENTATION: dict[str, dict] = {
+    "paper": {"mix": 0.0, "gain": 0.0, "procedural": 0.0},
+    # Placeholders until measured: a quarter of each batch of each kind.
+    "augmented": {"mix": 0.25, "gain": 0.25, "procedural": 0.25, "gain_range": [0.5, 2.0]},
+}
+"""Augmentation → its :class:`~frenbrdf.training.config.AugmentConfig` values, the same for every
+method: ``paper`` trains on the tables only (the paper's protocol), ``augmented`` adds mixes,
+colour gains and procedural analytic materials (docs/data.md)."""
+
+
+def augmentation_overrides(name: str) -> dict:
+    """The ``augment`` values of an augmentation preset, its name recorded in them."""
+    if name not in AUGMENTATION:
+        raise ValueError(f"augmentation must be one of {sorted(AUGMENTATION)}, got {name!r}")
+    return {**AUGMENTATION[name], "preset": name}
 
 
 def method_names() -> tuple[str, ...]:

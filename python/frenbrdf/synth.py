@@ -45,7 +45,7 @@ from .merl import write_merl
 from .microfacet import ggx_d, ggx_visibility
 
 __all__ = ["KINDS", "KIND_SHARES", "MANIFEST_NAME", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
-           "AnalyticMaterial", "evaluate", "ggx_d", "ggx_visibility", "material_bank", "merl_table", "write_bank"]
+           "AnalyticMaterial", "draw_material", "evaluate", "ggx_d", "ggx_visibility", "material_bank", "merl_table", "write_bank"]
 
 #: The kinds of material in a bank, and the share of each.
 KIND_SHARES = {"plastic": 0.35, "metal": 0.25, "coated": 0.20, "fabric": 0.10, "diffuse": 0.10}
@@ -149,6 +149,27 @@ _SAMPLERS = {"diffuse": _sample_diffuse, "plastic": _sample_plastic, "metal": _s
              "fabric": _sample_fabric, "coated": _sample_coated}
 
 
+def draw_material(rng: np.random.Generator, kind: str | None = None, name: str = "{label}-{kind}") -> AnalyticMaterial:
+    """One random analytic material, drawn as the bank draws them.
+
+    Parameters
+    ----------
+    rng
+        The source of every random choice (colours, roughness, Fresnel, layers).
+    kind
+        One of :data:`KINDS`; None draws it with the probabilities of :data:`KIND_SHARES`.
+    name
+        The material's name, a template in which ``{label}`` (e.g. ``copper``) and ``{kind}``
+        are filled in.
+    """
+    if kind is None:
+        kind = KINDS[rng.choice(len(KINDS), p=np.array(list(KIND_SHARES.values())))]
+    if kind not in _SAMPLERS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+    label, params = _SAMPLERS[kind](rng)
+    return AnalyticMaterial(name=name.format(label=label, kind=kind), **params)
+
+
 def material_bank(n: int = 100, seed: int = 0) -> list[AnalyticMaterial]:
     """A deterministic bank of ``n`` analytic materials.
 
@@ -168,8 +189,7 @@ def material_bank(n: int = 100, seed: int = 0) -> list[AnalyticMaterial]:
     width = max(3, len(str(n - 1)))
     bank = []
     for index, kind in enumerate(rng.permutation(kinds)):
-        label, params = _SAMPLERS[kind](rng)
-        bank.append(AnalyticMaterial(name=f"synth-{index:0{width}d}-{label}-{kind}", **params))
+        bank.append(draw_material(rng, str(kind), name=f"synth-{index:0{width}d}-{{label}}-{{kind}}"))
     return bank
 
 

@@ -11,12 +11,13 @@ from torch import nn
 SAMPLE_SIZE = 9
 
 
-def mlp(sizes: list[int]) -> nn.Sequential:
-    """Linear layers with ReLU between them (none after the last)."""
+def mlp(sizes: list[int], dropout: float = 0.0) -> nn.Sequential:
+    """Linear layers with ReLU between them (none after the last), each ReLU followed by dropout
+    when ``dropout > 0`` (without it the layers, and so the state-dict keys, are the same as ever)."""
     layers: list[nn.Module] = []
     for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
-        layers += [nn.Linear(fan_in, fan_out), nn.ReLU()]
-    return nn.Sequential(*layers[:-1])
+        layers += [nn.Linear(fan_in, fan_out), nn.ReLU()] + ([nn.Dropout(dropout)] if dropout > 0 else [])
+    return nn.Sequential(*layers[:-2 if dropout > 0 else -1])
 
 
 @dataclass
@@ -27,11 +28,15 @@ class EncoderConfig:
     """Hidden widths of the per-sample MLP."""
     latent: int = 40
     """Size of the latent z."""
+    dropout: float = 0.0
+    """Dropout probability after each hidden layer of the per-sample MLP while training (0: none)."""
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
         if min(self.hidden, default=1) < 1 or self.latent < 1:
             raise ValueError(f"encoder sizes must be positive, got hidden={self.hidden}, latent={self.latent}")
+        if not 0.0 <= self.dropout < 1.0:
+            raise ValueError(f"encoder dropout must lie in [0, 1), got {self.dropout}")
 
 
 class SetEncoder(nn.Module):
@@ -39,7 +44,7 @@ class SetEncoder(nn.Module):
 
     def __init__(self, config: EncoderConfig):
         super().__init__()
-        self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent])
+        self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent], config.dropout)
 
     def forward(self, samples: torch.Tensor) -> torch.Tensor:
         return self.per_sample(samples).mean(dim=-2)

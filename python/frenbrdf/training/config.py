@@ -12,7 +12,55 @@ from pathlib import Path
 from ..configs import from_dict, merge, to_dict
 from ..losses import LossConfig
 from ..models.autoencoder import ModelConfig
-from ..presets import METHODS, check_method, training_overrides
+from ..presets import METHODS, augmentation_overrides, check_method, training_overrides
+
+
+@dataclass
+class AugmentConfig:
+    """Materials the training batches hold beyond the tables (docs/data.md). The defaults are the
+    paper's protocol: the training tables only.
+
+    Each material of a batch is, independently, procedural with probability ``procedural``,
+    else a mix with probability ``mix``, else a gained table with probability ``gain``, else a
+    training table as drawn. Validation and test materials are never augmented. L_fre
+    (FreNBRDF) is computed for tables and procedural materials only: mixes and gained tables
+    are masked out of it, since their true coefficients are not those of any cached table.
+    """
+
+    mix: float = 0.0
+    """Fraction of batch materials replaced by t·a + (1 − t)·b of two training tables (t ~ U(0, 1)),
+    mixed in reflectance at bins valid in both."""
+    gain: float = 0.0
+    """Fraction of batch materials given per-channel gains (a change of colour and brightness)."""
+    gain_range: tuple[float, float] = (0.5, 2.0)
+    """Each channel's gain is drawn log-uniform in this range, then all three are scaled down
+    together where needed so that the material's albedo stays ≤ 1."""
+    procedural: float = 0.0
+    """Fraction of batch materials drawn afresh every step from the analytic families of
+    :mod:`frenbrdf.synth` and evaluated exactly at the sampled bins."""
+    preset: str = "paper"
+    """The :data:`frenbrdf.presets.AUGMENTATION` entry these values came from (set by
+    :func:`config_for`; "custom" for values set by hand)."""
+
+    def __post_init__(self):
+        self.gain_range = tuple(float(g) for g in self.gain_range)
+        problems = []
+        for name in ("mix", "gain", "procedural"):
+            value = getattr(self, name)
+            if not 0.0 <= value <= 1.0:
+                problems.append(f"{name} must lie in [0, 1], got {value}")
+        if self.mix + self.gain + self.procedural > 1.0 + 1e-9:
+            problems.append(f"mix + gain + procedural must be ≤ 1, got {self.mix + self.gain + self.procedural:g}")
+        low_high = self.gain_range
+        if len(low_high) != 2 or not (0 < low_high[0] <= low_high[1] and math.isfinite(low_high[1])):
+            problems.append(f"gain_range must be two finite numbers 0 < low ≤ high, got {self.gain_range}")
+        if problems:
+            raise ValueError("invalid augment config: " + "; ".join(problems))
+
+    @property
+    def active(self) -> bool:
+        """Whether any batch material may be augmented."""
+        return self.mix + self.gain + self.procedural > 0
 
 
 @dataclass
@@ -29,6 +77,9 @@ class TrainConfig:
     """Seeds the split, the initialisation and the sampling."""
     split: tuple[float, float, float] = (0.7, 0.1, 0.2)
     """Train/validation/test fractions, by material."""
+    holdout: tuple[str, ...] = ()
+    """Glob patterns over material names (e.g. ``"*fabric*"``): the matching materials are the
+    test split, the others are split into train/validation by ``split``'s first two fractions."""
     epochs: int = 200
     """Passes over the training materials."""
     batch_materials: int = 8
@@ -41,6 +92,13 @@ class TrainConfig:
     """Adam learning rate."""
     grad_clip: float = 0.0
     """Clip the gradient norm to this (0: no clipping)."""
+    weight_decay: float = 0.0
+    """Decoupled weight decay (AdamW) of the network's parameters; 0: plain Adam."""
+    context_jitter: float = 0.0
+    """Each step's context sample count is drawn uniformly from [jitter · context_samples,
+    context_samples]; 0: always ``context_samples``."""
+    patience: int = 0
+    """Stop when the validation reconstruction loss has not improved for this many epochs; 0: never."""
     device: str = "cpu"
     """``"cpu"``, ``"cuda"`` or ``"auto"``."""
     cache_dir: str = ""
@@ -49,6 +107,7 @@ class TrainConfig:
     """Show progress bars."""
     model: ModelConfig = field(default_factory=ModelConfig)
     loss: LossConfig = field(default_factory=LossConfig)
+    augment: AugmentConfig = field(default_factory=AugmentConfig)
 
     def __post_init__(self):
         problems = []
@@ -59,13 +118,19 @@ class TrainConfig:
                 problems.append(f"{name} must be ≥ 1, got {getattr(self, name)}")
         if not (self.lr > 0 and math.isfinite(self.lr)):
             problems.append(f"lr must be a positive number, got {self.lr}")
-        if not (self.grad_clip >= 0 and math.isfinite(self.grad_clip)):
-            problems.append(f"grad_clip must be ≥ 0, got {self.grad_clip}")
+        for name in ("grad_clip", "weight_decay"):
+            if not (getattr(self, name) >= 0 and math.isfinite(getattr(self, name))):
+                problems.append(f"{name} must be ≥ 0, got {getattr(self, name)}")
+        if not 0.0 <= self.context_jitter <= 1.0:
+            problems.append(f"context_jitter must lie in [0, 1], got {self.context_jitter}")
+        if int(self.patience) < 0:
+            problems.append(f"patience must be ≥ 0, got {self.patience}")
         if self.device not in ("cpu", "cuda", "auto"):
             problems.append(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
         if problems:
             raise ValueError("invalid training config: " + "; ".join(problems))
         self.split = tuple(self.split)
+        self.holdout = (self.holdout,) if isinstance(self.holdout, str) else tuple(self.holdout)
 
     @property
     def cache_folder(self) -> Path:
@@ -73,13 +138,17 @@ class TrainConfig:
         return Path(self.cache_dir or os.environ.get("FRENBRDF_CACHE") or Path.home() / ".cache" / "frenbrdf")
 
 
-def config_for(method: str, *, training: str | None = None, **overrides) -> TrainConfig:
+def config_for(method: str, *, training: str | None = None, augmentation: str | None = None,
+               **overrides) -> TrainConfig:
     """The preset of a method (:data:`frenbrdf.presets.METHODS`), optionally with a training length
-    (``"demo"``, ``"sweep"``), with top-level fields overridden."""
+    (``"demo"``, ``"sweep"``) and an augmentation (:data:`frenbrdf.presets.AUGMENTATION`, ``"paper"``
+    by default), with top-level fields overridden."""
     check_method(method)
     layers = [METHODS[method]]
     if training is not None:
         layers.append(training_overrides(training))
+    if augmentation is not None:
+        layers.append({"augment": augmentation_overrides(augmentation)})
     layers.append({key: to_dict(value) if dataclasses.is_dataclass(value) else value
                    for key, value in overrides.items()})
     settings = to_dict(TrainConfig(method=method))

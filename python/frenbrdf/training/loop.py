@@ -27,6 +27,7 @@ from ..data import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
 from ..losses import FrequencyLoss
 from ..models.autoencoder import AutoEncoder
+from .augment import BatchDrawer
 from .config import TrainConfig
 from .prepared import Distributed, PreparedData, prepare, select_device
 from .run import Run
@@ -51,7 +52,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
 
     checkpoint = checkpoints.load(run_dir / "last.pt") if resume else None
     split = _resumed_split(checkpoint, cfg, files, run_dir) if checkpoint else split_materials(files, cfg.seed,
-                                                                                               cfg.split)
+                                                                                               cfg.split, cfg.holdout)
     # Full batches only (the last partial one is dropped; each epoch reshuffles), so that
     # every step's batch splits evenly across ranks.
     batch_size = min(cfg.batch_materials, len(split.train))
@@ -68,7 +69,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
     torch.manual_seed(cfg.seed)
     network = AutoEncoder(cfg.model).to(device)
     frequency = FrequencyLoss(cfg.loss.frequency).to(device) if data.truth is not None else None
-    optimizer = torch.optim.Adam(network.parameters(), lr=cfg.lr)
+    optimizer = make_optimizer(network, cfg)
+    drawer = BatchDrawer(cfg, data, with_truth=cfg.loss.eta > 0)
     generator = torch.Generator().manual_seed(cfg.seed)
     history: list[dict] = []
     best = {"epoch": -1, "val": math.inf}
@@ -100,13 +102,10 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
             batch = order[step_in_epoch * batch_size:(step_in_epoch + 1) * batch_size].tolist()
             # Every rank draws the whole batch's samples (same generator), then keeps its share:
             # the run equals a single-process run on the same seed.
-            context = data.bank.sample(batch, cfg.context_samples, generator)
-            query = data.bank.sample(batch, cfg.query_samples, generator)
             share = slice(ranks.rank * len(batch) // ranks.world, (ranks.rank + 1) * len(batch) // ranks.world)
-            context, query = context.take(share).to(device), query.take(share).to(device)
-            true = data.truth[batch][share].to(device) if data.truth is not None and cfg.loss.eta > 0 else None
-            terms = optimisation_step(trained, frequency, optimizer, cfg.loss, cfg.grad_clip, context, query, true,
-                                      measure_gradients=step_in_epoch == 0)
+            mine = drawer.draw(batch, generator).take(share).to(device)
+            terms = optimisation_step(trained, frequency, optimizer, cfg.loss, cfg.grad_clip, mine.context, mine.query,
+                                      mine.truth, measure_gradients=step_in_epoch == 0, truth_mask=mine.truth_mask)
             if terms.gradient_ratio is not None:
                 gradient_ratio = terms.gradient_ratio
             if terms.not_finite:
@@ -129,9 +128,18 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
         if ranks.main:
             checkpoints.save(run_dir / "last.pt", state(epoch))
             save_json(run_dir / "history.json", history)
+        if cfg.patience and epoch - best["epoch"] >= cfg.patience:
+            break  # early stopping: no better validation loss for `patience` epochs
     bar.close()
     ranks.barrier()
     return Run(run_dir, seconds=time.perf_counter() - start)
+
+
+def make_optimizer(network: torch.nn.Module, cfg: TrainConfig) -> torch.optim.Optimizer:
+    """Adam, or AdamW (decoupled weight decay) with ``cfg.weight_decay > 0``."""
+    if cfg.weight_decay > 0:
+        return torch.optim.AdamW(network.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    return torch.optim.Adam(network.parameters(), lr=cfg.lr)
 
 
 def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Path) -> Split:

@@ -19,7 +19,7 @@ import torch
 import torch.distributed as dist
 from tqdm.auto import tqdm
 
-from ..data import MaterialBank, Split, mapped_bank, read_tables
+from ..data import MaterialBank, Split, mapped_bank, max_directional_albedo, read_tables
 from ..losses import FrequencyTruth
 from ..models.mapping import LogRelativeMapping
 from .config import TrainConfig
@@ -71,6 +71,9 @@ class PreparedData:
     """Training materials first, then validation, in split order."""
     truth: torch.Tensor | None
     """True SH coefficients ``(M, S, 3, ncoeff)`` in bank order, or None without L_fre."""
+    albedo: torch.Tensor | None = None
+    """The training materials' largest directional albedo per channel ``(n_train, 3)``
+    (:func:`frenbrdf.data.max_directional_albedo`), computed for gain augmentation only."""
 
     @property
     def n_train(self) -> int:
@@ -114,7 +117,8 @@ def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distr
     truth = None
     if cfg.loss.eta > 0 or cfg.method == "frenbrdf":
         truth = _true_coefficients(cfg, names, files, mapping, bank, ranks)
-    return PreparedData(split, mapping, bank, truth)
+    albedo = max_directional_albedo(bank, mapping, range(len(split.train))) if cfg.augment.gain > 0 else None
+    return PreparedData(split, mapping, bank, truth, albedo)
 
 
 def _true_coefficients(cfg: TrainConfig, names, files, mapping, bank, ranks: Distributed) -> torch.Tensor:

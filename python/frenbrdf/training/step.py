@@ -34,8 +34,12 @@ class LossTerms:
 
 
 def loss_terms(network, frequency: FrequencyLoss | None, loss: LossConfig, context, query,
-               true_coefficients: torch.Tensor | None) -> LossTerms:
-    """L = L_rec + λ1 · weights + λ2 · latents + η · L_fre (L_fre only with ``frequency`` and the truth)."""
+               true_coefficients: torch.Tensor | None, truth_mask: torch.Tensor | None = None) -> LossTerms:
+    """L = L_rec + λ1 · weights + λ2 · latents + η · L_fre (L_fre only with ``frequency`` and the truth).
+
+    ``truth_mask`` ``(B,)`` bool: L_fre over the materials whose truth is known only (augmented
+    batches); with none known the step has no L_fre term.
+    """
     z, params = network(context.encoder_input())
     terms = {
         "rec": reconstruction_loss(nbrdf_forward(params, query.coords), query.values, query.cos_in, loss.kind),
@@ -43,7 +47,10 @@ def loss_terms(network, frequency: FrequencyLoss | None, loss: LossConfig, conte
         "z": loss.lambda_latent * latent_penalty(z),
     }
     if frequency is not None and true_coefficients is not None:
-        terms["fre"] = frequency(params, true_coefficients)
+        if truth_mask is None:
+            terms["fre"] = frequency(params, true_coefficients)
+        elif truth_mask.any():
+            terms["fre"] = frequency([p[truth_mask] for p in params], true_coefficients[truth_mask])
     total = terms["rec"] + terms["w"] + terms["z"] + loss.eta * terms.get("fre", 0.0)
     return LossTerms(total, {name: float(value.detach()) for name, value in terms.items()}, terms)
 
@@ -60,13 +67,13 @@ def gradient_norm_ratio(network, terms: LossTerms, eta: float) -> float:
 
 def optimisation_step(network, frequency: FrequencyLoss | None, optimizer: torch.optim.Optimizer, loss: LossConfig,
                       grad_clip: float, context, query, true_coefficients: torch.Tensor | None, *,
-                      measure_gradients: bool = False) -> LossTerms:
+                      measure_gradients: bool = False, truth_mask: torch.Tensor | None = None) -> LossTerms:
     """Computes the loss and, when every term is finite, takes one optimiser step (else none).
 
     ``measure_gradients``: also set ``terms.gradient_ratio`` (two more backward passes) when
-    L_fre is part of the loss.
+    L_fre is part of the loss. ``truth_mask`` as in :func:`loss_terms`.
     """
-    terms = loss_terms(network, frequency, loss, context, query, true_coefficients)
+    terms = loss_terms(network, frequency, loss, context, query, true_coefficients, truth_mask)
     if terms.not_finite:
         return terms
     if measure_gradients and "fre" in terms.parts and loss.eta > 0:

@@ -1,0 +1,167 @@
+"""Each training step's batch: the sampled tables, and augmented materials in place of some.
+
+:class:`BatchDrawer` draws a step's context and query samples (:class:`TrainingBatch`) as the
+paper does, then, as :class:`~frenbrdf.training.config.AugmentConfig` says, replaces some
+materials of the batch (docs/data.md gives the physical argument for each):
+
+- a *mix* t·a + (1 − t)·b of two training tables, at bins valid in both: each mapped value is
+  un-mapped to reflectance with f_ref at its bin, mixed, and mapped again;
+- a *gained* table g_c · f, the gains scaled so that the material's largest directional albedo
+  (:func:`frenbrdf.data.max_directional_albedo`, computed once in ``prepare``) stays ≤ 1;
+- a *procedural* material (:mod:`.procedural`), evaluated exactly at the sampled bins, with
+  its L_fre truth evaluated exactly at the SHT nodes.
+
+Context and query samples of one material are drawn together, so both describe the same
+material. Every random choice comes from the training loop's generator: the same seed gives
+the same batches, and a resumed run continues the same sequence. With augmentation off the
+generator is used exactly as before it existed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from ..data import SampleBatch
+from ..merl import merl_above_horizon
+from ..models.nbrdf import bin_geometry
+from .config import TrainConfig
+from .procedural import NodeTruth, draw_procedural, values_at_bins
+
+#: What each material of a batch is.
+TABLE, MIX, GAIN, PROCEDURAL = range(4)
+
+
+@dataclass
+class TrainingBatch:
+    """The samples of one step's materials and, with L_fre, their true coefficients."""
+
+    context: SampleBatch
+    query: SampleBatch
+    truth: torch.Tensor | None = None
+    """``(B, S, 3, ncoeff)``, or None without L_fre."""
+    truth_mask: torch.Tensor | None = None
+    """``(B,)`` bool: the materials whose truth is known (None: all). Mixes and gained tables have
+    none: L_fre leaves them out."""
+    roles: np.ndarray | None = None
+    """``(B,)``: what each material is (:data:`TABLE`, :data:`MIX`, :data:`GAIN`, :data:`PROCEDURAL`);
+    None without augmentation."""
+
+    def take(self, materials: slice) -> TrainingBatch:
+        """The part of the batch for some of the materials (a rank's share)."""
+        return TrainingBatch(self.context.take(materials), self.query.take(materials),
+                             None if self.truth is None else self.truth[materials],
+                             None if self.truth_mask is None else self.truth_mask[materials],
+                             None if self.roles is None else self.roles[materials])
+
+    def to(self, device) -> TrainingBatch:
+        return TrainingBatch(self.context.to(device), self.query.to(device),
+                             None if self.truth is None else self.truth.to(device),
+                             None if self.truth_mask is None else self.truth_mask.to(device), self.roles)
+
+
+class BatchDrawer:
+    """Draws training batches of a run's prepared data (:class:`~frenbrdf.training.PreparedData`).
+
+    Parameters
+    ----------
+    cfg
+        The run's config: sample counts, ``context_jitter``, ``augment``.
+    data
+        The prepared data (its bank, mapping, truth and, with gains, albedos).
+    with_truth
+        Whether batches carry L_fre's true coefficients.
+    """
+
+    def __init__(self, cfg: TrainConfig, data, with_truth: bool):
+        self.cfg, self.data, self.augment = cfg, data, cfg.augment
+        self.with_truth = with_truth and data.truth is not None
+        if not self.augment.active:
+            return
+        self.reference = torch.from_numpy(np.ascontiguousarray(data.mapping.reference_bins().T, dtype=np.float32))
+        if self.augment.procedural > 0:
+            self.above_horizon = torch.from_numpy(np.flatnonzero(merl_above_horizon().reshape(-1)))
+            self.node_truth = NodeTruth(cfg.loss.frequency, data.mapping) if self.with_truth else None
+        if self.augment.gain > 0 and data.albedo is None:
+            raise ValueError("gain augmentation needs the materials' albedos: prepare the data with this config")
+
+    def context_count(self, generator: torch.Generator) -> int:
+        """This step's number of context samples (drawn from [jitter · N, N] with ``context_jitter``)."""
+        n = self.cfg.context_samples
+        if self.cfg.context_jitter == 0:
+            return n
+        low = max(1, math.ceil(self.cfg.context_jitter * n))
+        return int(torch.randint(low, n + 1, (1,), generator=generator))
+
+    def draw(self, batch: list[int], generator: torch.Generator) -> TrainingBatch:
+        """The batch of training materials ``batch`` (bank indices), some replaced by augmented ones."""
+        n_context = self.context_count(generator)
+        context = self.data.bank.sample(batch, n_context, generator)
+        query = self.data.bank.sample(batch, self.cfg.query_samples, generator)
+        truth = self.data.truth[batch] if self.with_truth else None
+        if not self.augment.active:
+            return TrainingBatch(context, query, truth)
+        roles = self.roles(len(batch), generator)
+        geometry = bin_geometry()
+        for slot in np.flatnonzero(roles != TABLE):
+            if roles[slot] == PROCEDURAL:
+                material = draw_procedural(generator)
+                bins = self.above_horizon[torch.randint(len(self.above_horizon), (n_context + self.cfg.query_samples,),
+                                                        generator=generator)]
+                values = values_at_bins(material, bins, self.data.mapping, self.reference[bins])
+                if truth is not None and self.node_truth is not None:
+                    truth[slot] = self.node_truth.coefficients(material)
+            elif roles[slot] == MIX:
+                bins, values = self.mixed(batch[slot], n_context + self.cfg.query_samples, generator)
+            else:
+                bins, values = self.gained(batch[slot], n_context + self.cfg.query_samples, generator)
+            for samples, part in ((context, slice(0, n_context)), (query, slice(n_context, None))):
+                samples.coords[slot] = geometry.half_diff[bins[part]]
+                samples.values[slot] = values[part]
+                samples.cos_in[slot] = geometry.cos_in[bins[part]]
+        mask = torch.from_numpy((roles == TABLE) | (roles == PROCEDURAL)) if truth is not None else None
+        return TrainingBatch(context, query, truth, mask, roles)
+
+    def roles(self, n: int, generator: torch.Generator) -> np.ndarray:
+        """What each of ``n`` batch materials becomes: procedural, mix, gain or table, independently."""
+        u = torch.rand(n, generator=generator, dtype=torch.float64).numpy()
+        a = self.augment
+        bounds = np.cumsum([a.procedural, a.mix, a.gain])
+        return np.select([u < bounds[0], u < bounds[1], u < bounds[2]], [PROCEDURAL, MIX, GAIN], TABLE)
+
+    def reflectance(self, material: int, bins: torch.Tensor) -> torch.Tensor:
+        """A bank material's reflectance ``(n, 3)`` at bins (its mapped values un-mapped)."""
+        return self.data.mapping.inverse(self.data.bank.mapped[material, bins], self.reference[bins])
+
+    def mixed(self, a: int, n: int, generator: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
+        """Bins and mapped values of t·a + (1 − t)·b, with b another training material and t ~ U(0, 1)."""
+        n_train = self.data.n_train
+        b = (a + 1 + int(torch.randint(n_train - 1, (1,), generator=generator))) % n_train if n_train > 1 else a
+        t = float(torch.rand(1, generator=generator, dtype=torch.float64))
+        valid = self.data.bank.valid
+        common = self.data.bank.valid_bins(a) if torch.equal(valid[a], valid[b]) else torch.nonzero(
+            valid[a] & valid[b]).squeeze(1)
+        if len(common) == 0:
+            raise ValueError(f"materials {self.data.bank.names[a]} and {self.data.bank.names[b]} share no valid bin")
+        bins = common[torch.randint(len(common), (n,), generator=generator)]
+        mix = t * self.reflectance(a, bins) + (1 - t) * self.reflectance(b, bins)
+        return bins, self.data.mapping.forward(mix, self.reference[bins])
+
+    def gained(self, a: int, n: int, generator: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
+        """Bins and mapped values of material ``a`` with per-channel gains (:func:`draw_gains`)."""
+        gains = draw_gains(self.data.albedo[a], self.augment.gain_range, generator)
+        own = self.data.bank.valid_bins(a)
+        bins = own[torch.randint(len(own), (n,), generator=generator)]
+        return bins, self.data.mapping.forward(gains * self.reflectance(a, bins), self.reference[bins])
+
+
+def draw_gains(albedo: torch.Tensor, gain_range: tuple[float, float], generator: torch.Generator) -> torch.Tensor:
+    """Per-channel gains ``(3,)``: log-uniform in ``gain_range``, then all scaled by one factor ≤ 1 so
+    that ``max_c g_c · albedo_c ≤ 1`` (the colour change is kept, the brightness capped)."""
+    low, high = math.log(gain_range[0]), math.log(gain_range[1])
+    gains = torch.exp(low + (high - low) * torch.rand(3, generator=generator, dtype=torch.float64)).float()
+    brightest = float((gains * albedo).max())
+    return gains / brightest if brightest > 1 else gains
