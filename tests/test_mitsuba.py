@@ -1,8 +1,10 @@
 """The Mitsuba 3 plugin: Dr.Jit evaluation equals numpy, sampling is consistent, renders work.
 
-Needs ``pip install mitsuba``; the tests that run Mitsuba skip without it. Most also need
-the ``llvm_ad_rgb`` variant (Dr.Jit's LLVM backend, e.g. Debian's ``libllvm19``): in
-``scalar_rgb`` a Python BSDF runs one ray at a time, far too slowly for them.
+Needs the ``mitsuba`` extra (``pip install -e ".[test]"`` installs it); the tests that run
+Mitsuba skip without it. Most also need the ``llvm_ad_rgb`` variant (in ``scalar_rgb`` a
+Python BSDF runs one ray at a time, far too slowly for them): Dr.Jit's LLVM backend uses
+the system's libLLVM when it works, else the one the extra installs (karellen-llvm-core),
+so the tests fail, rather than skip, when neither works.
 """
 
 from __future__ import annotations
@@ -35,8 +37,11 @@ def mi():
         pytest.skip("mitsuba is not installed (pip install mitsuba)")
     variant = fm.register()
     if variant == fm.FALLBACK_VARIANT:
-        pytest.skip("llvm_ad_rgb is not usable here (needs libLLVM ≥ 15, e.g. apt-get install -y libllvm19); "
-                    "test_scalar_fallback covers scalar_rgb")
+        if fm.packaged_libllvm() is None:
+            pytest.skip(f"llvm_ad_rgb is not usable here and {fm.LLVM_PACKAGE} is not installed "
+                        "(pip install -e '.[test]' installs it on Linux x86-64, or apt-get install -y libllvm19)")
+        pytest.fail(f"llvm_ad_rgb is not usable although {fm.LLVM_PACKAGE} is installed "
+                    f"({fm.LIBLLVM_VARIABLE}={os.environ.get(fm.LIBLLVM_VARIABLE)!r})")
     import mitsuba
 
     return mitsuba
@@ -296,6 +301,22 @@ def test_render_small_sphere_from_files(mi, gold_table, tmp_path):
     assert fm._HANDLES == handles  # render_material released what it registered
 
 
+def test_render_cli_accepts_a_saved_nbrdf(mi, tmp_path, capsys):
+    """`frenbrdf render x.pt --mitsuba` (the file fit-nbrdf writes) gives the PNG of the NBRDF's Mitsuba render."""
+    import matplotlib.image
+
+    from frenbrdf.cli import main
+
+    nbrdf, path, png = tiny_nbrdf(seed=5), tmp_path / "material.pt", tmp_path / "material.png"
+    save_nbrdf(path, nbrdf)
+    assert main(["render", str(path), "--mitsuba", "--out", str(png), "--resolution", "16", "--spp", "4"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    written = matplotlib.image.imread(png)[..., :3]
+    expected = fm.tonemap(fm.render_material(nbrdf, spp=4, resolution=16))
+    assert written.shape == (16, 16, 3) and expected[8, 8].max() > 0
+    np.testing.assert_allclose(written, expected, atol=1 / 255 + 1e-6)  # 8-bit PNG
+
+
 def test_importance_sampling_beats_cosine_sampling(mi, gold_table):
     reference = fm.tonemap(fm.render_material(gold_table, spp=256, resolution=24, seed=1))
     errors = {sampling: np.sqrt(np.mean((fm.tonemap(fm.render_material(gold_table, spp=16, resolution=24,
@@ -366,3 +387,49 @@ def test_scalar_fallback_when_llvm_is_unusable(tmp_path):
     env = {**os.environ, "DRJIT_LIBLLVM_PATH": str(tmp_path / "no-libLLVM.so")}
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=300)
     assert result.returncode == 0 and result.stdout.strip().endswith("ok"), result.stdout + result.stderr
+
+
+# --------------------------------------------------------------------------- which libLLVM
+
+
+def test_packaged_llvm_is_chosen_only_when_the_system_has_none(monkeypatch):
+    """DRJIT_LIBLLVM_PATH → the pip package's libLLVM only when unset, drjit not yet imported and the system's fails."""
+    from frenbrdf.mitsuba import variants
+
+    system_works = {"value": True}
+    monkeypatch.setattr(variants, "packaged_libllvm", lambda: "/site/lib/libLLVM.so.19.1")
+    monkeypatch.setattr(variants, "_llvm_works", lambda libllvm: libllvm is not None or system_works["value"])
+    monkeypatch.delitem(sys.modules, "drjit", raising=False)
+    monkeypatch.delenv(fm.LIBLLVM_VARIABLE, raising=False)
+    assert variants.use_packaged_llvm() is None and fm.LIBLLVM_VARIABLE not in os.environ  # the system's works
+    system_works["value"] = False
+    monkeypatch.setitem(sys.modules, "drjit", object())
+    assert variants.use_packaged_llvm() is None and fm.LIBLLVM_VARIABLE not in os.environ  # too late: imported
+    monkeypatch.delitem(sys.modules, "drjit")
+    monkeypatch.setenv(fm.LIBLLVM_VARIABLE, "/mine/libLLVM.so")
+    assert variants.use_packaged_llvm() == "/mine/libLLVM.so" == os.environ[fm.LIBLLVM_VARIABLE]  # the user's
+    monkeypatch.delenv(fm.LIBLLVM_VARIABLE)
+    assert variants.use_packaged_llvm() == "/site/lib/libLLVM.so.19.1" == os.environ[fm.LIBLLVM_VARIABLE]
+    monkeypatch.setattr(variants, "packaged_libllvm", lambda: None)
+    monkeypatch.delenv(fm.LIBLLVM_VARIABLE)
+    assert variants.use_packaged_llvm() is None and fm.LIBLLVM_VARIABLE not in os.environ  # nothing to point at
+
+
+@needs_mitsuba
+def test_packaged_libllvm_runs_the_llvm_variant():
+    """The libLLVM the test extras install works in Dr.Jit: llvm_ad_rgb renders with the plugin (whatever the system has)."""
+    packaged = fm.packaged_libllvm()
+    if packaged is None:
+        pytest.skip(f"{fm.LLVM_PACKAGE} is not installed (pip install -e '.[test]' installs it on Linux x86-64)")
+    script = textwrap.dedent("""
+        import numpy as np, drjit as dr
+        from frenbrdf import mitsuba as fm
+        from frenbrdf.analytic import AnalyticMaterial, merl_table
+        assert fm.register() == "llvm_ad_rgb"
+        image = fm.render_material(merl_table(AnalyticMaterial("grey", diffuse=(0.5, 0.5, 0.5))), spp=2, resolution=8)
+        assert np.all(np.isfinite(image)) and image[4, 4].max() > 0
+        print("llvm", *dr.detail.llvm_version())
+    """)
+    env = {**os.environ, fm.LIBLLVM_VARIABLE: packaged}
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=300)
+    assert result.returncode == 0 and result.stdout.strip().startswith("llvm 19 "), result.stdout + result.stderr

@@ -67,10 +67,13 @@ Python BSDFs are practical only in Mitsuba's JIT variants: :func:`set_variant` p
 ``llvm_ad_rgb`` when Dr.Jit's LLVM backend works and otherwise falls back to
 ``scalar_rgb`` with a warning; there the Python BSDF runs once per ray, about 8,000
 samples per second on one core against millions (a 256×256, 64 spp sphere takes about
-9 minutes instead of a second). Debian's ``libllvm19`` works
-(``apt-get install -y libllvm19``); LLVM 14 is refused and LLVM 15 aborts the process
-on the first kernel with a minimum or an arc tangent, which is why the backend is probed
-once in a subprocess (:func:`llvm_available`) before it is used here.
+9 minutes instead of a second). LLVM 19 works (Debian's ``libllvm19``); LLVM 14 is
+refused and LLVM 15 aborts the process on the first kernel with a minimum or an arc
+tangent, which is why the backend is probed once in a subprocess (:func:`llvm_available`)
+before it is used here. The ``mitsuba`` extra installs LLVM 19.1.7 from PyPI
+(:data:`LLVM_PACKAGE`, Linux x86-64): when the system has no libLLVM that works, the
+first use of this module, before it imports drjit, points Dr.Jit at that one by setting
+``DRJIT_LIBLLVM_PATH`` (:func:`use_packaged_llvm`; a path already set is kept).
 """
 
 from .bsdf import register
@@ -86,11 +89,22 @@ from .material import (
 )
 from .sampling import ALPHA_GRID, COSINE_ONLY, MIN_COSINE_WEIGHT, Lobe, SamplingMixture, fit_sampling
 from .scene import environment_bitmap, render_material, save_png, scene_dict, tonemap
-from .variants import FALLBACK_VARIANT, PLUGIN_NAME, PREFERRED_VARIANT, llvm_available, set_variant
+from .variants import (
+    FALLBACK_VARIANT,
+    LIBLLVM_VARIABLE,
+    LLVM_PACKAGE,
+    PLUGIN_NAME,
+    PREFERRED_VARIANT,
+    llvm_available,
+    packaged_libllvm,
+    set_variant,
+    use_packaged_llvm,
+)
 
 __all__ = [
-    "ALPHA_GRID", "COSINE_ONLY", "FALLBACK_VARIANT", "MIN_COSINE_WEIGHT", "PLUGIN_NAME", "PREFERRED_VARIANT",
-    "Lobe", "Material", "SamplingMixture", "_HANDLES", "bsdf_dict", "environment_bitmap", "fit_sampling",
-    "llvm_available", "load_material", "material_from_nbrdf", "material_from_table", "material_handle",
-    "register", "release_handle", "render_material", "save_png", "scene_dict", "set_variant", "tonemap",
+    "ALPHA_GRID", "COSINE_ONLY", "FALLBACK_VARIANT", "LIBLLVM_VARIABLE", "LLVM_PACKAGE", "MIN_COSINE_WEIGHT",
+    "PLUGIN_NAME", "PREFERRED_VARIANT", "Lobe", "Material", "SamplingMixture", "_HANDLES", "bsdf_dict",
+    "environment_bitmap", "fit_sampling", "llvm_available", "load_material", "material_from_nbrdf",
+    "material_from_table", "material_handle", "packaged_libllvm", "register", "release_handle", "render_material",
+    "save_png", "scene_dict", "set_variant", "tonemap", "use_packaged_llvm",
 ]

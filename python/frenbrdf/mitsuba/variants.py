@@ -1,11 +1,14 @@
-"""Mitsuba variants: which one to use, probing Dr.Jit's LLVM backend safely, and registration."""
+"""Mitsuba variants: which one to use, which libLLVM Dr.Jit loads, and probing its LLVM backend safely."""
 
 from __future__ import annotations
 
 import functools
+import importlib.metadata
+import os
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 #: The plugin's type name in Mitsuba scenes.
 PLUGIN_NAME = "frenbrdf"
@@ -14,12 +17,23 @@ PREFERRED_VARIANT = "llvm_ad_rgb"
 #: The variant used when the LLVM backend is not available.
 FALLBACK_VARIANT = "scalar_rgb"
 
-_INSTALL_HINT = ("frenbrdf.mitsuba needs Mitsuba 3: pip install mitsuba (or pip install 'frenbrdf[mitsuba]'); "
-                 "its fast llvm_ad_rgb variant also needs LLVM, e.g. apt-get install -y libllvm19")
+#: The PyPI package whose wheel ships a libLLVM Dr.Jit can load (LLVM 19.1.7, Linux x86-64); the
+#: ``mitsuba`` extra installs it, for machines without a system LLVM that works.
+LLVM_PACKAGE = "karellen-llvm-core"
+#: Dr.Jit's variable for the libLLVM to load; read once, when drjit is first imported.
+LIBLLVM_VARIABLE = "DRJIT_LIBLLVM_PATH"
+
+_INSTALL_HINT = ("frenbrdf.mitsuba needs Mitsuba 3: pip install mitsuba, or pip install 'frenbrdf[mitsuba]', which "
+                 f"also installs {LLVM_PACKAGE}, a libLLVM for its fast llvm_ad_rgb variant")
 
 
 def _import_mitsuba():
-    """``(mitsuba, drjit)``, or an ImportError that says how to install them."""
+    """``(mitsuba, drjit)``, or an ImportError that says how to install them.
+
+    Before drjit's first import, points Dr.Jit at the pip-installed libLLVM if the
+    system's does not work (:func:`use_packaged_llvm`).
+    """
+    use_packaged_llvm()
     try:
         import drjit
         import mitsuba
@@ -46,20 +60,74 @@ assert dr.all(dr.isfinite(mi.render(scene, spp=2).array))
 
 
 @functools.cache
-def llvm_available() -> bool:
-    """Whether Mitsuba's ``llvm_ad_rgb`` variant works on this machine.
-
-    Probed in a subprocess (a second or two, once per process) because Dr.Jit aborts the
-    whole process, rather than raising, with an unsupported ``libLLVM``: it refuses LLVM
-    14 cleanly, but LLVM 15 loads and then aborts when a kernel uses ``dr.minimum`` or
-    ``dr.atan2``. ``DRJIT_LIBLLVM_PATH`` is honoured, as Dr.Jit honours it.
-    """
-    _import_mitsuba()
+def _llvm_works(libllvm: str | None) -> bool:
+    """Whether the probe passes with Dr.Jit loading ``libllvm`` (None: the one Dr.Jit finds by itself)."""
+    env = {name: value for name, value in os.environ.items() if name != LIBLLVM_VARIABLE}
+    if libllvm is not None:
+        env[LIBLLVM_VARIABLE] = libllvm
     try:
-        result = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, timeout=300)
+        result = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, timeout=300, env=env)
     except (OSError, subprocess.TimeoutExpired):
         return False
     return result.returncode == 0
+
+
+def llvm_available() -> bool:
+    """Whether Mitsuba's ``llvm_ad_rgb`` variant works in this process.
+
+    Probed in a subprocess (a second or two, once per process and library) because
+    Dr.Jit aborts the whole process, rather than raising, with an unsupported ``libLLVM``:
+    it refuses LLVM 14 cleanly, but LLVM 15 loads and then aborts when a kernel uses
+    ``dr.minimum`` or ``dr.atan2``. ``DRJIT_LIBLLVM_PATH`` is honoured, as Dr.Jit honours it.
+    """
+    _import_mitsuba()
+    return _llvm_works(os.environ.get(LIBLLVM_VARIABLE))
+
+
+def packaged_libllvm() -> str | None:
+    """The libLLVM of the pip package :data:`LLVM_PACKAGE`, or None when it is not installed.
+
+    The wheel installs ``libLLVM.so.19.1`` under the environment's ``lib/`` (a data file,
+    found through the package's file list) beside its own libc++, whose ``.so.1`` links
+    the package's start-up hook makes on the first Python start after the install.
+    """
+    try:
+        files = importlib.metadata.files(LLVM_PACKAGE) or []
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    for file in files:
+        if file.name.startswith("libLLVM.so."):
+            path = Path(file.locate()).resolve()
+            if path.is_file():
+                return str(path)
+    return None
+
+
+def use_packaged_llvm() -> str | None:
+    """Points Dr.Jit at :func:`packaged_libllvm` when the system has no libLLVM that works.
+
+    Sets ``DRJIT_LIBLLVM_PATH`` in this process (children inherit it), and only if it is
+    unset and drjit is not imported yet: Dr.Jit reads it once, at import, and a path the
+    user chose is kept. Costs one probe (:func:`llvm_available` reuses it) the first time,
+    when the package is installed. Returns the path Dr.Jit is pointed at, or None.
+    """
+    if LIBLLVM_VARIABLE in os.environ or "drjit" in sys.modules:
+        return os.environ.get(LIBLLVM_VARIABLE)
+    packaged = packaged_libllvm()
+    if packaged is None or _llvm_works(None):
+        return None
+    os.environ[LIBLLVM_VARIABLE] = packaged
+    return packaged
+
+
+def _llvm_hint() -> str:
+    """How to get a libLLVM that works, for the fallback warning."""
+    packaged = packaged_libllvm()
+    if packaged is None:
+        return f"pip install {LLVM_PACKAGE} (Linux x86-64) or apt-get install -y libllvm19"
+    if os.environ.get(LIBLLVM_VARIABLE) == packaged:
+        return f"{LLVM_PACKAGE}'s {packaged} does not work here either"
+    return f"try {LLVM_PACKAGE}'s: {LIBLLVM_VARIABLE}={packaged}, set before drjit is imported"
 
 
 def set_variant(variant: str | None = None) -> str:
@@ -88,9 +156,9 @@ def set_variant(variant: str | None = None) -> str:
             variant = PREFERRED_VARIANT
         else:
             warnings.warn(f"Mitsuba's {PREFERRED_VARIANT} variant is not usable here (Dr.Jit's LLVM backend needs a "
-                          f"recent libLLVM: apt-get install -y libllvm19); falling back to {FALLBACK_VARIANT}, "
-                          "which evaluates the Python BSDF one ray at a time (hundreds of times slower)",
-                          RuntimeWarning, stacklevel=2)
+                          f"recent libLLVM: 19 works, 14 and 15 do not; {_llvm_hint()}); falling back to "
+                          f"{FALLBACK_VARIANT}, which evaluates the Python BSDF one ray at a time (hundreds of times "
+                          "slower)", RuntimeWarning, stacklevel=2)
             variant = FALLBACK_VARIANT
     if variant not in mi.variants():
         raise ValueError(f"Mitsuba variant {variant!r} is not available; this build has {mi.variants()}")
