@@ -5,8 +5,8 @@
 
 Options: ``--spp 1 4 16 64 256``, ``--reference-spp 4096``, ``--resolution 128``,
 ``--repeats 3``, ``--threads 1`` (Dr.Jit's threads: the seconds are one core's),
-``--variant`` (default: :func:`frenbrdf.mitsuba.set_variant`, ``llvm_ad_rgb`` when
-``libllvm19`` is installed), ``--out docs/charts``, ``--name chart5_rendering``.
+``--variant`` (default: :func:`frenbrdf.mitsuba.set_variant`, ``llvm_ad_rgb`` when a
+libLLVM works: the system's or the one the mitsuba extra installs), ``--out docs/charts``, ``--name chart5_rendering``.
 
 Materials: three analytic MERL tables of :mod:`frenbrdf.synth` (a near-mirror chromium,
 GGX α = 0.02; a rough red plastic, Lambert + GGX α = 0.3; a Lambertian grey) and, with

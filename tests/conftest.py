@@ -37,6 +37,27 @@ def _installed(name: str) -> bool:
 HAVE_MITSUBA = _installed("mitsuba") and _installed("drjit")
 
 
+def mitsuba_jit():
+    """Mitsuba with the plugin registered in its JIT variant ``llvm_ad_rgb``, for the tests that need it.
+
+    Skips (with the reason) where Mitsuba or the packaged LLVM is not installed; fails where the
+    packaged LLVM is installed and the variant still does not work, so a broken install is never a skip.
+    """
+    if not HAVE_MITSUBA:
+        pytest.skip("mitsuba is not installed (pip install mitsuba)")
+    from frenbrdf import mitsuba as fm
+
+    if fm.register() == fm.FALLBACK_VARIANT:
+        if fm.packaged_libllvm() is None:
+            pytest.skip(f"llvm_ad_rgb is not usable here and {fm.LLVM_PACKAGE} is not installed "
+                        "(pip install -e '.[test]' installs it on Linux x86-64, or apt-get install -y libllvm19)")
+        pytest.fail(f"llvm_ad_rgb is not usable although {fm.LLVM_PACKAGE} is installed "
+                    f"({fm.LIBLLVM_VARIABLE}={os.environ.get(fm.LIBLLVM_VARIABLE)!r})")
+    import mitsuba
+
+    return mitsuba
+
+
 def bench_module(name: str):
     """A module of benches/ (not part of the installed package), imported as the scripts import it."""
     if str(BENCHES) not in sys.path:

@@ -12,7 +12,7 @@ import pytest
 
 from frenbrdf.training import train
 
-from .conftest import BENCHES, HAVE_MITSUBA, tiny
+from .conftest import BENCHES, mitsuba_jit, tiny
 
 
 def load_script(name: str):
@@ -45,12 +45,7 @@ def test_samples_chart_writes_png_csv_and_json(toy_materials, tmp_path):
 
 
 def test_rendering_chart_writes_png_csv_and_json(tmp_path):
-    if not HAVE_MITSUBA:
-        pytest.skip("mitsuba is not installed (pip install mitsuba)")
-    from frenbrdf import mitsuba as fm
-
-    if fm.register() == fm.FALLBACK_VARIANT:
-        pytest.skip("llvm_ad_rgb is not usable here (needs libLLVM ≥ 15, e.g. apt-get install -y libllvm19)")
+    mitsuba_jit()
     from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
 
     chart = load_script("chart_rendering")

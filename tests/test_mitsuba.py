@@ -25,7 +25,7 @@ from frenbrdf.fitting import save_nbrdf
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, fold_difference
 
-from .conftest import HAVE_MITSUBA
+from .conftest import HAVE_MITSUBA, mitsuba_jit
 
 needs_mitsuba = pytest.mark.skipif(not HAVE_MITSUBA, reason="mitsuba is not installed (pip install mitsuba)")
 
@@ -33,18 +33,7 @@ needs_mitsuba = pytest.mark.skipif(not HAVE_MITSUBA, reason="mitsuba is not inst
 @pytest.fixture(scope="module")
 def mi():
     """Mitsuba with the plugin registered, in a JIT variant."""
-    if not HAVE_MITSUBA:
-        pytest.skip("mitsuba is not installed (pip install mitsuba)")
-    variant = fm.register()
-    if variant == fm.FALLBACK_VARIANT:
-        if fm.packaged_libllvm() is None:
-            pytest.skip(f"llvm_ad_rgb is not usable here and {fm.LLVM_PACKAGE} is not installed "
-                        "(pip install -e '.[test]' installs it on Linux x86-64, or apt-get install -y libllvm19)")
-        pytest.fail(f"llvm_ad_rgb is not usable although {fm.LLVM_PACKAGE} is installed "
-                    f"({fm.LIBLLVM_VARIABLE}={os.environ.get(fm.LIBLLVM_VARIABLE)!r})")
-    import mitsuba
-
-    return mitsuba
+    return mitsuba_jit()
 
 
 def tiny_nbrdf(seed: int = 0, hidden=(8, 8), reference=None) -> NBRDF:
