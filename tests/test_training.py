@@ -284,13 +284,13 @@ def test_dropout_and_weight_decay_change_nothing_when_off(toy_materials, tmp_pat
 def test_configs_and_run_folders_from_before_augmentation_still_load(toy_materials, tmp_path):
     run = train(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1))
     saved = json.loads((run.path / "config.json").read_text())
-    assert saved["augment"]["preset"] == "paper" and saved["holdout"] == []
+    assert saved["augment"]["preset"] == "augmented" and saved["holdout"] == []
     for key in ("augment", "holdout", "weight_decay", "context_jitter", "patience"):
         del saved[key]
     del saved["model"]["encoder"]["dropout"]
     (run.path / "config.json").write_text(json.dumps(saved))
     old = Run(run.path).config
-    assert old.augment == training.config.AugmentConfig() and not old.augment.active
+    assert old.augment.preset == "paper" and not old.augment.active
     assert (old.holdout, old.weight_decay, old.context_jitter, old.patience, old.model.encoder.dropout) == ((), 0, 0, 0,
                                                                                                           0)
     assert frenbrdf.Model.load(run.path).config.encoder.dropout == 0.0

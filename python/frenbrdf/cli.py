@@ -234,8 +234,8 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--training", choices=sorted(TRAINING),
                        help="a training length of frenbrdf.presets over the method's preset (default: the full one)")
     train.add_argument("--augmentation", choices=sorted(AUGMENTATION),
-                       help="what the batches hold beyond the tables (frenbrdf.presets.AUGMENTATION; default: paper, "
-                       "the tables only)")
+                       help="what the batches hold beyond the tables (frenbrdf.presets.AUGMENTATION; default: augmented, "
+                       "mixes and colour gains; paper: the tables only, the paper's protocol)")
     train.add_argument("--holdout", nargs="+", metavar="PATTERN",
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")
@@ -319,8 +319,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")
     demo.add_argument("--data", help="folder of MERL files instead of the synthetic bank")
     demo.add_argument("--epochs", type=int, help="training epochs per method (default: the demo's)")
-    demo.add_argument("--augmentation", choices=sorted(AUGMENTATION), default="paper",
-                      help="what the batches hold beyond the tables (default: paper, the tables only)")
+    demo.add_argument("--augmentation", choices=sorted(AUGMENTATION), default="augmented",
+                      help="what the batches hold beyond the tables (default: augmented, mixes and colour gains; "
+                      "paper: the tables only)")
     demo.add_argument("--quiet", action="store_true", help="no progress bars")
     demo.set_defaults(run=_demo)
     return parser

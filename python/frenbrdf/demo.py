@@ -26,7 +26,7 @@ DEMO_EVALUATION = EvaluateConfig(samples=4000, edits=120, edit_resolution=96)
 
 
 def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, *, epochs: int | None = None,
-             augmentation: str = "paper", progress: bool = True) -> Path:
+             augmentation: str = "augmented", progress: bool = True) -> Path:
     """Runs the main job; returns the report folder. ``augmentation``: a
     :data:`frenbrdf.presets.AUGMENTATION` entry, the same for every method."""
     out = Path(out)

@@ -17,8 +17,12 @@ class DecoderConfig:
 
     hidden: tuple[int, ...] = (128, 128)
     """Hidden widths of every head."""
-    last_layer_scale: float = 0.1
-    """Factor on the default initialisation of each head's last weight matrix."""
+    last_layer_scale: float = 1.0
+    """Factor on the default initialisation of each head's last weight matrix. At 0.1 (HyperBRDF's
+    habit of starting small) every latent decodes to nearly the same NBRDF and, at the demo's 800
+    steps, the decoder never learns to vary colour: purple, green and pink come back beige even with
+    the latent optimised per material. At 1.0 the latent steers the NBRDF from the first step
+    (docs/colour.md)."""
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
@@ -29,11 +33,10 @@ class DecoderConfig:
 class HyperNetwork(nn.Module):
     """``z (B, latent)`` → a list of NBRDF parameter tensors ``(B, *shape)``.
 
-    Each head's last layer starts small (``last_layer_scale``) with its bias set to a
-    standard initialisation of the NBRDF tensor, so every latent first decodes to about
-    the same well-conditioned random NBRDF and the heads learn deviations from it. The
-    NBRDF's output layer starts at zero instead: the first prediction is the mapped value
-    0, i.e. the reference (median) BRDF.
+    Each head's last layer starts at torch's default scale times ``last_layer_scale`` with its
+    bias set to a standard initialisation of the NBRDF tensor, so every latent first decodes
+    to a well-conditioned random NBRDF around a shared one. The NBRDF's output-layer biases
+    start at zero: the mean first prediction is the mapped value 0, i.e. the reference BRDF.
     """
 
     def __init__(self, latent: int, shapes: list[tuple[int, ...]], config: DecoderConfig):

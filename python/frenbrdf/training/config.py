@@ -18,7 +18,8 @@ from ..presets import METHODS, augmentation_overrides, check_method, training_ov
 @dataclass
 class AugmentConfig:
     """Materials the training batches hold beyond the tables (docs/data.md). The defaults are the
-    paper's protocol: the training tables only.
+    ``augmented`` preset of :data:`frenbrdf.presets.AUGMENTATION` (mixes and colour gains, chosen by
+    measurement: docs/colour.md); ``paper`` is the paper's protocol, the training tables only.
 
     Each material of a batch is, independently, procedural with probability ``procedural``,
     else a mix with probability ``mix``, else a gained table with probability ``gain``, else a
@@ -27,10 +28,10 @@ class AugmentConfig:
     are masked out of it, since their true coefficients are not those of any cached table.
     """
 
-    mix: float = 0.0
+    mix: float = 0.25
     """Fraction of batch materials replaced by t·a + (1 − t)·b of two training tables (t ~ U(0, 1)),
     mixed in reflectance at bins valid in both."""
-    gain: float = 0.0
+    gain: float = 0.5
     """Fraction of batch materials given per-channel gains (a change of colour and brightness)."""
     gain_range: tuple[float, float] = (0.5, 2.0)
     """Each channel's gain is drawn log-uniform in this range, then all three are scaled down
@@ -38,7 +39,7 @@ class AugmentConfig:
     procedural: float = 0.0
     """Fraction of batch materials drawn afresh every step from the analytic families of
     :mod:`frenbrdf.synth` and evaluated exactly at the sampled bins."""
-    preset: str = "paper"
+    preset: str = "augmented"
     """The :data:`frenbrdf.presets.AUGMENTATION` entry these values came from (set by
     :func:`config_for`; "custom" for values set by hand)."""
 

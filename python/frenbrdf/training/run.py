@@ -14,6 +14,7 @@ from pathlib import Path
 from ..configs import from_dict
 from ..data import Split
 from ..models.autoencoder import Model
+from ..presets import AUGMENTATION
 from .config import TrainConfig
 
 
@@ -49,7 +50,10 @@ class Run:
 
     @functools.cached_property
     def config(self) -> TrainConfig:
-        return from_dict(TrainConfig, self._json("config.json"), str(self.path / "config.json"))
+        saved = self._json("config.json")
+        # Runs from before augmentation existed trained on the tables only.
+        saved.setdefault("augment", AUGMENTATION["paper"] | {"preset": "paper"})
+        return from_dict(TrainConfig, saved, str(self.path / "config.json"))
 
     @functools.cached_property
     def split(self) -> Split:
