@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from frenbrdf import analytic, synth
+from frenbrdf import analytic, presets, synth
 from frenbrdf.data import ALBEDO_INCIDENT_DEGREES, list_materials, mapped_bank, max_directional_albedo, split_materials
 from frenbrdf.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from frenbrdf.merl import merl_above_horizon
@@ -47,7 +47,9 @@ def _analytic_bank(materials) -> tuple[LogRelativeMapping, object, np.ndarray]:
         table[:, ~above] = np.nan
         tables.append(table)
     tables = np.stack(tables)
-    mapping = LogRelativeMapping.from_tables(tables, MappingConfig())
+    # Per bin: the harder reference for the exact truth, which interpolates f_ref between bins (per
+    # channel, a Lambertian material equal to the median would map to 0 everywhere).
+    mapping = LogRelativeMapping.from_tables(tables, MappingConfig(reference="per_bin"))
     return mapping, mapped_bank([m.name for m in materials], tables, mapping), tables
 
 
@@ -182,7 +184,11 @@ def test_augment_config_refuses_bad_values():
         AugmentConfig(mix=0.5, gain=0.5, procedural=0.5)
     with pytest.raises(ValueError, match="gain_range"):
         AugmentConfig(gain_range=(2.0, 1.0))
-    assert not AugmentConfig().active and AugmentConfig(procedural=0.1).active
+    paper = AugmentConfig(mix=0.0, gain=0.0)
+    assert not paper.active and dataclasses.replace(paper, procedural=0.1).active
+    # The default is the 'augmented' preset; 'paper' switches every kind off.
+    assert AugmentConfig() == AugmentConfig(**presets.AUGMENTATION["augmented"], preset="augmented")
+    assert not config_for("nbrdf", augmentation="paper").augment.active
     assert config_for("nbrdf", augmentation="augmented").augment.preset == "augmented"
     with pytest.raises(ValueError, match="augmentation must be one of"):
         config_for("nbrdf", augmentation="lots")
