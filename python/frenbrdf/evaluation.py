@@ -174,7 +174,7 @@ def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene)
 
 
 def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene,
-           config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
+                           config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
     """Encodes a table from the samples at ``bins`` and refines on them (:func:`frenbrdf.reconstruct.reconstruct`),
     renders the result: (reconstruction, display image, seconds of the refinement stages, beyond encoding)."""
     wi, wo = _bin_directions(bins)
@@ -363,10 +363,13 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     frequency_metric = FrequencyMetric()
     show = config.progress
     # Refinement is seeded by the evaluation's seed: the same config reruns to the same numbers.
-    refinement = None if config.refine == "none" else dataclasses.replace(refine_config(config.refine), seed=config.seed)
+    refinement = (None if config.refine == "none"
+                  else dataclasses.replace(refine_config(config.refine), seed=config.seed))
 
     # Reconstruction. Latents by prefix of the metrics they give: the encoder's (""), the refined ("refined_").
-    latents = {prefix: {m: {} for m in models} for prefix in ("", "refined_")[: 1 + bool(refinement)]}
+    latents = {"": {m: {} for m in models}}
+    if refinement:
+        latents["refined_"] = {m: {} for m in models}
     edit_truth_linear = {}
     per_material = {m: [] for m in models}
     renders = {}
@@ -386,7 +389,8 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
                 result, image, seconds = refined_reconstruction(model, table, bins, scene, refinement)
                 latents["refined_"][method][name] = result.z
                 renders[name][f"{method} refined"] = image
-                metrics.update({f"refined_{key}": value for key, value in image_metrics(truth_image, image, mask).items()})
+                refined = image_metrics(truth_image, image, mask)
+                metrics.update({f"refined_{key}": value for key, value in refined.items()})
                 metrics.update(refined_lfre=frequency_metric(model, table, result.nbrdf), refine_seconds=seconds)
             per_material[method].append({"material": name, **metrics})
 
@@ -455,7 +459,8 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     reports = {seed: evaluate_runs(group, out / f"seed-{seed}", data=data, config=config, materials=materials)
                for seed, group in sorted(groups.items())}
     # A row without a finite value on every seed (editing of a single material) cannot be compared.
-    keys = [key for key, _ in table_rows(config.refine) if all(np.isfinite(v[key]) for r in reports.values() for v in r["summary"].values())]
+    keys = [key for key, _ in table_rows(config.refine)
+            if all(np.isfinite(v[key]) for r in reports.values() for v in r["summary"].values())]
     comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, keys)
     methods = reports[min(reports)]["reconstruction"]
     all_rows = {m: [row for r in reports.values() for row in r["reconstruction"][m]] for m in methods}

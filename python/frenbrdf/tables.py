@@ -37,7 +37,8 @@ def table_rows(refine: str = "none") -> list[tuple[str, str]]:
     refined = REFINED.get(refine, f"refined ({refine})")
     return [*RECONSTRUCTION_ROWS, ("refined_psnr", f"Recon PSNR, {refined} ↑"),
             ("refined_lfre", f"Recon L_fre, {refined} ↓"), ("refined_delta_e", f"Recon ΔE, {refined} ↓"),
-            *EDITING_ROWS, ("edit_refined_psnr", "Edit PSNR, refined z ↑"), ("edit_refined_delta_e", "Edit ΔE, refined z ↓")]
+            *EDITING_ROWS, ("edit_refined_psnr", "Edit PSNR, refined z ↑"),
+            ("edit_refined_delta_e", "Edit ΔE, refined z ↓")]
 
 
 def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
@@ -157,13 +158,14 @@ def refinement_markdown(refinement: dict, samples: int) -> str:
         stages += f", then {steps['weight_steps']} on the decoded NBRDF's own weights"
     seconds = refinement["seconds_per_material"]
     per_method = ", ".join(f"{method} {value:.2g} s" for method, value in seconds.items())
+    refined = REFINED.get(budget, f"refined ({budget})").capitalize()
     return (f"Two protocols. **Encoder only** (rows without \"refined\"): the paper's protocol, each material encoded "
-            f"from {samples} samples and decoded. **{REFINED.get(budget, f'Refined ({budget})').capitalize()}** (budget "
+            f"from {samples} samples and decoded. **{refined}** (budget "
             f"`{budget}`: {stages}): what `frenbrdf reconstruct --refine {budget}` gives a user, "
             f"{np.mean(list(seconds.values())):.2g} s of refinement per material beyond encoding ({per_method}). "
-            "Its L_fre is that of the refined NBRDF itself. The \"refined z\" edit rows interpolate the refined latents "
-            "of the same pairs" + (" (the latents after the latent stage: refined weights have no latent)"
-                                   if steps["weight_steps"] else "")
+            "Its L_fre is that of the refined NBRDF itself. The \"refined z\" edit rows interpolate the refined "
+            "latents of the same pairs"
+            + (" (the latents after the latent stage: refined weights have no latent)" if steps["weight_steps"] else "")
             + "; `interpolation.png` stays on the encoder's latents, as the paper edits.")
 
 
