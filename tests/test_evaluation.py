@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -124,6 +125,82 @@ def test_every_table_reports_colour_difference(tiny_runs, tmp_path):
     assert "`renders.png` shows the first" in table
 
 
+REFINED_KEYS = {"refined_psnr", "refined_lfre", "refined_delta_e", "edit_refined_psnr", "edit_refined_delta_e"}
+
+
+def test_refined_rows_appear_only_when_refinement_runs(tiny_runs, tmp_path):
+    config = EvaluateConfig(samples=300, edits=6, resolution=32, edit_resolution=16, progress=False)
+    plain = evaluate_runs(tiny_runs, tmp_path / "plain", config=config)
+    assert all(not REFINED_KEYS & set(summary) for summary in plain["summary"].values())
+    assert "refinement" not in plain and "refined" not in (tmp_path / "plain" / "evaluation.md").read_text()
+
+    refined = evaluate_runs(tiny_runs, tmp_path / "refined", config=dataclasses.replace(config, refine="latent"))
+    table = (tmp_path / "refined" / "evaluation.md").read_text()
+    for method, summary in refined["summary"].items():
+        assert REFINED_KEYS <= set(summary) and all(np.isfinite(summary[key]) for key in REFINED_KEYS)
+        # The encoder-only numbers are the same with or without refinement: the same bins, the same pairs.
+        assert {key: summary[key] for key in plain["summary"][method]} == pytest.approx(plain["summary"][method])
+        rows = refined["reconstruction"][method]
+        assert summary["refined_psnr"] == pytest.approx(np.mean([r["refined_psnr"] for r in rows]))
+        assert all(r["refine_seconds"] > 0 and 0 <= r["refined_ssim"] <= 1 for r in rows)
+        assert refined["refinement"]["seconds_per_material"][method] == pytest.approx(
+            np.mean([r["refine_seconds"] for r in rows]))
+    assert refined["refinement"]["budget"] == "latent"
+    for label in ("Recon PSNR, refined z ↑", "Recon ΔE, refined z ↓", "Recon L_fre, refined z ↓",
+                  "Edit PSNR, refined z ↑", "Edit ΔE, refined z ↓"):
+        assert f"| {label} |" in table, label
+    assert "**Encoder only**" in table and "`frenbrdf reconstruct --refine latent`" in table
+    assert "s of refinement per material" in table and "its refined one (`<method> refined`)" in table
+
+
+def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp_path):
+    """Each refined row is :func:`frenbrdf.reconstruct.reconstruct` run on the bins the encoder was given."""
+    from frenbrdf.evaluation import _bin_directions, sample_bins
+    from frenbrdf.merl import N_BINS, read_merl
+    from frenbrdf.reconstruct import BUDGETS, reconstruct
+    from frenbrdf.render import render_linear, tonemap
+
+    config = EvaluateConfig(samples=250, edits=3, resolution=32, edit_resolution=16, progress=False, seed=3,
+                            refine="full")
+    report = evaluate_runs(tiny_runs, tmp_path / "eval", config=config)
+    model = Run(tiny_runs[0]).model()
+    rng = np.random.default_rng(config.seed)  # bins are drawn per material, in name order, from the seed
+    scene = Scene(resolution=config.resolution)
+    for name, row in zip(report["test_materials"], report["reconstruction"][model.method]):
+        table = read_merl(Path(report["data"]) / f"{name}.binary")
+        bins = sample_bins(table, rng, config.samples)
+        result = reconstruct(model, table.reshape(3, N_BINS)[:, bins].T, _bin_directions(bins),
+                             refine=dataclasses.replace(BUDGETS["full"], seed=config.seed))
+        expected = image_metrics(tonemap(render_linear(table, scene)), tonemap(render_linear(result.nbrdf, scene)),
+                                 material_mask(scene))
+        assert row["material"] == name
+        assert row["refined_psnr"] == pytest.approx(expected["psnr"], abs=1e-3)
+        assert row["refined_delta_e"] == pytest.approx(expected["delta_e"], abs=1e-3)
+        assert row["refined_psnr"] != pytest.approx(row["psnr"], abs=1e-3)  # refinement changed the material
+    assert "Recon PSNR, refined z + weights ↑" in (tmp_path / "eval" / "evaluation.md").read_text()
+
+
+def test_frequency_metric_measures_a_latent_and_an_nbrdf_alike(tiny_runs, toy_materials):
+    """A refined NBRDF is no decoder output; L_fre of the NBRDF decoded from z is L_fre of z."""
+    from frenbrdf.evaluation import FrequencyMetric
+    from frenbrdf.merl import read_merl
+
+    model = Run(tiny_runs[0]).model()
+    table = read_merl(sorted(toy_materials.glob("*.binary"))[0])
+    metric = FrequencyMetric()
+    z = np.linspace(-1, 1, model.config.encoder.latent)
+    assert metric(model, table, model.decode(z)) == pytest.approx(metric(model, table, z), rel=1e-6)
+    assert metric(model, table, model.decode(-z)) != pytest.approx(metric(model, table, z), rel=1e-3)
+
+
+def test_a_bad_refinement_budget_is_a_clear_error(tiny_runs, tmp_path, capsys):
+    with pytest.raises(ValueError, match="refine must be a refinement budget, one of .*'latent'.*got 'lots'"):
+        EvaluateConfig(refine="lots")
+    with pytest.raises(SystemExit):
+        cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "eval"), "--refine", "lots"])
+    assert "--refine: invalid choice: 'lots'" in capsys.readouterr().err
+
+
 def test_the_render_grid_shows_the_first_materials_and_the_worst_colours():
     names = [f"m{i}" for i in range(10)]
     delta_e = {"m0": 50, "m1": 1, "m2": 1, "m3": 1, "m4": 2, "m5": 9, "m6": 3, "m7": 30, "m8": 8, "m9": 0}
@@ -147,6 +224,10 @@ def test_cli_evaluate_and_render(tiny_runs, toy_materials, tmp_path, capsys):
     assert cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "eval"), "--samples", "200",
                      "--edits", "6", "--resolution", "32", "--quick", "--quiet"]) == 0
     assert "Recon RMSE" in capsys.readouterr().out
+    assert cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "refined"), "--samples", "200",
+                     "--edits", "3", "--resolution", "32", "--quick", "--quiet", "--refine", "latent"]) == 0
+    assert "| Recon PSNR, refined z ↑ |" in capsys.readouterr().out
+    assert json.loads((tmp_path / "refined" / "evaluation.json").read_text())["config"]["refine"] == "latent"
     material = sorted(toy_materials.glob("*.binary"))[0]
     assert cli.main(["render", str(material), "--out", str(tmp_path / "m.png"), "--resolution", "32"]) == 0
     assert (tmp_path / "m.png").exists()
@@ -155,13 +236,15 @@ def test_cli_evaluate_and_render(tiny_runs, toy_materials, tmp_path, capsys):
 def test_demo_on_a_data_folder_writes_a_report(toy_materials, tmp_path, monkeypatch):
     from frenbrdf import demo
 
+    assert demo.DEMO_EVALUATION.refine == "latent"  # the demo reports what a user gets, beside the paper's protocol
     monkeypatch.setattr(demo, "DEMO_EVALUATION", EvaluateConfig(samples=500, edits=6, resolution=48,
-                                                                 edit_resolution=24, progress=False))
+                                                                 edit_resolution=24, progress=False, refine="latent"))
     assert cli.main(["demo", "--out", str(tmp_path / "report"), "--data", str(toy_materials), "--epochs", "1",
                      "--quiet"]) == 0
     readme = (tmp_path / "report" / "README.md").read_text()
     assert "## What was run" in readme and "Recon PSNR" in readme and "| total |" in readme
     assert "Recon ΔE" in readme and "highest ΔE" in readme
+    assert "| Recon ΔE, refined z ↓ |" in readme and "**Encoder only**" in readme and "--refine latent" in readme
     for method in ("frenbrdf", "nbrdf", "hyperbrdf"):
         assert (tmp_path / "report" / "runs" / method / "best.pt").exists()
     assert (tmp_path / "report" / "evaluation" / "renders.png").exists()
@@ -198,6 +281,19 @@ def test_evaluation_compares_runs_of_several_seeds(seed_runs, tmp_path):
     assert (out / "seed-0" / "evaluation.md").exists() and (out / "seed-1" / "renders.png").exists()
     assert "| Recon ΔE ↓ |" in table and "| Edit ΔE ↓ |" in table and "highest ΔE" in table
     assert set(report["comparison"]["metrics"]) == {key for key, _ in ROWS}
+    assert "refined" not in table
+
+
+def test_the_seeds_table_carries_the_refined_rows(seed_runs, tmp_path):
+    config = EvaluateConfig(samples=200, edits=3, resolution=32, edit_resolution=16, progress=False, refine="latent")
+    report = evaluate_seeds(seed_runs, tmp_path / "eval", config=config)
+    metrics = report["comparison"]["metrics"]
+    assert REFINED_KEYS <= set(metrics)
+    by_seed = [report["seeds"][s]["summary"]["nbrdf"]["refined_psnr"] for s in ("0", "1")]
+    assert metrics["refined_psnr"]["methods"]["nbrdf"]["by_seed"] == pytest.approx(by_seed)
+    table = (tmp_path / "eval" / "evaluation.md").read_text()
+    assert "| Recon PSNR, refined z ↑ |" in table and "| Edit ΔE, refined z ↓ |" in table
+    assert "**Encoder only**" in table
 
 
 def test_all_evaluates_every_material_of_another_folder(tiny_runs, other_bank, tmp_path):

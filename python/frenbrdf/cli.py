@@ -115,7 +115,7 @@ def _evaluate(args: argparse.Namespace) -> int:
 
     config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
                             max_materials=args.max_materials, all_materials=args.all_materials,
-                            progress=not args.quiet)
+                            refine=args.refine, progress=not args.quiet)
     if args.quick:
         config.edits, config.edit_resolution = min(args.edits, 120), 96
     report = evaluate_seeds(args.runs, args.out, data=args.data, config=config)
@@ -269,6 +269,10 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")
     evaluate.add_argument("--edits", type=int, default=2000, help="interpolations for editing (default 2000)")
     evaluate.add_argument("--resolution", type=int, default=256, help="render size of the reconstruction table")
+    evaluate.add_argument("--refine", choices=("none", "latent", "full"), default="none",
+                          help="also refine each material at test time on the same samples (latent: optimise z; "
+                          "full: then the NBRDF's weights) and report the refined rows beside the encoder-only ones "
+                          "(default none: encoder only, the paper's protocol)")
     evaluate.add_argument("--quick", action="store_true", help="at most 120 interpolations, 96² editing renders")
     evaluate.add_argument("--json", action="store_true", help="also print the summary as JSON")
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars")

@@ -21,8 +21,9 @@ from .evaluation import EvaluateConfig, evaluate_runs, report_markdown
 from .presets import TRAINING, method_names
 from .training import Run, config_for, train
 
-#: Evaluation settings of the demo: the full reconstruction table, a shorter editing table.
-DEMO_EVALUATION = EvaluateConfig(samples=4000, edits=120, edit_resolution=96)
+#: Evaluation settings of the demo: the full reconstruction table, a shorter editing table, and the rows of test-time
+#: refinement of z (what ``frenbrdf reconstruct`` gives a user) beside the encoder-only ones (the paper's protocol).
+DEMO_EVALUATION = EvaluateConfig(samples=4000, edits=120, edit_resolution=96, refine="latent")
 
 
 def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, *, epochs: int | None = None,
@@ -72,7 +73,9 @@ def _write_readme(out: Path, data, runs: list[Run], report: dict, timings: dict)
         + ", ".join(f"`{r.path}`" for r in runs) + ".",
         f"- Evaluation: encoder given {DEMO_EVALUATION.samples} samples per test material, "
         f"{DEMO_EVALUATION.edits} interpolations for editing (renders {DEMO_EVALUATION.resolution}² and "
-        f"{DEMO_EVALUATION.edit_resolution}²).", "",
+        f"{DEMO_EVALUATION.edit_resolution}²)"
+        + (f"; each material also refined at test time on the same samples (`--refine {DEMO_EVALUATION.refine}`: "
+           "the \"refined\" rows)." if DEMO_EVALUATION.refine != "none" else "."), "",
         "## Results", "", table, "",
         "**One seed: this ranking is within noise.** Training noise between seeds is as large as the "
         "differences between the methods here (about ±1 dB of PSNR); only a comparison over several seeds "

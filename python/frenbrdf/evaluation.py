@@ -4,11 +4,14 @@
   the same bins for every method), decoded, rendered and compared with the render of the
   true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the colour difference ΔE
   (CIEDE2000) over the lit material pixels (:func:`frenbrdf.render.material_mask`), and the
-  frequency loss.
+  frequency loss. With ``EvaluateConfig.refine`` the same samples are also refined at test time
+  (:func:`frenbrdf.reconstruct.reconstruct`, what a user reconstructing a material runs) and the
+  refined NBRDF measured the same way: the "refined" rows.
 - Editing: each unordered pair (a, b) of test materials at most once and interior
   t ∈ {0.25, 0.5, 0.75}; the truth is
   the table (1 − t)·a + t·b (its render is the same blend of the linear renders, since
-  rendering is linear in the BRDF), the prediction decode((1 − t)·z_a + t·z_b).
+  rendering is linear in the BRDF), the prediction decode((1 − t)·z_a + t·z_b) of the encoder's
+  latents (the paper's editing) and, with refinement, of the refined latents too.
 
 ``evaluate_runs`` does both for several runs side by side and writes Markdown, JSON and
 PNG figures (:mod:`frenbrdf.figures`); ``frenbrdf evaluate`` is its command line. The
@@ -18,6 +21,7 @@ material of a folder that no run trained or validated on: an out-of-distribution
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import os
 import time
@@ -34,11 +38,15 @@ from .figures import rendered_materials, write_figures
 from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
 from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
 from .models.autoencoder import Model
+from .models.nbrdf import NBRDF
 from .presets import method_names
+from .reconstruct import BUDGETS, STAGES, Reconstruction, RefineConfig, refine_config
+from .reconstruct import reconstruct as refine_samples
 from .render import Scene, material_mask, render_linear, tonemap
 from .statistics import compare_seeds
 from .tables import PAPER as PAPER  # re-exported: frenbrdf.evaluation keeps its public names
-from .tables import ROWS, colour_losses, report_markdown, seeds_markdown
+from .tables import ROWS as ROWS
+from .tables import colour_losses, report_markdown, seeds_markdown, summarise, table_rows
 from .tables import markdown_table as markdown_table
 from .training.run import Run
 
@@ -97,7 +105,14 @@ class EvaluateConfig:
     all_materials: bool = False
     """Evaluate every material of the data folder that no run trained or validated on (out-of-distribution),
     instead of the runs' test split; needs the folder (``data``)."""
+    refine: str = "none"
+    """Test-time refinement, a budget name of :data:`frenbrdf.reconstruct.BUDGETS`: besides the encoder-only rows
+    (the paper's protocol), each material is refined on the same samples and measured again ("none": not)."""
     progress: bool = True
+
+    def __post_init__(self):
+        if self.refine not in BUDGETS:
+            raise ValueError(f"refine must be a refinement budget, one of {tuple(BUDGETS)}; got {self.refine!r}")
 
 
 def _bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +129,7 @@ def _bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class FrequencyMetric:
-    """L_fre between a true table and a decoded latent, in the model's mapped space.
+    """L_fre between a true table and a decoded latent (or an NBRDF, e.g. refined), in the model's mapped space.
 
     The settings are fixed (default: :class:`FrequencyLossConfig`'s), whatever the model was
     trained with, so that values of different models compare.
@@ -123,14 +138,16 @@ class FrequencyMetric:
     def __init__(self, config: FrequencyLossConfig = FrequencyLossConfig()):
         self.truth, self.loss = FrequencyTruth(config), FrequencyLoss(config)
 
-    def __call__(self, model: Model, table: np.ndarray, z: np.ndarray) -> float:
+    def __call__(self, model: Model, table: np.ndarray, material: np.ndarray | NBRDF) -> float:
+        """L_fre of ``material``: a latent ``(latent,)`` of ``model``, or an NBRDF of one material."""
         flat = table.reshape(3, N_BINS)
         valid = np.all(flat >= 0, axis=0)
         with np.errstate(invalid="ignore"):
             mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
         true = self.truth.coefficients(np.nan_to_num(mapped).T, valid)
         with torch.no_grad():
-            params = model.network.decoder(torch.from_numpy(z[None].astype(np.float32)))
+            params = (material.params if isinstance(material, NBRDF)
+                      else model.network.decoder(torch.from_numpy(material[None].astype(np.float32))))
             predicted = self.loss.predicted_coefficients(params)[0].numpy()
         return float(spectral_distance(predicted, true))
 
@@ -154,6 +171,16 @@ def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene)
     wi, wo = _bin_directions(bins)
     z = model.encode(table.reshape(3, N_BINS)[:, bins].T, (wi, wo))
     return z, tonemap(render_linear(model.decode(z)[0], scene))
+
+
+def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene,
+                           config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
+    """Encodes a table from the samples at ``bins`` and refines on them (:func:`frenbrdf.reconstruct.reconstruct`),
+    renders the result: (reconstruction, display image, seconds of the refinement stages, beyond encoding)."""
+    wi, wo = _bin_directions(bins)
+    result = refine_samples(model, table.reshape(3, N_BINS)[:, bins].T, (wi, wo), refine=config)
+    seconds = sum(result.timings.get(stage, 0.0) for stage in STAGES if stage != "encode")
+    return result, tonemap(render_linear(result.nbrdf, scene)), seconds
 
 
 def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
@@ -318,16 +345,6 @@ def load_runs(run_dirs, data: str | None = None, max_materials: int = 0, *, all_
     return RunSet([run.path for run in runs], models, materials.data, materials.names, materials.files, materials)
 
 
-def _summary(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
-    """The table's numbers (:data:`ROWS`) of one method: means over materials and over edits."""
-    def mean(values, key, scale=1.0):
-        return scale * float(np.mean([r[key] for r in values])) if values else float("nan")
-
-    return {"rmse_x100": mean(rows, "rmse", 100), "psnr": mean(rows, "psnr"), "ssim_x10": mean(rows, "ssim", 10),
-            "lfre": mean(rows, "lfre"), "delta_e": mean(rows, "delta_e"), "edit_psnr": mean(edit_rows, "psnr"),
-            "edit_ssim_x10": mean(edit_rows, "ssim", 10), "edit_delta_e": mean(edit_rows, "delta_e")}
-
-
 def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig(),
                   materials: EvaluationSet | None = None) -> dict:
     """Evaluates runs (one per method) on their common test split, or with ``config.all_materials`` on every
@@ -345,9 +362,15 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     mask, edit_mask = material_mask(scene), material_mask(edit_scene)
     frequency_metric = FrequencyMetric()
     show = config.progress
+    # Refinement is seeded by the evaluation's seed: the same config reruns to the same numbers.
+    refinement = (None if config.refine == "none"
+                  else dataclasses.replace(refine_config(config.refine), seed=config.seed))
 
-    # Reconstruction.
-    edit_truth_linear, latents = {}, {m: {} for m in models}
+    # Reconstruction. Latents by prefix of the metrics they give: the encoder's (""), the refined ("refined_").
+    latents = {"": {m: {} for m in models}}
+    if refinement:
+        latents["refined_"] = {m: {} for m in models}
+    edit_truth_linear = {}
     per_material = {m: [] for m in models}
     renders = {}
     for name in tqdm(names, desc="reconstruction", disable=not show):
@@ -358,10 +381,17 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         renders[name] = {"truth": truth_image}
         for method, model in models.items():
             z, image = reconstruct(model, table, bins, scene)
-            latents[method][name] = z
+            latents[""][method][name] = z
             renders[name][method] = image
             metrics = image_metrics(truth_image, image, mask)
             metrics["lfre"] = frequency_metric(model, table, z)
+            if refinement:
+                result, image, seconds = refined_reconstruction(model, table, bins, scene, refinement)
+                latents["refined_"][method][name] = result.z
+                renders[name][f"{method} refined"] = image
+                refined = image_metrics(truth_image, image, mask)
+                metrics.update({f"refined_{key}": value for key, value in refined.items()})
+                metrics.update(refined_lfre=frequency_metric(model, table, result.nbrdf), refine_seconds=seconds)
             per_material[method].append({"material": name, **metrics})
 
     # Editing.
@@ -373,22 +403,30 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
             for t in config.weights:
                 truth_image = tonemap((1 - t) * edit_truth_linear[name_a] + t * edit_truth_linear[name_b])
                 for method, model in models.items():
-                    z = (1 - t) * latents[method][name_a] + t * latents[method][name_b]
-                    image = tonemap(render_linear(model.decode(z)[0], edit_scene))
-                    edits[method].append({"a": name_a, "b": name_b, "t": t, **image_metrics(truth_image, image, edit_mask)})
+                    row = {"a": name_a, "b": name_b, "t": t}
+                    for prefix, by_method in latents.items():
+                        z = (1 - t) * by_method[method][name_a] + t * by_method[method][name_b]
+                        image = tonemap(render_linear(model.decode(z)[0], edit_scene))
+                        row.update({prefix + key: value for key, value in
+                                    image_metrics(truth_image, image, edit_mask).items()})
+                    edits[method].append(row)
                     bar.update()
 
     first, hardest = rendered_materials(names, per_material)
     report = {"data": str(loaded.data), "runs": [str(r) for r in runs], "test_materials": names,
               "evaluation_set": loaded.materials.to_json(),
               "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(config).items()},
-              "summary": {method: _summary(per_material[method], edits[method]) for method in models},
+              "summary": {method: summarise(per_material[method], edits[method]) for method in models},
               "colour": colour_losses(per_material), "rendered": {"first": first, "highest_delta_e": hardest},
               "reconstruction": per_material, "editing": edits, "seconds": time.perf_counter() - start}
+    if refinement:
+        report["refinement"] = {"budget": config.refine, "config": dataclasses.asdict(refinement),
+                                "seconds_per_material": {method: float(np.mean([r["refine_seconds"] for r in rows]))
+                                                         for method, rows in per_material.items()}}
     save_json(out / "evaluation.json", report)
     write_text(out / "evaluation.md", report_markdown(report))
     edit_pair = (names[pairs[0][0]], names[pairs[0][1]]) if pairs else None
-    write_figures(out, first + hardest, renders, per_material, models, latents, edit_pair, edit_truth_linear,
+    write_figures(out, first + hardest, renders, per_material, models, latents[""], edit_pair, edit_truth_linear,
                   config.weights, config.edit_resolution)
     return report
 
@@ -421,7 +459,8 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     reports = {seed: evaluate_runs(group, out / f"seed-{seed}", data=data, config=config, materials=materials)
                for seed, group in sorted(groups.items())}
     # A row without a finite value on every seed (editing of a single material) cannot be compared.
-    keys = [key for key, _ in ROWS if all(np.isfinite(v[key]) for r in reports.values() for v in r["summary"].values())]
+    keys = [key for key, _ in table_rows(config.refine)
+            if all(np.isfinite(v[key]) for r in reports.values() for v in r["summary"].values())]
     comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, keys)
     methods = reports[min(reports)]["reconstruction"]
     all_rows = {m: [row for r in reports.values() for row in r["reconstruction"][m]] for m in methods}

@@ -2,7 +2,8 @@
 
 - ``histograms.png``: per method, the per-material RMSE, PSNR, SSIM and ΔE, with the mean
   (solid) and ± one standard deviation (dashed).
-- ``renders.png``: truth | each method, for the materials :func:`rendered_materials` picks.
+- ``renders.png``: truth | each method (and its refined render beside it, when the evaluation refined),
+  for the materials :func:`rendered_materials` picks.
 - ``interpolation.png``: the first edited pair at t = 0, the interior weights and 1.
 """
 
@@ -36,7 +37,8 @@ def write_figures(out: Path, shown: list[str], renders: dict, per_material: dict
     shown
         Materials of ``renders.png``, in order (:func:`rendered_materials`).
     renders
-        Material → ``{"truth": image, method: image, …}`` (display images).
+        Material → ``{"truth": image, method: image, …}`` (display images), in the order of the columns of
+        ``renders.png`` (e.g. ``"<method> refined"`` after each method).
     per_material
         Method → reconstruction rows (each with the :data:`HISTOGRAM_METRICS`).
     models, latents
@@ -72,10 +74,10 @@ def write_figures(out: Path, shown: list[str], renders: dict, per_material: dict
     save_figure(figure, out / "histograms.png")
     plt.close(figure)
 
-    figure, axes = plt.subplots(len(shown), 1 + len(methods), figsize=(2 * (1 + len(methods)), 2 * len(shown)),
-                                squeeze=False)
+    columns = list(renders[shown[0]])  # truth, then each method (and its refined render)
+    figure, axes = plt.subplots(len(shown), len(columns), figsize=(2 * len(columns), 2 * len(shown)), squeeze=False)
     for row, name in enumerate(shown):
-        for col, key in enumerate(["truth", *methods]):
+        for col, key in enumerate(columns):
             axes[row, col].imshow(renders[name][key])
             axes[row, col].set_xticks([])
             axes[row, col].set_yticks([])

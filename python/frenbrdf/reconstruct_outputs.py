@@ -104,26 +104,8 @@ def truth_metrics(model: Model, result: Reconstruction, measurements: Measuremen
     from .evaluation import FrequencyMetric, image_metrics
 
     metrics = image_metrics(truth_image, image, material_mask(scene))
-    metrics["lfre"] = frequency_distance(FrequencyMetric(), model, measurements.table, result.nbrdf)
+    metrics["lfre"] = FrequencyMetric()(model, measurements.table, result.nbrdf)
     return metrics
-
-
-def frequency_distance(metric, model: Model, table: np.ndarray, nbrdf) -> float:
-    """L_fre of a true table and an NBRDF in the model's mapped space, as :class:`frenbrdf.evaluation.FrequencyMetric`
-    measures a decoded latent, but of the NBRDF's own weights (refined ones are no decoder output)."""
-    import torch
-
-    from .losses import spectral_distance
-    from .merl import N_BINS
-
-    flat = table.reshape(3, N_BINS)
-    valid = np.all(flat >= 0, axis=0)
-    with np.errstate(invalid="ignore"):
-        mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
-    true = metric.truth.coefficients(np.nan_to_num(mapped).T, valid)
-    with torch.no_grad():
-        predicted = metric.loss.predicted_coefficients(nbrdf.params)[0].numpy()
-    return float(spectral_distance(predicted, true))
 
 
 def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: dict, report: dict) -> None:
