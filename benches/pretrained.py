@@ -53,6 +53,14 @@ def summary(rows: list[dict]) -> dict[str, float]:
     return {key: float(np.mean([row[key] for row in rows])) for key in METRICS}
 
 
+def by_source(rows: list[dict], folders: list[Path]) -> dict[str, dict]:
+    """:func:`summary` of the rows of each source folder (MERL-derived and bank materials apart), and of all."""
+    names = {folder.name: {path.stem for path in list_materials(folder)} for folder in folders}
+    groups = {name: [row for row in rows if row["material"] in members] for name, members in names.items()}
+    return {"all": summary(rows), **{name: {**summary(group), "n": len(group)} for name, group in groups.items()
+                                     if group}}
+
+
 def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
           progress: bool = True) -> dict:
     """Trains, evaluates, packs and documents the shipped model; returns the card."""
@@ -66,7 +74,7 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
             "training_config": json.loads(Path(config_path).read_text()), "data": sources,
             "materials": {"train": len(run.split.train), "validation": len(run.split.val), "test": len(test)},
             "seed": seed, "best_epoch": run.best_epoch, "training_seconds": round(run.seconds or 0.0, 1),
-            "held_out": {"float32": summary(held_out)}}
+            "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders)}
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)
     packed = Model.pretrained(dest)
     card["held_out"]["packed"] = summary(reconstruction_rows(packed, test, seed=seed, frequency_metric=False,
@@ -102,6 +110,9 @@ material pixels, as trained (float32) and as shipped (packed):
 | metric | float32 | packed |
 |---|---|---|
 {table}
+
+By source (float32): {'; '.join(f"{name} ({s['n']}): PSNR {s['psnr']:.2f} dB, ΔE {s['delta_e']:.2f}"
+                                for name, s in card['held_out_by_source'].items() if name != 'all')}.
 """
 
 

@@ -374,3 +374,12 @@ def test_cli_evaluate_all(tiny_runs, other_bank, tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "out-of-distribution" in printed and "Recon ΔE" in printed
     assert len(json.loads((tmp_path / "eval" / "evaluation.json").read_text())["test_materials"]) == 2
+
+
+def test_a_method_evaluated_twice_is_named_alike_in_every_seed(tmp_path):
+    """Two runs of one method (e.g. trained with and without augmentation) keep one name across seeds,
+    so the over-seeds comparison pairs them: the folder above the method's for ``--seeds`` runs."""
+    from frenbrdf.evaluation import run_label
+
+    assert {run_label(tmp_path / "bank-paper" / "frenbrdf" / f"seed-{s}") for s in (0, 1, 2)} == {"bank-paper"}
+    assert run_label(tmp_path / "runs" / "frenbrdf-paper") == "frenbrdf-paper"

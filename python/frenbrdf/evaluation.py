@@ -341,8 +341,15 @@ def load_runs(run_dirs, data: str | None = None, max_materials: int = 0, *, all_
     models = {}
     for run in runs:
         model = run.model()
-        models[model.method if model.method not in models else f"{model.method} ({run.path.name})"] = model
+        models[model.method if model.method not in models else f"{model.method} ({run_label(run.path)})"] = model
     return RunSet([run.path for run in runs], models, materials.data, materials.names, materials.files, materials)
+
+
+def run_label(path: Path) -> str:
+    """What tells a run apart from another of its method: its folder, or for a seed's folder
+    (``OUT/seed-S`` of ``frenbrdf train --seeds``) the folder above its method's, the same for every seed."""
+    path = Path(path).resolve()
+    return path.parents[1].name if path.name.startswith("seed-") else path.name
 
 
 def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig(),
