@@ -4,23 +4,24 @@
 
 Times, interleaved, a whole step of the training loop (:class:`frenbrdf.training.augment.BatchDrawer`
 drawing the batch, then :func:`frenbrdf.training.optimisation_step`) at the method's default
-sizes, once with the ``paper`` augmentation (tables only) and once with ``augmented``, and the
-batch drawing alone. Without ``--data`` it writes 16 materials of the default synthetic bank to
+sizes, once per augmentation preset (``paper``: tables only; ``augmented``, the default: mixes
+and colour gains; ``procedural``: also analytic materials), and the batch drawing alone. Without ``--data`` it writes 16 materials of the default synthetic bank to
 a temporary folder. Writes ``bench-results/augment_step.{md,json}``.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import tempfile
 from pathlib import Path
 
 import torch
 
+from frenbrdf.atomic import save_json, write_text
 from frenbrdf.data import list_materials, split_materials
 from frenbrdf.losses import FrequencyLoss
 from frenbrdf.models.autoencoder import AutoEncoder
+from frenbrdf.presets import AUGMENTATION
 from frenbrdf.timing import timed_seconds
 from frenbrdf.training import config_for, optimisation_step, prepare
 from frenbrdf.training.augment import BatchDrawer
@@ -65,18 +66,19 @@ def main():
 
             data = Path(scratch)
             write_bank(data, n=16, seed=0, progress=False)
-        functions = {**step_functions(args.method, "paper", data, device),
-                     **step_functions(args.method, "augmented", data, device)}
+        functions = {}
+        for name in AUGMENTATION:
+            functions.update(step_functions(args.method, name, data, device))
         seconds = timed_seconds(functions, args.steps, device)
     lines = [f"{args.method} training step at default sizes on {device} (torch threads: {torch.get_num_threads()}), "
              f"median of {args.steps} steps, batch drawing included.", "",
              "| augmentation | step (ms) | of which drawing the batch (ms) |", "|---|---|---|"]
-    for name in ("paper", "augmented"):
+    for name in AUGMENTATION:
         lines.append(f"| {name} | {1e3 * seconds[f'{name} step']:.0f} | {1e3 * seconds[f'{name} draw']:.0f} |")
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "augment_step.md").write_text("\n".join(lines) + "\n")
-    (args.out / "augment_step.json").write_text(json.dumps({"method": args.method, "device": str(device),
-                                                            "steps": args.steps, "seconds": seconds}, indent=2) + "\n")
+    write_text(args.out / "augment_step.md", "\n".join(lines) + "\n")
+    save_json(args.out / "augment_step.json", {"method": args.method, "device": str(device), "steps": args.steps,
+                                               "seconds": seconds})
     print("\n".join(lines))
 
 
