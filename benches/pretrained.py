@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from frenbrdf import Model, pretrained
+from frenbrdf import Model, Run, pretrained
 from frenbrdf.atomic import write_text
 from frenbrdf.data import list_materials
 from frenbrdf.evaluation import reconstruction_rows
@@ -37,7 +37,7 @@ METRICS = ("rmse", "psnr", "ssim", "delta_e")
 
 
 def linked_data(folders: list[Path], data: Path) -> list[str]:
-    """A folder of links to every MERL file of ``folders`` (names must not repeat); returns the sources' names."""
+    """A folder of links to every MERL file of ``folders`` (names must not repeat)."""
     data.mkdir(parents=True, exist_ok=True)
     for folder in folders:
         for path in list_materials(folder):
@@ -46,7 +46,6 @@ def linked_data(folders: list[Path], data: Path) -> list[str]:
                 raise ValueError(f"{path.name} is in two of the folders {[str(f) for f in folders]}")
             if not link.exists():
                 link.symlink_to(path.resolve())
-    return [str(folder) for folder in folders]
 
 
 def summary(rows: list[dict]) -> dict[str, float]:
@@ -62,19 +61,26 @@ def by_source(rows: list[dict], folders: list[Path]) -> dict[str, dict]:
 
 
 def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
-          progress: bool = True) -> dict:
-    """Trains, evaluates, packs and documents the shipped model; returns the card."""
-    sources = linked_data(folders, work / "data")
+          progress: bool = True, reuse: bool = False) -> dict:
+    """Trains, evaluates, packs and documents the shipped model; returns the card.
+
+    ``reuse``: a finished run in ``work`` (its ``best.pt``) is evaluated, packed and documented
+    again instead of trained anew."""
+    sources = [folder.name for folder in folders]
+    linked_data(folders, work / "data")
     cfg = load_config(config_path, data=str(work / "data"), out=str(work / "run"), seed=seed)
     cfg.progress = progress
-    run = train(cfg)
+    run = Run(cfg.out) if reuse and (Path(cfg.out) / "best.pt").exists() else train(cfg)
     test = [work / "data" / f"{name}.binary" for name in sorted(run.split.test)]
     held_out = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, progress=progress)
+    refined = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, refine="latent",
+                                  progress=progress)
     card = {"version": pretrained.VERSION, "command": run_metadata()["command"],
             "training_config": json.loads(Path(config_path).read_text()), "data": sources,
             "materials": {"train": len(run.split.train), "validation": len(run.split.val), "test": len(test)},
             "seed": seed, "best_epoch": run.best_epoch, "training_seconds": round(run.seconds or 0.0, 1),
-            "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders)}
+            "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
+            "held_out_refined_by_source": by_source(refined, folders)}
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)
     packed = Model.pretrained(dest)
     card["held_out"]["packed"] = summary(reconstruction_rows(packed, test, seed=seed, frequency_metric=False,
@@ -100,7 +106,8 @@ packed in `python/frenbrdf/pretrained/` ({sum(card['bytes'].values()) / 1e6:.2f}
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
   {card['best_epoch']}, {card['training_seconds']} s.
-- **Regenerate**: `{card['command']}`.
+- **Regenerate**: `frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/`, `frenbrdf synth bank/`,
+  then `{card['command']}`.
 - **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
   compressed (relative error of f_ref + ε below 1e-4).
 
@@ -111,9 +118,15 @@ material pixels, as trained (float32) and as shipped (packed):
 |---|---|---|
 {table}
 
-By source (float32): {'; '.join(f"{name} ({s['n']}): PSNR {s['psnr']:.2f} dB, ΔE {s['delta_e']:.2f}"
-                                for name, s in card['held_out_by_source'].items() if name != 'all')}.
+By source (float32), encoder only: {by_source_text(card['held_out_by_source'])}.
+With the latent refined on the same samples (`--refine latent`, the default of `frenbrdf reconstruct`):
+{by_source_text(card['held_out_refined_by_source'])}.
 """
+
+
+def by_source_text(groups: dict) -> str:
+    return "; ".join(f"{name} ({s['n']}): PSNR {s['psnr']:.2f} dB, ΔE {s['delta_e']:.2f}"
+                     for name, s in groups.items() if name != "all")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -125,13 +138,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR), help="where the packed files go")
     parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"), help="the model card (Markdown)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--reuse", action="store_true", help="evaluate, pack and document WORK/run again, untrained")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
     folders = [Path(f) for f in (args.merl, args.bank) if f]
     if not folders:
         parser.error("give --merl, --bank or both")
     card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
-                 progress=not args.quiet)
+                 progress=not args.quiet, reuse=args.reuse)
     print(json.dumps(card["held_out"], indent=2))
     return 0
 

@@ -184,14 +184,17 @@ def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, sc
 
 
 def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
-                        frequency_metric: FrequencyMetric | None | bool = None, progress: bool = True) -> list[dict]:
+                        frequency_metric: FrequencyMetric | None | bool = None, refine: str = "none",
+                        progress: bool = True) -> list[dict]:
     """Reconstruction metrics of one model on MERL files (e.g. a validation split), one row each.
 
     Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
-    order of ``files``, as :func:`evaluate_runs` draws them), decoded, rendered and compared
-    with the render of the true table: RMSE, PSNR, SSIM, ΔE and L_fre (``frequency_metric``:
-    None for the default one, an instance to reuse across calls, False for no L_fre).
+    order of ``files``, as :func:`evaluate_runs` draws them), refined on them with the budget
+    ``refine`` (:data:`frenbrdf.reconstruct.BUDGETS`; ``"none"``: the encoder alone), decoded,
+    rendered and compared with the render of the true table: RMSE, PSNR, SSIM, ΔE and L_fre
+    (``frequency_metric``: None for the default one, an instance to reuse across calls, False for no L_fre).
     """
+    refinement = dataclasses.replace(refine_config(refine), seed=seed)
     rng = np.random.default_rng(seed)
     scene = Scene(resolution=resolution)
     if frequency_metric is None:
@@ -201,7 +204,11 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
         path = Path(path)
         table = read_merl(path)
         bins = sample_bins(table, rng, samples)
-        z, image = reconstruct(model, table, bins, scene)
+        if refine == "none":
+            z, image = reconstruct(model, table, bins, scene)
+        else:
+            result, image, _ = refined_reconstruction(model, table, bins, scene, refinement)
+            z = result.nbrdf if refinement.weight_steps else result.z
         metrics = image_metrics(tonemap(render_linear(table, scene)), image, material_mask(scene))
         if frequency_metric is not False:
             metrics["lfre"] = frequency_metric(model, table, z)

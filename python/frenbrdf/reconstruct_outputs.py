@@ -54,7 +54,7 @@ def load_model(model: str | os.PathLike) -> Model:
 
 
 def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
-                     samples: int | None = 4000, refine: str = "latent", seed: int = 0, resolution: int = 256,
+                     samples: int | None = 4000, refine: str = "full", seed: int = 0, resolution: int = 256,
                      progress: bool = True) -> dict:
     """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
 

@@ -144,7 +144,7 @@ class Model:
             raise ValueError(f"z must be finite with shape ({latent},) or (B, {latent}), got {z.shape}")
         return NBRDF(self.network.decoder(torch.from_numpy(z.reshape(-1, latent))), self.mapping)
 
-    def reconstruct(self, values, directions, *, refine="latent"):
+    def reconstruct(self, values, directions, *, refine="full"):
         """Encodes samples, then refines the result on them (:func:`frenbrdf.reconstruct.reconstruct`).
 
         ``refine``: ``"none"``, ``"latent"``, ``"full"`` or a :class:`frenbrdf.reconstruct.RefineConfig`.
