@@ -1,7 +1,7 @@
 """The colour ablation of docs/colour.md: one variant of a method preset, trained and measured.
 
     python benches/colour_ablation.py NAME --data bank/ [--method frenbrdf] [--over JSON] [--seed S]
-        [--training demo] [--latent-steps 300] [--work colour-ablation/]
+        [--training demo] [--latent-steps 300] [--ood merl/ --ood-every 4] [--work colour-ablation/]
 
 Trains ``--method``'s preset with ``--over`` (nested TrainConfig keys as JSON, e.g.
 ``'{"model": {"decoder": {"last_layer_scale": 1.0}}}'``) at the ``--training`` length, on one
@@ -10,7 +10,9 @@ material at 128² over the lit pixels: PSNR and mean CIEDE2000 ΔE of the encode
 and, with ``--latent-steps N``, of the latent optimised on the same samples with the decoder
 frozen (:func:`frenbrdf.reconstruct.reconstruct`, stage 1 only): where even that latent
 decodes to the wrong hue the decoder cannot represent the colour, where it decodes right the
-encoder failed to find it. Writes ``WORK/NAME-sS/ablation.json`` and prints one line.
+encoder failed to find it. With ``--ood DIR``, every ``--ood-every``-th material of another folder
+(by name) is measured too, encoder only (out of distribution). Writes ``WORK/NAME-sS/ablation.json``
+and prints one line.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ import torch
 
 from frenbrdf.atomic import save_json
 from frenbrdf.configs import from_dict, merge, to_dict
-from frenbrdf.evaluation import _bin_directions, image_metrics, sample_bins
+from frenbrdf.data import list_materials
+from frenbrdf.evaluation import _bin_directions, image_metrics, reconstruction_rows, sample_bins
 from frenbrdf.merl import N_BINS, read_merl
 from frenbrdf.reconstruct import RefineConfig, reconstruct
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
@@ -65,6 +68,8 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--training", default="demo", help="a training length of frenbrdf.presets.TRAINING")
     parser.add_argument("--latent-steps", type=int, default=0, help="also optimise the latent this many steps")
+    parser.add_argument("--ood", help="also measure materials of this folder (out of distribution), encoder only")
+    parser.add_argument("--ood-every", type=int, default=4, help="every N-th material of --ood by name (default 4)")
     parser.add_argument("--work", default="colour-ablation", help="folder of the runs")
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -80,6 +85,12 @@ def main() -> None:
     rows = measure(Run(out), Path(args.data), args.latent_steps, seed=args.seed)
     summary = {label: {metric: float(np.mean([r[label][metric] for r in rows])) for metric in ("psnr", "delta_e")}
                for label in ("encoder", "optimised") if label in rows[0]}
+    if args.ood:
+        ood = reconstruction_rows(Run(out).model(), list_materials(args.ood)[::args.ood_every], resolution=128,
+                                  frequency_metric=False, progress=False)
+        summary["out of distribution"] = {metric: float(np.mean([r[metric] for r in ood]))
+                                          for metric in ("psnr", "delta_e")}
+        rows += [{"material": r["material"], "out of distribution": r} for r in ood]
     save_json(out / "ablation.json", {"name": args.name, "seed": args.seed, "method": args.method, "over": args.over,
                                       "train_seconds": seconds, "summary": summary, "materials": rows})
     print(f"{args.name} seed {args.seed}: " + "; ".join(
