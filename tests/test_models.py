@@ -62,14 +62,20 @@ def test_set_encoder_is_order_invariant_and_takes_any_set_size():
 
 def test_hypernetwork_heads_produce_every_tensor():
     shapes = NBRDFConfig((8, 8)).shapes()
-    decoder = HyperNetwork(6, shapes, DecoderConfig(hidden=(16,)))
-    with torch.no_grad():
-        params = decoder(torch.randn(4, 6))
-    assert [tuple(p.shape) for p in params] == [(4, *s) for s in shapes]
-    # The last layers start small: latents decode to nearly the same NBRDF at first.
-    spread = max(float((p[0] - p[1]).abs().max()) for p in params)
-    scale = max(float(p.abs().max()) for p in params)
-    assert spread < 0.5 * scale
+    z = torch.randn(4, 6)
+    spreads, scales = {}, {}
+    for last_layer_scale in (0.1, 1.0):
+        torch.manual_seed(0)
+        decoder = HyperNetwork(6, shapes, DecoderConfig(hidden=(16,), last_layer_scale=last_layer_scale))
+        with torch.no_grad():
+            params = decoder(z)
+        assert [tuple(p.shape) for p in params] == [(4, *s) for s in shapes]
+        spreads[last_layer_scale] = max(float((p[0] - p[1]).abs().max()) for p in params)
+        scales[last_layer_scale] = max(float(p.abs().max()) for p in params)
+    # At 0.1 latents decode to nearly the same NBRDF at first (HyperBRDF's start); at 1, the default,
+    # the latent steers the NBRDF from the start (docs/colour.md): ten times the spread.
+    assert spreads[0.1] < 0.5 * scales[0.1]
+    assert spreads[1.0] == pytest.approx(10 * spreads[0.1], rel=1e-4)
 
 
 def test_nbrdf_object_reflectance_and_merl_table(tmp_path):
