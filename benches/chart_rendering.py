@@ -1,6 +1,6 @@
 """Chart 5: Mitsuba render error against samples per pixel and against time, per sampling strategy.
 
-    python benches/chart_rendering.py --decode merl-protocol/runs-merl/frenbrdf \\
+    python benches/chart_rendering.py --decode merl-protocol/runs/frenbrdf/seed-0 \\
         merl-protocol/merl/two-layer-gold.binary
 
 Options: ``--spp 1 4 16 64 256``, ``--reference-spp 4096``, ``--resolution 128``,

@@ -1,6 +1,6 @@
 """Chart 4: reconstruction quality against the number of samples given to the encoder.
 
-    python benches/chart_samples.py --runs merl-protocol/runs-merl/{frenbrdf,nbrdf,hyperbrdf} \\
+    python benches/chart_samples.py --runs merl-protocol/runs/{frenbrdf,nbrdf,hyperbrdf}/seed-0 \\
         --data merl-protocol/merl --name chart4_samples
     python benches/chart_samples.py --runs frenbrdf-demo/runs/{frenbrdf,nbrdf,hyperbrdf} \\
         --name chart4_samples_demo

@@ -1,8 +1,8 @@
 #!/bin/bash
 # The default bank (100 analytic materials): every method at the demo's length over three seeds
-# (each its own split and initialisation), FreNBRDF also trained on the tables alone (the paper's
-# protocol, to measure the augmentation), then the evaluation on the bank's test splits and on
-# the MERL-derived materials none of them saw (out of distribution).
+# (each its own split and initialisation), then the evaluation on the bank's test splits and on
+# the MERL-derived materials none of them saw (out of distribution). The augmentation's own
+# evidence (against the tables alone) is docs/colour.md's, made with benches/colour_ablation.py.
 # Usage: docs/results/bank/run.sh [FOLDER]   (default bank-protocol; ../shared beside the repository)
 set -e
 shared=$(cd "$(dirname "$0")/../../../../shared" && pwd)
@@ -16,13 +16,8 @@ for m in frenbrdf nbrdf hyperbrdf; do
   frenbrdf train --method $m --training demo --data bank --out runs/$m --seeds 0 1 2 --quiet --json
   echo "train $m (seeds 0 1 2) $(( $(date +%s) - t )) s"
 done
-frenbrdf train --method frenbrdf --training demo --augmentation paper --data bank --out runs-paper/frenbrdf \
-  --seeds 0 1 2 --quiet --json
 t=$(date +%s)
 frenbrdf evaluate runs/*/seed-* --out eval-bank --quick --refine latent --quiet
 frenbrdf evaluate runs/*/seed-* --out eval-bank-on-merl --data merl --all --max-materials 40 --quick --refine latent --quiet
-frenbrdf evaluate runs/frenbrdf/seed-* runs-paper/frenbrdf/seed-* --out eval-augmentation --quick --quiet
-frenbrdf evaluate runs/frenbrdf/seed-* runs-paper/frenbrdf/seed-* --out eval-augmentation-on-merl --data merl --all \
-  --max-materials 40 --quick --quiet
 echo "evaluate $(( $(date +%s) - t )) s"
 echo "total $(( $(date +%s) - start )) s"
