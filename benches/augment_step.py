@@ -12,6 +12,7 @@ a temporary folder. Writes ``bench-results/augment_step.{md,json}``.
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 from pathlib import Path
 
@@ -26,6 +27,9 @@ from frenbrdf.timing import timed_seconds
 from frenbrdf.training import config_for, optimisation_step, prepare
 from frenbrdf.training.augment import BatchDrawer
 from frenbrdf.training.loop import make_optimizer
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import material_folder  # noqa: E402
 
 
 def step_functions(method: str, augmentation: str, data: Path, device: torch.device) -> dict:
@@ -60,12 +64,7 @@ def main():
     args = parser.parse_args()
     device = torch.device(args.device)
     with tempfile.TemporaryDirectory() as scratch:
-        data = args.data
-        if data is None:
-            from frenbrdf.synth import write_bank
-
-            data = Path(scratch)
-            write_bank(data, n=16, seed=0, progress=False)
+        data = material_folder(args.data, scratch)
         functions = {}
         for name in AUGMENTATION:
             functions.update(step_functions(args.method, name, data, device))

@@ -161,6 +161,16 @@ class CpuMeter:
 # Inputs
 
 
+def material_folder(data: Path | None, scratch: str | os.PathLike, n: int = 16) -> Path:
+    """``data``, or without it the first ``n`` materials of the default bank written into ``scratch``."""
+    if data is not None:
+        return Path(data)
+    from frenbrdf.synth import write_bank
+
+    write_bank(scratch, n=n, seed=0, progress=False)
+    return Path(scratch)
+
+
 def unit_vectors(rng: np.random.Generator, n: int, hemisphere: bool = False) -> np.ndarray:
     """``n`` random directions ``(n, 3)``, uniform on the sphere, or on the upper (z ≥ 0) hemisphere."""
     v = rng.normal(size=(n, 3))

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import tempfile
 from pathlib import Path
 
@@ -19,6 +20,9 @@ import torch
 
 from frenbrdf.timing import time_training_step
 from frenbrdf.training import config_for
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
+from common import material_folder  # noqa: E402
 
 
 def time_method(method: str, data: Path, steps: int, device: torch.device, slices=None) -> dict:
@@ -39,12 +43,7 @@ def main():
     args = parser.parse_args()
     device = torch.device(args.device)
     with tempfile.TemporaryDirectory() as scratch:
-        data = args.data
-        if data is None:
-            from frenbrdf.synth import write_bank
-
-            data = Path(scratch)
-            write_bank(data, n=16, seed=0, progress=False)
+        data = material_folder(args.data, scratch)
         slices = tuple(int(i) for i in args.slices.split(",")) if args.slices else None
         results = [time_method(method, data, args.steps, device, slices) for method in ("frenbrdf", "nbrdf", "hyperbrdf")]
     lines = [f"Training step at default settings on {device} (torch threads: {torch.get_num_threads()}), "

@@ -19,6 +19,7 @@ from .losses import FrequencyLoss
 from .models.autoencoder import AutoEncoder
 from .models.nbrdf import N_INPUTS, NBRDF
 from .training import TrainConfig, optimisation_step, prepare
+from .training.loop import make_optimizer
 
 
 def timed_seconds(functions: dict, steps: int, device: torch.device, *, warmup: int = 3,
@@ -57,7 +58,7 @@ def time_training_step(cfg: TrainConfig, steps: int = 30, device: torch.device |
     torch.manual_seed(0)
     network = AutoEncoder(cfg.model).to(device)
     frequency = FrequencyLoss(cfg.loss.frequency).to(device)
-    optimizer = torch.optim.Adam(network.parameters(), lr=cfg.lr)
+    optimizer = make_optimizer(network, cfg)  # Adam, or AdamW with weight decay: as training builds it
     generator = torch.Generator().manual_seed(0)
     batch = list(range(min(cfg.batch_materials, len(split.train))))
     context = bank.sample(batch, cfg.context_samples, generator).to(device)
