@@ -7,7 +7,7 @@ then the NBRDF's weights refined (``--weight-steps``, after ``--full-latent-step
 steps), all from ``--samples`` random valid bins (:func:`frenbrdf.reconstruct.reconstruct`),
 and a per-material NBRDF fitted from scratch on every valid bin (``fit-nbrdf``,
 :func:`frenbrdf.fitting.fit_nbrdf`, ``--fit-epochs``). Each is rendered and compared with the
-render of the true table (:func:`frenbrdf.evaluation.image_metrics`: PSNR and ΔE over the lit
+render of the true table (:func:`frenbrdf.scoring.image_metrics`: PSNR and ΔE over the lit
 material pixels). Seconds are the process's CPU seconds per material (refinement: all stages,
 encoding included; fitting: the fit), which on one torch thread (``OMP_NUM_THREADS=1``) is what
 an idle core takes, whatever else shares the machine; wall seconds are kept beside them.
@@ -33,11 +33,11 @@ from tqdm.auto import tqdm
 
 from frenbrdf import Run
 from frenbrdf.data import list_materials
-from frenbrdf.evaluation import image_metrics
 from frenbrdf.fitting import FitConfig, fit_nbrdf
 from frenbrdf.measurements import merl_measurements
 from frenbrdf.reconstruct import RefineConfig, reconstruct
 from frenbrdf.render import Scene, material_mask, render
+from frenbrdf.scoring import image_metrics
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
 from common import pyplot, run_metadata, save_chart, save_figure  # noqa: E402

@@ -65,8 +65,8 @@ def analytic_materials() -> dict[str, np.ndarray]:
 def decoded_nbrdf(run: str | os.PathLike, merl_file: str | os.PathLike, samples: int = 4000):
     """The NBRDF that a run's model decodes from ``samples`` random measured bins of a MERL file."""
     from frenbrdf import Model, read_merl
-    from frenbrdf.evaluation import reconstruct, sample_bins
     from frenbrdf.render import Scene
+    from frenbrdf.scoring import reconstruct, sample_bins
 
     model = Model.load(run)
     table = read_merl(merl_file)

@@ -12,8 +12,8 @@ split), ``--data DIR`` (default: the folder recorded in the runs' ``config.json`
 
 Each test material of the runs' common split is encoded from N random measured bins,
 decoded, rendered and compared with the render of its true table, exactly as
-``frenbrdf evaluate`` does it (:func:`frenbrdf.evaluation.sample_bins`,
-:func:`~frenbrdf.evaluation.reconstruct`, :func:`~frenbrdf.evaluation.image_metrics`:
+``frenbrdf evaluate`` does it (:func:`frenbrdf.scoring.sample_bins`,
+:func:`~frenbrdf.scoring.reconstruct`, :func:`~frenbrdf.scoring.image_metrics`:
 PSNR, SSIM and RMSE of the tone-mapped sphere renders over the lit material pixels).
 Every N below ``all`` is drawn ``--seeds`` times, with the same bins for every method. A point of the chart is the mean
 over the test materials, averaged over the draws; the band is ± one standard deviation
@@ -35,9 +35,10 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from frenbrdf.evaluation import image_metrics, load_runs, reconstruct, sample_bins
+from frenbrdf.evaluation import load_runs
 from frenbrdf.merl import read_merl, valid_mask
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
+from frenbrdf.scoring import image_metrics, reconstruct, sample_bins
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
 from common import pyplot, run_metadata, save_chart, save_figure  # noqa: E402

@@ -28,10 +28,10 @@ import torch
 from frenbrdf.atomic import save_json
 from frenbrdf.configs import from_dict, merge, to_dict
 from frenbrdf.data import list_materials
-from frenbrdf.evaluation import _bin_directions, image_metrics, reconstruction_rows, sample_bins
 from frenbrdf.merl import N_BINS, read_merl
 from frenbrdf.reconstruct import RefineConfig, reconstruct
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
+from frenbrdf.scoring import bin_directions, image_metrics, reconstruction_rows, sample_bins
 from frenbrdf.training import Run, TrainConfig, config_for, train
 
 
@@ -43,7 +43,7 @@ def measure(run: Run, data: Path, latent_steps: int, samples: int = 4000, seed: 
     for name in run.split.test:
         table = read_merl(data / f"{name}.binary")
         bins = sample_bins(table, rng, samples)
-        values, directions = table.reshape(3, N_BINS)[:, bins].T, _bin_directions(bins)
+        values, directions = table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins)
         truth = tonemap(render_linear(table, scene))
         row = {"material": name, "truth_rgb": truth[mask].mean(0).round(3).tolist()}
         latents = {"encoder": model.encode(values, directions)}

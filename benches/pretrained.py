@@ -7,7 +7,7 @@
 Trains one model (``frenbrdf train`` with ``--config``: any TrainConfig keys over the
 method's preset; ``data``, ``out`` and ``seed`` are set here) on the MERL files and the
 bank together (a folder of links to both), evaluates its held-out test split
-(:func:`frenbrdf.evaluation.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
+(:func:`frenbrdf.scoring.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
 material pixels, encoder only), packs it (:func:`frenbrdf.pretrained.pack_pretrained`:
 float16 weights, compact f_ref), measures what float16 costs (the same test split through
 the packed model), and writes the card (``card.json`` beside the files, ``docs/pretrained.md``).
@@ -26,7 +26,7 @@ import numpy as np
 from frenbrdf import Model, Run, pretrained
 from frenbrdf.atomic import write_text
 from frenbrdf.data import list_materials
-from frenbrdf.evaluation import reconstruction_rows
+from frenbrdf.scoring import reconstruction_rows
 from frenbrdf.training import load_config, train
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path

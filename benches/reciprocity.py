@@ -18,10 +18,11 @@ from pathlib import Path
 import numpy as np
 
 import frenbrdf
-from frenbrdf.evaluation import load_runs, sample_bins
+from frenbrdf.evaluation import load_runs
 from frenbrdf.merl import N_BINS
 from frenbrdf.models.nbrdf import nbrdf_coordinates
 from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
+from frenbrdf.scoring import sample_bins
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
 import common  # noqa: E402
@@ -52,9 +53,9 @@ def run_gaps(run_dir: str, data: str | None, wi: np.ndarray, wo: np.ndarray) -> 
     for name in loaded.test:
         table = frenbrdf.read_merl(loaded.files[name])
         bins = sample_bins(table, rng, 4000)
-        from frenbrdf.evaluation import _bin_directions
+        from frenbrdf.scoring import bin_directions
 
-        nbrdf = model.decode(model.encode(table.reshape(3, N_BINS)[:, bins].T, _bin_directions(bins)))[0]
+        nbrdf = model.decode(model.encode(table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins)))[0]
         reference = nbrdf.mapping.reference_at(wi, wo)
         unfolded = [nbrdf.mapping.inverse(nbrdf.mapped(unfolded_inputs(a, b)), reference) for a, b in
                     ((wi, wo), (wo, wi))]

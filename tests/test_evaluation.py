@@ -155,10 +155,10 @@ def test_refined_rows_appear_only_when_refinement_runs(tiny_runs, tmp_path):
 
 def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp_path):
     """Each refined row is :func:`frenbrdf.reconstruct.reconstruct` run on the bins the encoder was given."""
-    from frenbrdf.evaluation import _bin_directions, sample_bins
     from frenbrdf.merl import N_BINS, read_merl
     from frenbrdf.reconstruct import BUDGETS, reconstruct
     from frenbrdf.render import render_linear, tonemap
+    from frenbrdf.scoring import bin_directions, sample_bins
 
     config = EvaluateConfig(samples=250, edits=3, resolution=32, edit_resolution=16, progress=False, seed=3,
                             refine="full")
@@ -169,7 +169,7 @@ def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp
     for name, row in zip(report["test_materials"], report["reconstruction"][model.method]):
         table = read_merl(Path(report["data"]) / f"{name}.binary")
         bins = sample_bins(table, rng, config.samples)
-        result = reconstruct(model, table.reshape(3, N_BINS)[:, bins].T, _bin_directions(bins),
+        result = reconstruct(model, table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins),
                              refine=dataclasses.replace(BUDGETS["full"], seed=config.seed))
         expected = image_metrics(tonemap(render_linear(table, scene)), tonemap(render_linear(result.nbrdf, scene)),
                                  material_mask(scene))
@@ -182,8 +182,8 @@ def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp
 
 def test_frequency_metric_measures_a_latent_and_an_nbrdf_alike(tiny_runs, toy_materials):
     """A refined NBRDF is no decoder output; L_fre of the NBRDF decoded from z is L_fre of z."""
-    from frenbrdf.evaluation import FrequencyMetric
     from frenbrdf.merl import read_merl
+    from frenbrdf.scoring import FrequencyMetric
 
     model = Run(tiny_runs[0]).model()
     table = read_merl(sorted(toy_materials.glob("*.binary"))[0])
@@ -383,3 +383,23 @@ def test_a_method_evaluated_twice_is_named_alike_in_every_seed(tmp_path):
 
     assert {run_label(tmp_path / "bank-paper" / "frenbrdf" / f"seed-{s}") for s in (0, 1, 2)} == {"bank-paper"}
     assert run_label(tmp_path / "runs" / "frenbrdf-paper") == "frenbrdf-paper"
+
+
+def test_an_edit_at_its_ends_is_the_reconstruction_of_that_material(tiny_runs, toy_materials):
+    from frenbrdf.merl import read_merl
+    from frenbrdf.render import render_linear
+    from frenbrdf.scoring import edit_metrics, reconstruction_rows
+
+    model = Run(tiny_runs[0]).model()
+    files = sorted(toy_materials.glob("*.binary"))[:2]
+    latents: dict = {}
+    rows = reconstruction_rows(model, files, samples=300, resolution=24, frequency_metric=False, progress=False,
+                               latents=latents)
+    assert list(latents) == [f.stem for f in files]
+    scene = Scene(resolution=24)
+    a, b = (render_linear(read_merl(f), scene) for f in files)
+    z_a, z_b = latents[files[0].stem], latents[files[1].stem]
+    for t, row in ((0.0, rows[0]), (1.0, rows[1])):
+        assert edit_metrics(model, z_a, z_b, a, b, t, scene, material_mask(scene))["psnr"] == pytest.approx(row["psnr"])
+    middle = edit_metrics(model, z_a, z_b, a, b, 0.5, scene, material_mask(scene))
+    assert middle["psnr"] != pytest.approx(rows[0]["psnr"]) and np.isfinite(middle["psnr"])

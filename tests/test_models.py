@@ -150,9 +150,9 @@ def test_decoded_materials_are_isotropic():
 
 
 def test_nbrdf_coordinates_at_the_bins_are_the_training_inputs():
-    from frenbrdf.evaluation import _bin_directions
     from frenbrdf.models.nbrdf import bin_geometry
+    from frenbrdf.scoring import bin_directions
 
     bins = np.random.default_rng(0).choice(90 * 90 * 180, 2000)
-    wi, wo = _bin_directions(bins)
+    wi, wo = bin_directions(bins)
     np.testing.assert_allclose(nbrdf_coordinates(wi, wo), bin_geometry().half_diff[bins].numpy(), atol=1e-6)

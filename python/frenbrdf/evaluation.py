@@ -29,59 +29,26 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
 from tqdm.auto import tqdm
 
 from .atomic import save_json, write_text
 from .data import list_materials
 from .figures import rendered_materials, write_figures
-from .losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
-from .merl import N_BINS, SHAPE, merl_bin_angles, read_merl
+from .merl import read_merl
 from .models.autoencoder import Model
-from .models.nbrdf import NBRDF
 from .presets import method_names
-from .reconstruct import BUDGETS, STAGES, Reconstruction, RefineConfig, refine_config
-from .reconstruct import reconstruct as refine_samples
+from .reconstruct import BUDGETS, refine_config
 from .render import Scene, material_mask, render_linear, tonemap
+from .scoring import FrequencyMetric as FrequencyMetric  # re-exported: frenbrdf.evaluation keeps its public names
+from .scoring import edit_metrics, reconstruct, refined_reconstruction, sample_bins
+from .scoring import image_metrics as image_metrics
+from .scoring import reconstruction_rows as reconstruction_rows
 from .statistics import compare_seeds
 from .tables import PAPER as PAPER  # re-exported: frenbrdf.evaluation keeps its public names
 from .tables import ROWS as ROWS
 from .tables import colour_losses, report_markdown, seeds_markdown, summarise, table_rows
 from .tables import markdown_table as markdown_table
 from .training.run import Run
-
-
-def image_metrics(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray | None = None) -> dict[str, float]:
-    """RMSE, PSNR, SSIM and colour difference ΔE of two display images in [0, 1] ``(H, W, 3)`` over
-    the pixels of ``mask`` ``(H, W)`` (default: all; evaluation passes :func:`frenbrdf.render.material_mask`).
-
-    RMSE and PSNR (data range 1) are those of the masked pixels; SSIM is scikit-image's SSIM
-    map averaged over them (its 7×7 windows near the silhouette still see some background);
-    ``delta_e`` is :func:`delta_e`.
-    """
-    from skimage.metrics import structural_similarity
-
-    mask = np.ones(truth.shape[:2], dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
-    if mask.shape != truth.shape[:2] or truth.shape != prediction.shape or not mask.any():
-        raise ValueError(f"images {truth.shape} and {prediction.shape} need a non-empty mask of shape "
-                         f"{truth.shape[:2]}, got {mask.shape}")
-    mse = float(np.mean((truth[mask] - prediction[mask]) ** 2))
-    psnr = 10 * np.log10(1.0 / mse) if mse > 0 else float("inf")
-    _, ssim_map = structural_similarity(truth, prediction, data_range=1.0, channel_axis=-1, full=True)
-    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim_map[mask].mean()),
-            "delta_e": delta_e(truth, prediction, mask)}
-
-
-def delta_e(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray) -> float:
-    """Mean CIEDE2000 colour difference of two display images in [0, 1] ``(H, W, 3)`` over ``mask``.
-
-    The images are read as sRGB (scikit-image's ``rgb2lab``, D65); ours are gamma 2.2, which
-    sRGB's curve follows to within a few per cent. ΔE ≈ 1 is the smallest difference a person
-    sees side by side; above ~5 the colours read as different.
-    """
-    from skimage.color import deltaE_ciede2000, rgb2lab
-
-    return float(deltaE_ciede2000(rgb2lab(truth[mask]), rgb2lab(prediction[mask])).mean())
 
 
 @dataclass
@@ -115,105 +82,12 @@ class EvaluateConfig:
             raise ValueError(f"refine must be a refinement budget, one of {tuple(BUDGETS)}; got {self.refine!r}")
 
 
-def _bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(ω_i, ω_o) of flat bin indices (φ_h = 0), each ``(len(bins), 3)``.
-
-    The angles of :func:`frenbrdf.merl_bin_rusinkiewicz` at those bins only (the same
-    values, without building the whole grid).
-    """
-    from .coords import rusinkiewicz_to_directions
-
-    theta_h, theta_d, phi_d = merl_bin_angles()
-    i, j, k = np.unravel_index(np.asarray(bins), SHAPE[1:])
-    return rusinkiewicz_to_directions(np.stack([theta_h[i], np.zeros(i.shape), theta_d[j], phi_d[k]], axis=-1))
-
-
-class FrequencyMetric:
-    """L_fre between a true table and a decoded latent (or an NBRDF, e.g. refined), in the model's mapped space.
-
-    The settings are fixed (default: :class:`FrequencyLossConfig`'s), whatever the model was
-    trained with, so that values of different models compare.
-    """
-
-    def __init__(self, config: FrequencyLossConfig = FrequencyLossConfig()):
-        self.truth, self.loss = FrequencyTruth(config), FrequencyLoss(config)
-
-    def __call__(self, model: Model, table: np.ndarray, material: np.ndarray | NBRDF) -> float:
-        """L_fre of ``material``: a latent ``(latent,)`` of ``model``, or an NBRDF of one material."""
-        flat = table.reshape(3, N_BINS)
-        valid = np.all(flat >= 0, axis=0)
-        with np.errstate(invalid="ignore"):
-            mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
-        true = self.truth.coefficients(np.nan_to_num(mapped).T, valid)
-        with torch.no_grad():
-            params = (material.params if isinstance(material, NBRDF)
-                      else model.network.decoder(torch.from_numpy(material[None].astype(np.float32))))
-            predicted = self.loss.predicted_coefficients(params)[0].numpy()
-        return float(spectral_distance(predicted, true))
-
-
 def edit_pairs(n_materials: int, most: int, rng: np.random.Generator) -> list[tuple[int, int]]:
     """Unordered pairs of distinct materials, each at most once: all of them, or ``most`` drawn at random."""
     pairs = list(itertools.combinations(range(n_materials), 2))
     if len(pairs) > most:
         pairs = [pairs[i] for i in sorted(rng.choice(len(pairs), size=most, replace=False))]
     return pairs
-
-
-def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np.ndarray:
-    """``samples`` random valid bins (flat indices) of a MERL table, with replacement only if too few."""
-    valid_bins = np.flatnonzero(np.all(table.reshape(3, N_BINS) >= 0, axis=0))
-    return rng.choice(valid_bins, size=samples, replace=len(valid_bins) < samples)
-
-
-def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Encodes a table from the samples at ``bins``, decodes and renders it: (z, display image)."""
-    wi, wo = _bin_directions(bins)
-    z = model.encode(table.reshape(3, N_BINS)[:, bins].T, (wi, wo))
-    return z, tonemap(render_linear(model.decode(z)[0], scene))
-
-
-def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene,
-                           config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
-    """Encodes a table from the samples at ``bins`` and refines on them (:func:`frenbrdf.reconstruct.reconstruct`),
-    renders the result: (reconstruction, display image, seconds of the refinement stages, beyond encoding)."""
-    wi, wo = _bin_directions(bins)
-    result = refine_samples(model, table.reshape(3, N_BINS)[:, bins].T, (wi, wo), refine=config)
-    seconds = sum(result.timings.get(stage, 0.0) for stage in STAGES if stage != "encode")
-    return result, tonemap(render_linear(result.nbrdf, scene)), seconds
-
-
-def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
-                        frequency_metric: FrequencyMetric | None | bool = None, refine: str = "none",
-                        progress: bool = True) -> list[dict]:
-    """Reconstruction metrics of one model on MERL files (e.g. a validation split), one row each.
-
-    Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
-    order of ``files``, as :func:`evaluate_runs` draws them), refined on them with the budget
-    ``refine`` (:data:`frenbrdf.reconstruct.BUDGETS`; ``"none"``: the encoder alone), decoded,
-    rendered and compared with the render of the true table: RMSE, PSNR, SSIM, ΔE and L_fre
-    (``frequency_metric``: None for the default one, an instance to reuse across calls, False for no L_fre).
-    """
-    refinement = dataclasses.replace(refine_config(refine), seed=seed)
-    rng = np.random.default_rng(seed)
-    scene = Scene(resolution=resolution)
-    if frequency_metric is None:
-        frequency_metric = FrequencyMetric()
-    rows = []
-    for path in tqdm(list(files), desc="reconstruction", disable=not progress, leave=False):
-        path = Path(path)
-        table = read_merl(path)
-        bins = sample_bins(table, rng, samples)
-        if refine == "none":
-            z, image = reconstruct(model, table, bins, scene)
-        else:
-            result, image, _ = refined_reconstruction(model, table, bins, scene, refinement)
-            z = result.nbrdf if refinement.weight_steps else result.z
-        metrics = image_metrics(tonemap(render_linear(table, scene)), image, material_mask(scene))
-        if frequency_metric is not False:
-            metrics["lfre"] = frequency_metric(model, table, z)
-        rows.append({"material": path.stem, **metrics})
-    return rows
 
 
 @dataclass
@@ -415,14 +289,13 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         for a, b in pairs:
             name_a, name_b = names[a], names[b]
             for t in config.weights:
-                truth_image = tonemap((1 - t) * edit_truth_linear[name_a] + t * edit_truth_linear[name_b])
                 for method, model in models.items():
                     row = {"a": name_a, "b": name_b, "t": t}
                     for prefix, by_method in latents.items():
-                        z = (1 - t) * by_method[method][name_a] + t * by_method[method][name_b]
-                        image = tonemap(render_linear(model.decode(z)[0], edit_scene))
-                        row.update({prefix + key: value for key, value in
-                                    image_metrics(truth_image, image, edit_mask).items()})
+                        metrics = edit_metrics(model, by_method[method][name_a], by_method[method][name_b],
+                                               edit_truth_linear[name_a], edit_truth_linear[name_b], t, edit_scene,
+                                               edit_mask)
+                        row.update({prefix + key: value for key, value in metrics.items()})
                     edits[method].append(row)
                     bar.update()
 

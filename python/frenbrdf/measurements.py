@@ -100,8 +100,8 @@ def read_measurements(path: str | os.PathLike, *, samples: int | None = 4000, se
 
 def merl_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
     """A MERL file sampled at ``samples`` random valid bins (drawn from ``seed``) or at all of them (None)."""
-    from .evaluation import _bin_directions, sample_bins
     from .merl import N_BINS, read_merl
+    from .scoring import bin_directions, sample_bins
 
     table = read_merl(path)
     flat = table.reshape(3, N_BINS)
@@ -113,7 +113,7 @@ def merl_measurements(path: str | os.PathLike, *, samples: int | None = 4000, se
         bins = sample_bins(table, np.random.default_rng(seed), samples)
     if len(bins) == 0:
         raise ValueError(f"{path}: the MERL table holds no valid bin")
-    wi, wo = _bin_directions(bins)
+    wi, wo = bin_directions(bins)
     return Measurements(flat[:, bins].T.copy(), wi, wo, str(path), "merl", table)
 
 

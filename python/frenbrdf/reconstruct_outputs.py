@@ -16,7 +16,7 @@ folder, all of it or nothing:
 ``reconstruction.json``
     The input, the model, the refinement, the latent, seconds and loss per stage, and with a
     MERL input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
-    material pixels, :func:`frenbrdf.evaluation.image_metrics`) and L_fre.
+    material pixels, :func:`frenbrdf.scoring.image_metrics`) and L_fre.
 """
 
 from __future__ import annotations
@@ -101,7 +101,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
 def truth_metrics(model: Model, result: Reconstruction, measurements: Measurements, truth_image: np.ndarray,
                   image: np.ndarray, scene: Scene) -> dict[str, float]:
     """RMSE, PSNR, SSIM and ΔE of the renders over the lit material pixels, and L_fre against the true table."""
-    from .evaluation import FrequencyMetric, image_metrics
+    from .scoring import FrequencyMetric, image_metrics
 
     metrics = image_metrics(truth_image, image, material_mask(scene))
     metrics["lfre"] = FrequencyMetric()(model, measurements.table, result.nbrdf)

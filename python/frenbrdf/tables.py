@@ -56,7 +56,7 @@ def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
                        edit_refined_psnr=mean(edit_rows, "refined_psnr"),
                        edit_refined_delta_e=mean(edit_rows, "refined_delta_e"))
     return summary
-#: ΔE above which two colours read as different (:func:`frenbrdf.evaluation.delta_e`); reports count the materials above it.
+#: ΔE above which two colours read as different (:func:`frenbrdf.scoring.delta_e`); reports count the materials above it.
 DIFFERENT_COLOUR = 5.0
 #: Materials per method that a report lists as where colour is lost most.
 WORST_LISTED = 5

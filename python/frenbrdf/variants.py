@@ -7,7 +7,7 @@ it) and measures it:
 
 - on the **validation** split: encode each material from 4000 samples, decode, render,
   compare with the render of the true table (PSNR, SSIM, RMSE, ΔE; the code of
-  :func:`frenbrdf.evaluation.reconstruction_rows`) and L_fre, always computed with the
+  :func:`frenbrdf.scoring.reconstruction_rows`) and L_fre, always computed with the
   default :class:`~frenbrdf.losses.FrequencyLossConfig` so that variants compare;
 - the training-step time (:func:`frenbrdf.timing.time_training_step`), with and without
   the frequency term; the bytes a material costs: NBRDF weights × 4 (float32) and the
@@ -36,7 +36,7 @@ from tqdm.auto import tqdm
 from .atomic import save_json
 from .configs import from_dict, merge, to_dict
 from .data import list_materials
-from .evaluation import FrequencyMetric, reconstruction_rows
+from .scoring import FrequencyMetric, reconstruction_rows
 from .timing import time_training_step
 from .training import TrainConfig, config_for, train
 

@@ -3,7 +3,8 @@
 ``train(cfg) -> Run`` is a plain function; ``frenbrdf train`` is a thin wrapper. A run
 folder holds ``config.json``, ``split.json``, ``mapping.npz`` (f_ref, once per run),
 ``history.json``, ``last.pt`` (for ``--resume``) and ``best.pt`` (lowest validation
-reconstruction loss); :class:`~frenbrdf.training.run.Run` opens one. Checkpoints
+reconstruction loss, or highest validation render PSNR: ``TrainConfig.select``);
+:class:`~frenbrdf.training.run.Run` opens one. Checkpoints
 (:mod:`frenbrdf.checkpoints`) hold the weights, optimiser, config, split and RNG state,
 written atomically. Under ``torchrun`` each step's batch of materials is sharded across
 ranks (DDP: gloo on CPU, NCCL on GPU).
@@ -11,6 +12,7 @@ ranks (DDP: gloo on CPU, NCCL on GPU).
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import os
@@ -26,9 +28,10 @@ from ..configs import to_dict
 from ..data import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
 from ..losses import FrequencyLoss
-from ..models.autoencoder import AutoEncoder
+from ..models.autoencoder import AutoEncoder, Model
+from ..scoring import reconstruction_rows
 from .augment import BatchDrawer
-from .config import TrainConfig
+from .config import TrainConfig, selection_score
 from .prepared import Distributed, PreparedData, prepare, select_device
 from .run import Run
 from .step import loss_terms, optimisation_step
@@ -73,23 +76,30 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
     drawer = BatchDrawer(cfg, data, with_truth=cfg.loss.eta > 0)
     generator = torch.Generator().manual_seed(cfg.seed)
     history: list[dict] = []
-    best = {"epoch": -1, "val": math.inf}
+    # The best epoch by each rule measured (best.pt holds cfg.select's pick): score, lower is better.
+    bests = {rule: {"epoch": -1, "val": math.inf} for rule in (("loss", "psnr") if cfg.render_every else ("loss",))}
     first_epoch = 0
     if checkpoint is not None:
         network.load_state_dict(checkpoint["model"])
         optimizer.load_state_dict(checkpoint["optimizer"])
         generator.set_state(checkpoint["generator"])
-        history, best, first_epoch = checkpoint["history"], checkpoint["best"], checkpoint["epoch"] + 1
+        history, first_epoch = checkpoint["history"], checkpoint["epoch"] + 1
+        bests.update(checkpoint.get("bests", {cfg.select: checkpoint["best"]}))
     trained = torch.nn.parallel.DistributedDataParallel(network) if ranks.world > 1 else network
 
     def state(epoch: int) -> dict:
         return {"method": cfg.method, "config": json.dumps(to_dict(cfg)), "split": split.to_json(),
                 "model": network.state_dict(), "optimizer": optimizer.state_dict(),
-                "generator": generator.get_state(), "epoch": epoch, "best": best, "history": history}
+                "generator": generator.get_state(), "epoch": epoch, "best": bests[cfg.select], "bests": bests,
+                "history": history}
 
     if not history:  # the untrained model's validation loss: the baseline every epoch improves on
         initial = evaluate_split(network, frequency, cfg, data, data.validation, device)
         history.append({"epoch": -1, **{f"val_{k}": v for k, v in initial.items()}})
+    validation_files = [files[name] for name in split.val]
+    # Training wall time, carried over a resume; the validation renders are measurement, not training.
+    clock_start, render_seconds = time.perf_counter(), 0.0
+    seconds_before = history[-1].get("seconds", 0.0)
     steps_per_epoch = data.n_train // batch_size
     bar = tqdm(total=(cfg.epochs - first_epoch) * steps_per_epoch, desc=f"train {cfg.method}",
                disable=not (cfg.progress and ranks.main))
@@ -118,21 +128,46 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
             bar.update()
             bar.set_postfix({name: f"{value:.3g}" for name, value in terms.logged.items()}, refresh=False)
         validation = evaluate_split(network, frequency, cfg, data, data.validation, device)
-        history.append({"epoch": epoch, **{f"train_{k}": v for k, v in sums.items()},
-                        **({"train_gradient_ratio": gradient_ratio} if gradient_ratio is not None else {}),
-                        **{f"val_{k}": v for k, v in validation.items()}})
-        if validation["rec"] < best["val"]:
-            best = {"epoch": epoch, "val": validation["rec"]}
-            if ranks.main:
-                checkpoints.save(run_dir / "best.pt", state(epoch))
+        entry = {"epoch": epoch, **{f"train_{k}": v for k, v in sums.items()},
+                 **({"train_gradient_ratio": gradient_ratio} if gradient_ratio is not None else {}),
+                 **{f"val_{k}": v for k, v in validation.items()}}
+        if cfg.render_every and ((epoch + 1) % cfg.render_every == 0 or epoch == cfg.epochs - 1):
+            render_start = time.perf_counter()
+            entry.update(render_validation(network, data, cfg, validation_files))
+            render_seconds += time.perf_counter() - render_start
+        entry["seconds"] = seconds_before + time.perf_counter() - clock_start - render_seconds
+        history.append(entry)
+        for rule, best in bests.items():
+            score = selection_score(entry, rule)
+            if score is not None and score < best["val"]:
+                bests[rule] = {"epoch": epoch, "val": score}
+                if ranks.main:
+                    checkpoints.save(run_dir / best_checkpoint(rule, cfg), state(epoch))
         if ranks.main:
             checkpoints.save(run_dir / "last.pt", state(epoch))
             save_json(run_dir / "history.json", history)
-        if cfg.patience and epoch - best["epoch"] >= cfg.patience:
-            break  # early stopping: no better validation loss for `patience` epochs
+        if cfg.patience and epoch - bests[cfg.select]["epoch"] >= cfg.patience:
+            break  # early stopping: the selection measure has not improved for `patience` epochs
     bar.close()
     ranks.barrier()
     return Run(run_dir, seconds=time.perf_counter() - start)
+
+
+def best_checkpoint(rule: str, cfg: TrainConfig) -> str:
+    """The file name of the best checkpoint by ``rule``: ``best.pt`` for the run's own rule (``cfg.select``)."""
+    return "best.pt" if rule == cfg.select else f"best-{rule}.pt"
+
+
+def render_validation(network, data: PreparedData, cfg: TrainConfig, files) -> dict:
+    """Mean render PSNR and ΔE of the validation materials as ``frenbrdf evaluate`` measures them
+    (:func:`frenbrdf.scoring.reconstruction_rows`: 4000 samples each, drawn from the run's seed, the same
+    every time)."""
+    on_cpu = network if next(network.parameters()).device.type == "cpu" else copy.deepcopy(network).cpu()
+    model = Model(on_cpu, data.mapping, cfg.model, cfg.method)  # puts the network in eval mode
+    rows = reconstruction_rows(model, files, resolution=cfg.render_resolution, seed=cfg.seed,
+                               frequency_metric=False, progress=False)
+    return {"val_psnr": sum(r["psnr"] for r in rows) / len(rows),
+            "val_delta_e": sum(r["delta_e"] for r in rows) / len(rows)}
 
 
 def make_optimizer(network: torch.nn.Module, cfg: TrainConfig) -> torch.optim.Optimizer:

@@ -15,7 +15,7 @@ from ..configs import from_dict
 from ..data import Split
 from ..models.autoencoder import Model
 from ..presets import AUGMENTATION
-from .config import TrainConfig
+from .config import TrainConfig, selection_score
 
 
 class Run:
@@ -75,11 +75,16 @@ class Run:
 
     @property
     def best(self) -> dict:
-        """The history entry of the best epoch (lowest validation reconstruction loss, the first of ties)."""
-        trained = [entry for entry in self.history if entry["epoch"] >= 0]
-        if not trained:
-            raise ValueError(f"{self.path}: no epoch has been trained yet")
-        return min(trained, key=lambda entry: entry["val_rec"])
+        """The history entry of the best epoch by the run's selection rule (``TrainConfig.select``: the lowest
+        validation reconstruction loss, or the highest validation render PSNR), the first of ties."""
+        return self.best_by(self.config.select)
+
+    def best_by(self, rule: str) -> dict:
+        """The history entry of the best epoch by ``rule`` (:data:`~frenbrdf.training.config.SELECTION_RULES`)."""
+        judged = [entry for entry in self.history if selection_score(entry, rule) is not None]
+        if not judged:
+            raise ValueError(f"{self.path}: no trained epoch has been measured by the rule {rule!r} yet")
+        return min(judged, key=lambda entry: selection_score(entry, rule))
 
     @property
     def best_epoch(self) -> int:
