@@ -144,8 +144,15 @@ def interval(d: dict) -> str:
 def regulariser_markdown(runs: dict, report: dict) -> str:
     lines = ["| variant (FreNBRDF) | test PSNR | Δ PSNR vs default | test ΔE | Δ ΔE | OOD PSNR | Δ OOD PSNR | "
              "OOD ΔE | Δ OOD ΔE | best epoch (val loss) |", "|---" * 10 + "|"]
+    default = list(runs["frenbrdf"].values())
+    cells = ["frenbrdf (the default)", f"{np.mean([r['test']['validation loss']['psnr'] for r in default]):.2f}", "–",
+             f"{np.mean([r['test']['validation loss']['delta_e'] for r in default]):.2f}", "–"]
+    cells += ([f"{np.mean([r['ood']['psnr'] for r in default]):.2f}", "–",
+               f"{np.mean([r['ood']['delta_e'] for r in default]):.2f}", "–"] if "ood" in default[0] else ["–"] * 4)
+    lines.append("| " + " | ".join(cells + [", ".join(str(r["curves"]["best_epoch"]["validation loss"])
+                                                     for r in default)]) + " |")
     for variant in VARIANTS:
-        if variant in METHODS[1:] or variant not in runs:
+        if variant in METHODS or variant not in runs:
             continue
         test = paired(runs, "frenbrdf", variant, lambda r: r["test"]["validation loss"])
         ood = paired(runs, "frenbrdf", variant, lambda r: r["ood"]) if "ood" in next(iter(runs[variant].values())) else None

@@ -66,10 +66,69 @@ def test_rendering_chart_writes_png_csv_and_json(tmp_path):
 def test_eta_chart_pairs_each_eta_with_eta_zero_of_the_same_seed(tmp_path):
     chart = load_script("chart_eta")
     runs = [{"eta": eta, "seed": seed, "psnr": 25.0 + seed + (0.5 if eta else 0.0), "ssim": 0.9, "rmse": 0.05,
-             "lfre": 1.0 - eta, "ratio_first": eta * 10, "ratio_last": eta * 5}
+             "delta_e": 3.0, "lfre": 1.0 - eta, "edit_psnr": 24.0 + seed * (1 + eta), "edit_delta_e": 4.0,
+             "ratio_first": eta * 10, "ratio_last": eta * 5}
             for eta in (0.0, 0.05) for seed in (0, 1, 2)]
     rows = chart.summarise(runs, [0.0, 0.05], [0, 1, 2])
     assert rows[1]["psnr_vs_0"] == pytest.approx(0.5) and rows[0]["psnr_vs_0"] == 0
     assert rows[1]["psnr_sd"] == pytest.approx(1.0)  # seeds differ by 1 dB; the pairing removes it
+    assert rows[1]["psnr_vs_0_significant"] and not rows[1]["edit_psnr_vs_0_significant"]
+    table = chart.markdown(rows)
+    assert "**+0.50 [+0.50, +0.50]**" in table and "+0.05 [" in table  # significant in bold, editing not
     chart.draw(rows, tmp_path / "chart6.png", "test")
     assert (tmp_path / "chart6.png").stat().st_size > 10_000
+
+
+def test_curves_chart_compares_selection_rules_and_regularisers_paired_by_seed(tmp_path):
+    chart = load_script("chart_curves")
+
+    def run(seed, psnr, by_psnr=0.0):
+        curve = {"epoch": [1, 2, 3, 4], "seconds": [1.0, 2.0, 3.0, 4.0], "train_rec": [0.5, 0.4, 0.3, 0.2],
+                 "val_rec": [0.6, 0.5, 0.5, 0.55], "render_epoch": [2, 4], "render_seconds": [2.0, 4.0],
+                 "val_psnr": [20.0 + seed, 21.0 + seed], "val_delta_e": [5.0, 4.0],
+                 "best_epoch": {"validation loss": 2, "validation render PSNR": 4}}
+        test = {rule: {"psnr": psnr + seed + (by_psnr if rule == "validation render PSNR" else 0.0),
+                       "delta_e": 3.0} for rule in chart.RULES}
+        return {"curves": curve, "test": test, "ood": {"psnr": psnr - 5 + seed, "delta_e": 6.0}}
+
+    runs = {"frenbrdf": {s: run(s, 30.0, by_psnr=0.4) for s in range(3)},
+            "nbrdf": {s: run(s, 29.0, by_psnr=0.2) for s in range(3)},
+            "frenbrdf, weight decay 0.1": {s: run(s, 31.0) for s in range(3)}}
+    selection = {row["rule"]: row for row in chart.selection_rows(runs)}
+    assert selection["validation loss"]["psnr_vs_loss"] == 0
+    assert selection["validation render PSNR"]["psnr_vs_loss"] == pytest.approx(0.3)  # over both methods' 6 runs
+    assert selection["validation render PSNR"]["psnr_vs_loss_significant"]
+    table = chart.regulariser_markdown(runs, {"epochs": 4, "data": "merl", "seeds": [0, 1, 2], "ood": "bank",
+                                              "ood_materials": 40})
+    weight_decay = next(line for line in table.splitlines() if line.startswith("| frenbrdf, weight decay"))
+    assert "**+1.00 [+1.00, +1.00]**" in weight_decay  # +1 dB on every seed, in and out of distribution
+    chart.draw(runs, tmp_path / "chart7.png", "test")
+    assert (tmp_path / "chart7.png").stat().st_size > 10_000
+
+
+def test_lfre_floor_evaluates_the_exact_brdf_where_the_loss_evaluates_a_prediction(tmp_path):
+    import types
+
+    import torch
+
+    from frenbrdf.losses import FrequencyLossConfig
+    from frenbrdf.models.mapping import LogRelativeMapping
+    from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
+    from frenbrdf.scoring import FrequencyMetric
+
+    from .conftest import write_keras_h5
+
+    chart = load_script("lfre_floor")
+    rng = np.random.default_rng(0)
+    # Outputs x > 0 everywhere, so the clamp of exp(x) − 1 at 0 never acts and log(1 + f) gives x back.
+    layers = [(rng.normal(0, 0.3, (6, 8)), np.full(8, 0.5)), (rng.normal(0, 0.3, (8, 3)), np.full(3, 2.0))]
+    path = write_keras_h5(tmp_path / "toy.h5", layers)
+    metric = FrequencyMetric(FrequencyLossConfig(lmax=11, slices=(0, 45)))
+    model = types.SimpleNamespace(mapping=LogRelativeMapping(np.zeros(3), epsilon=1.0))  # log(1 + f)
+    exact = chart.exact_coefficients(metric, model, path)
+    with torch.no_grad():
+        predicted = metric.loss.predicted_coefficients(keras_nbrdf(load_keras_nbrdf(path)).params)[0].numpy()
+    np.testing.assert_allclose(exact, predicted, rtol=1e-4, atol=1e-4)
+    degrees = metric.loss.sht.plan(torch.float64).degrees_orders()[:, 0]
+    shares = chart.shares(exact ** 2, degrees)
+    assert sum(shares["bands"].values()) == pytest.approx(1) and sum(shares["slices"]) == pytest.approx(1)

@@ -333,3 +333,15 @@ def test_selection_by_render_psnr_needs_the_renders(toy_materials, tmp_path):
         tiny("nbrdf", toy_materials, tmp_path / "run", select="ssim")
     with pytest.raises(ValueError, match="patience"):
         tiny("nbrdf", toy_materials, tmp_path / "run", select="psnr", render_every=5, patience=2)
+
+
+def test_cli_trains_selecting_by_validation_renders(toy_materials, tmp_path, capsys):
+    out = tmp_path / "run"
+    config_file = tmp_path / "tiny.json"
+    config_file.write_text(json.dumps(to_dict(tiny("nbrdf", toy_materials, out, epochs=2, render_resolution=16))))
+    assert cli.main(["train", "--config", str(config_file), "--render-every", "1", "--select", "psnr", "--quiet",
+                     "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    run = Run(out)
+    assert run.config.select == "psnr" and summary["selected_by"] == "psnr"
+    assert summary["best_val_psnr"] == max(e["val_psnr"] for e in run.history if "val_psnr" in e)

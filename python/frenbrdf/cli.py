@@ -75,7 +75,8 @@ def _train(args: argparse.Namespace) -> int:
     for seed in args.seeds if args.seeds is not None else [args.seed]:
         out = str(Path(args.out) / f"seed-{seed}") if args.seeds is not None else args.out
         overrides = {"method": args.method, "data": args.data, "out": out, "epochs": args.epochs, "seed": seed,
-                     "device": args.device, "holdout": args.holdout}
+                     "device": args.device, "holdout": args.holdout, "render_every": args.render_every,
+                     "select": args.select}
         if args.config:
             cfg = load_config(args.config, **overrides)
         else:
@@ -84,11 +85,14 @@ def _train(args: argparse.Namespace) -> int:
         cfg.progress = not args.quiet
         run = train(cfg, resume=args.resume)
         summary = {"run_dir": str(run.path), "method": cfg.method, "seed": cfg.seed, "best_epoch": run.best_epoch,
-                   "best_val_rec": run.best_val, "seconds": round(run.seconds, 1)}
+                   "selected_by": cfg.select, "best_val_rec": run.best_val, "seconds": round(run.seconds, 1)}
+        if "val_psnr" in run.best:
+            summary["best_val_psnr"] = run.best["val_psnr"]
         if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
+            psnr = f", validation render PSNR {run.best['val_psnr']:.2f} dB" if "val_psnr" in run.best else ""
             print(json.dumps(summary, indent=2) if args.json else
-                  f"{cfg.method} (seed {cfg.seed}): best validation L_rec {run.best_val:.4g} at epoch "
-                  f"{run.best_epoch}; {run.seconds:.0f} s; run folder {run.path}")
+                  f"{cfg.method} (seed {cfg.seed}): best epoch {run.best_epoch} by validation {cfg.select}: "
+                  f"L_rec {run.best_val:.4g}{psnr}; {run.seconds:.0f} s; run folder {run.path}")
     return 0
 
 
@@ -239,6 +243,12 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--holdout", nargs="+", metavar="PATTERN",
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")
+    train.add_argument("--render-every", type=int, metavar="N",
+                       help="render the validation materials every N epochs and log their PSNR and ΔE (docs/charts: "
+                       "chart 7)")
+    train.add_argument("--select", choices=("loss", "psnr"),
+                       help="what picks best.pt: the validation loss (default) or the validation render PSNR "
+                       "(needs --render-every)")
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")

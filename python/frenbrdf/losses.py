@@ -160,8 +160,12 @@ class FrequencyLoss(nn.Module):
 
     def predicted_maps(self, params: list[torch.Tensor]) -> torch.Tensor:
         """The decoded NBRDFs on the SHT grid: ``(B, S, 3, nlat, nlon)``."""
-        batch, n_slices, config = params[0].shape[0], len(self.config.slices), self.config
-        values = nbrdf_forward(params, self.node_coords.expand(batch, -1, -1))
+        return self.maps_from_nodes(nbrdf_forward(params, self.node_coords.expand(params[0].shape[0], -1, -1)))
+
+    def maps_from_nodes(self, values: torch.Tensor) -> torch.Tensor:
+        """Mapped values at the (H, D) pairs of ``node_coords`` ``(B, S·nodes, 3)`` → maps on the SHT grid
+        ``(B, S, 3, nlat, nlon)``: φ_d + π copied by reciprocity, the southern rings by the extension."""
+        batch, n_slices, config = values.shape[0], len(self.config.slices), self.config
         north = values.reshape(batch, n_slices, self.n_north, config.nlon // 2, 3).permute(0, 1, 4, 2, 3)
         north = torch.cat([north, north], dim=-1)  # φ + π: reciprocity
         n_south = config.nlat - self.n_north

@@ -84,16 +84,23 @@ class FrequencyMetric:
 
     def __call__(self, model: Model, table: np.ndarray, material: np.ndarray | NBRDF) -> float:
         """L_fre of ``material``: a latent ``(latent,)`` of ``model``, or an NBRDF of one material."""
+        return float(spectral_distance(self.predicted_coefficients(model, material), self.true_coefficients(model, table)))
+
+    def true_coefficients(self, model: Model, table: np.ndarray) -> np.ndarray:
+        """The truth L_fre compares with: the table mapped as ``model`` maps, kNN-interpolated onto the SHT grid
+        and analysed, ``(S, 3, ncoeff)``."""
         flat = table.reshape(3, N_BINS)
         valid = np.all(flat >= 0, axis=0)
         with np.errstate(invalid="ignore"):
             mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
-        true = self.truth.coefficients(np.nan_to_num(mapped).T, valid)
-        with torch.no_grad():
-            params = (material.params if isinstance(material, NBRDF)
-                      else model.network.decoder(torch.from_numpy(material[None].astype(np.float32))))
-            predicted = self.loss.predicted_coefficients(params)[0].numpy()
-        return float(spectral_distance(predicted, true))
+        return self.truth.coefficients(np.nan_to_num(mapped).T, valid)
+
+    @torch.no_grad()
+    def predicted_coefficients(self, model: Model, material: np.ndarray | NBRDF) -> np.ndarray:
+        """The SH coefficients of a decoded latent or an NBRDF at the grid nodes, ``(S, 3, ncoeff)``."""
+        params = (material.params if isinstance(material, NBRDF)
+                  else model.network.decoder(torch.from_numpy(material[None].astype(np.float32))))
+        return self.loss.predicted_coefficients(params)[0].numpy()
 
 
 def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np.ndarray:
