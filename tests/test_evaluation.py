@@ -381,7 +381,10 @@ def test_a_method_evaluated_twice_is_named_alike_in_every_seed(tmp_path):
     so the over-seeds comparison pairs them: the folder above the method's for ``--seeds`` runs."""
     from frenbrdf.evaluation import run_label
 
-    assert {run_label(tmp_path / "bank-paper" / "frenbrdf" / f"seed-{s}") for s in (0, 1, 2)} == {"bank-paper"}
+    assert {run_label(tmp_path / "bank-paper" / "frenbrdf" / f"seed-{s}", "frenbrdf") for s in (0, 1, 2)} == {
+        "bank-paper"}
+    assert {run_label(tmp_path / "sweep" / f"eta-{eta}" / "seed-0", "frenbrdf") for eta in (0.05, 0.5)} == {
+        "eta-0.05", "eta-0.5"}  # a sweep's variants, each its own folder of seeds
     assert run_label(tmp_path / "runs" / "frenbrdf-paper") == "frenbrdf-paper"
 
 

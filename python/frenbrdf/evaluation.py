@@ -222,15 +222,22 @@ def load_runs(run_dirs, data: str | None = None, max_materials: int = 0, *, all_
     models = {}
     for run in runs:
         model = run.model()
-        models[model.method if model.method not in models else f"{model.method} ({run_label(run.path)})"] = model
+        label = model.method if model.method not in models else f"{model.method} ({run_label(run.path, run.method)})"
+        if label in models:
+            raise ValueError(f"two runs of {model.method} would both be called {label!r} ({run.path}); give them "
+                             "folders of different names")
+        models[label] = model
     return RunSet([run.path for run in runs], models, materials.data, materials.names, materials.files, materials)
 
 
-def run_label(path: Path) -> str:
-    """What tells a run apart from another of its method: its folder, or for a seed's folder
-    (``OUT/seed-S`` of ``frenbrdf train --seeds``) the folder above its method's, the same for every seed."""
+def run_label(path: Path, method: str = "") -> str:
+    """What tells a run apart from another of its method, the same for every seed: its folder, or for a
+    seed's folder (``OUT/seed-S`` of ``frenbrdf train --seeds``) the folder holding it (e.g. ``eta-0.05``),
+    or the one above when that is just the method's name (``bank-paper/frenbrdf/seed-S``)."""
     path = Path(path).resolve()
-    return path.parents[1].name if path.name.startswith("seed-") else path.name
+    if not path.name.startswith("seed-"):
+        return path.name
+    return path.parents[1].name if path.parent.name == method else path.parent.name
 
 
 def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig(),
