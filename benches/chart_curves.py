@@ -21,7 +21,7 @@ renders excluded) and, every few epochs, the validation render PSNR: the learnin
 
 Runs live in ``--work`` (reused when complete: a second call only measures). ``--train-only``
 trains the named ``--variants`` and stops, so that several processes can share the training.
-Writes ``<out>/chart7_curves.{png,csv,json}`` and ``chart7_regularisers.md``.
+Writes ``<out>/<name>.{png,csv,json}`` and ``<name>_regularisers.md`` (``--name``, default ``chart7_curves``).
 """
 
 from __future__ import annotations
@@ -209,6 +209,7 @@ def main() -> int:
     parser.add_argument("--resolution", type=int, default=128, help="render size of the test measurements")
     parser.add_argument("--work", type=Path, default=Path("bench-results/curves"), help="run folders (reused)")
     parser.add_argument("--out", type=Path, default=Path("docs/charts"))
+    parser.add_argument("--name", default="chart7_curves", help="file name of the chart, without suffix")
     parser.add_argument("--train-only", action="store_true", help="train the variants' runs and stop")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args()
@@ -239,8 +240,8 @@ def main() -> int:
               "rows": rows, "runs": runs}
     caption = (f"{args.data.name}, {args.epochs} epochs of the demo's batches, seeds {', '.join(map(str, args.seeds))}; "
                f"validation renders every {args.render_every} epochs; {time.perf_counter() - start:.0f} s to measure.")
-    save_chart(args.out, "chart7_curves", rows, report, lambda path: draw(runs, path, caption))
-    write_text(args.out / "chart7_regularisers.md", regulariser_markdown(runs, report))
+    save_chart(args.out, args.name, rows, report, lambda path: draw(runs, path, caption))
+    write_text(args.out / f"{args.name}_regularisers.md", regulariser_markdown(runs, report))
     for row in report["selection"]:
         print(f"{row['rule']}: test PSNR {row['psnr']:.2f} (vs validation loss {row['psnr_vs_loss']:+.2f} "
               f"[{row['psnr_vs_loss_low']}, {row['psnr_vs_loss_high']}])")
