@@ -67,13 +67,10 @@ def config(variant: str, seed: int, args):
     method, overrides = VARIANTS[variant]
     overrides = dict(overrides)
     augmentation = overrides.pop("augmentation", None)
-    cfg = config_for(method, training="demo", augmentation=augmentation, data=str(args.data), seed=seed,
-                     epochs=args.epochs, render_every=args.render_every, select="loss",
-                     out=str(args.work / folder_name(variant) / f"seed-{seed}"), progress=not args.quiet,
-                     **{key: value for key, value in overrides.items() if key != "model"})
-    if "model" in overrides:
-        cfg.model.encoder.dropout = overrides["model"]["encoder"]["dropout"]
-    return cfg
+    return config_for(method, training="demo", augmentation=augmentation, data=str(args.data), seed=seed,
+                      epochs=args.epochs, render_every=args.render_every, select="loss",
+                      out=str(args.work / folder_name(variant) / f"seed-{seed}"), progress=not args.quiet,
+                      **overrides)  # nested overrides (``model``) merge into the preset's
 
 
 def train_or_reuse(cfg) -> Run:

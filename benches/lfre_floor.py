@@ -31,6 +31,7 @@ import torch
 from scipy.stats import spearmanr
 
 from frenbrdf.atomic import save_json, write_text
+from frenbrdf.losses import spectral_distance
 from frenbrdf.merl import read_merl
 from frenbrdf.nbrdf_import import evaluate_keras_nbrdf, load_keras_nbrdf
 from frenbrdf.scoring import FrequencyMetric, reconstruction_rows
@@ -72,10 +73,8 @@ def measure(run: Run, weights_dir: Path, metric: FrequencyMetric, degrees: np.nd
         true = metric.true_coefficients(model, read_merl(path))
         predicted = metric.predicted_coefficients(model, latents[path.stem])
         exact = exact_coefficients(metric, model, weights_dir / f"{path.stem}.h5")
-        area = 4 * np.pi
-        row |= {"lfre": float(((predicted - true) ** 2).sum(-1).mean() / area),
-                "floor": float(((exact - true) ** 2).sum(-1).mean() / area),
-                "lfre_to_exact": float(((predicted - exact) ** 2).sum(-1).mean() / area),
+        row |= {"lfre": float(spectral_distance(predicted, true)), "floor": float(spectral_distance(exact, true)),
+                "lfre_to_exact": float(spectral_distance(predicted, exact)),
                 "model_shares": shares((predicted - true) ** 2, degrees),
                 "floor_shares": shares((exact - true) ** 2, degrees),
                 "truth_shares": shares(true ** 2, degrees)}

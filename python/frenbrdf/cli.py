@@ -9,7 +9,7 @@ import platform
 import sys
 from pathlib import Path
 
-from .presets import AUGMENTATION, TRAINING, method_names
+from .presets import AUGMENTATION, SELECTION_RULES, TRAINING, method_names
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -84,15 +84,16 @@ def _train(args: argparse.Namespace) -> int:
                              **{k: v for k, v in overrides.items() if v is not None and k != "method"})
         cfg.progress = not args.quiet
         run = train(cfg, resume=args.resume)
-        summary = {"run_dir": str(run.path), "method": cfg.method, "seed": cfg.seed, "best_epoch": run.best_epoch,
-                   "selected_by": cfg.select, "best_val_rec": run.best_val, "seconds": round(run.seconds, 1)}
-        if "val_psnr" in run.best:
-            summary["best_val_psnr"] = run.best["val_psnr"]
+        best = run.best  # the history entry of the selected epoch
+        summary = {"run_dir": str(run.path), "method": cfg.method, "seed": cfg.seed, "best_epoch": best["epoch"],
+                   "selected_by": cfg.select, "best_val_rec": best["val_rec"], "seconds": round(run.seconds, 1)}
+        if "val_psnr" in best:
+            summary["best_val_psnr"] = best["val_psnr"]
         if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
-            psnr = f", validation render PSNR {run.best['val_psnr']:.2f} dB" if "val_psnr" in run.best else ""
+            psnr = f", validation render PSNR {best['val_psnr']:.2f} dB" if "val_psnr" in best else ""
             print(json.dumps(summary, indent=2) if args.json else
-                  f"{cfg.method} (seed {cfg.seed}): best epoch {run.best_epoch} by validation {cfg.select}: "
-                  f"L_rec {run.best_val:.4g}{psnr}; {run.seconds:.0f} s; run folder {run.path}")
+                  f"{cfg.method} (seed {cfg.seed}): best epoch {best['epoch']} by validation {cfg.select}: "
+                  f"L_rec {best['val_rec']:.4g}{psnr}; {run.seconds:.0f} s; run folder {run.path}")
     return 0
 
 
@@ -246,7 +247,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--render-every", type=int, metavar="N",
                        help="render the validation materials every N epochs and log their PSNR and ΔE (docs/charts: "
                        "chart 7)")
-    train.add_argument("--select", choices=("loss", "psnr"),
+    train.add_argument("--select", choices=SELECTION_RULES,
                        help="what picks best.pt: the validation loss (default) or the validation render PSNR "
                        "(needs --render-every)")
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))

@@ -56,6 +56,11 @@ method: ``paper`` trains on the tables only (the paper's protocol), ``augmented`
 adds mixes and colour gains, ``procedural`` also analytic materials drawn afresh (docs/data.md)."""
 
 
+SELECTION_RULES: tuple[str, ...] = ("loss", "psnr")
+"""What can pick a run's best checkpoint (``TrainConfig.select``): the validation loss, or the validation
+render PSNR."""
+
+
 def augmentation_overrides(name: str) -> dict:
     """The ``augment`` values of an augmentation preset, its name recorded in them."""
     if name not in AUGMENTATION:

@@ -109,19 +109,27 @@ def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np
     return rng.choice(valid_bins, size=samples, replace=len(valid_bins) < samples)
 
 
+def bin_samples(table: np.ndarray, bins: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """A table's reflectance at ``bins`` ``(N, 3)`` and the bins' directions ``(ω_i, ω_o)``: what an encoder takes."""
+    return table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins)
+
+
+def encode_and_render(model: Model, values: np.ndarray, directions, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Encodes samples, decodes and renders the result: (z, display image)."""
+    z = model.encode(values, directions)
+    return z, tonemap(render_linear(model.decode(z)[0], scene))
+
+
 def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Encodes a table from the samples at ``bins``, decodes and renders it: (z, display image)."""
-    wi, wo = bin_directions(bins)
-    z = model.encode(table.reshape(3, N_BINS)[:, bins].T, (wi, wo))
-    return z, tonemap(render_linear(model.decode(z)[0], scene))
+    return encode_and_render(model, *bin_samples(table, bins), scene)
 
 
 def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene,
                            config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
     """Encodes a table from the samples at ``bins`` and refines on them (:func:`frenbrdf.reconstruct.reconstruct`),
     renders the result: (reconstruction, display image, seconds of the refinement stages, beyond encoding)."""
-    wi, wo = bin_directions(bins)
-    result = refine_samples(model, table.reshape(3, N_BINS)[:, bins].T, (wi, wo), refine=config)
+    result = refine_samples(model, *bin_samples(table, bins), refine=config)
     seconds = sum(result.timings.get(stage, 0.0) for stage in STAGES if stage != "encode")
     return result, tonemap(render_linear(result.nbrdf, scene)), seconds
 
@@ -141,6 +149,7 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
     refinement = dataclasses.replace(refine_config(refine), seed=seed)
     rng = np.random.default_rng(seed)
     scene = Scene(resolution=resolution)
+    mask = material_mask(scene)
     if frequency_metric is None:
         frequency_metric = FrequencyMetric()
     rows = []
@@ -150,16 +159,42 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
         bins = sample_bins(table, rng, samples)
         if refine == "none":
             z, image = reconstruct(model, table, bins, scene)
+            decoded = z  # what L_fre measures: the latent, or the refined NBRDF itself
         else:
             result, image, _ = refined_reconstruction(model, table, bins, scene, refinement)
-            z = result.nbrdf if refinement.weight_steps else result.z
-        metrics = image_metrics(tonemap(render_linear(table, scene)), image, material_mask(scene))
+            z, decoded = result.z, (result.nbrdf if refinement.weight_steps else result.z)
+        metrics = image_metrics(tonemap(render_linear(table, scene)), image, mask)
         if frequency_metric is not False:
-            metrics["lfre"] = frequency_metric(model, table, z)
+            metrics["lfre"] = frequency_metric(model, table, decoded)
         rows.append({"material": path.stem, **metrics})
         if latents is not None:
-            latents[path.stem] = result.z if refine != "none" else z
+            latents[path.stem] = z
     return rows
+
+
+class ScoringSet:
+    """MERL files read once, to score many models on (training's validation renders, every few epochs).
+
+    Each material keeps the encoder's samples, drawn from ``seed`` as :func:`reconstruction_rows` draws
+    them, and the display render of its true table; the tables themselves are not kept (no L_fre).
+    :meth:`mean_metrics` then costs only the models' encode, decode and render.
+    """
+
+    def __init__(self, files, *, samples: int = 4000, resolution: int = 64, seed: int = 0):
+        rng = np.random.default_rng(seed)
+        self.scene = Scene(resolution=resolution)
+        self.mask = material_mask(self.scene)
+        self.materials = []
+        for path in files:
+            table = read_merl(path)
+            self.materials.append((bin_samples(table, sample_bins(table, rng, samples)),
+                                   tonemap(render_linear(table, self.scene))))
+
+    def mean_metrics(self, model: Model) -> dict[str, float]:
+        """RMSE, PSNR, SSIM and ΔE of ``model``'s encoder-only reconstructions, averaged over the materials."""
+        rows = [image_metrics(truth, encode_and_render(model, values, directions, self.scene)[1], self.mask)
+                for (values, directions), truth in self.materials]
+        return {key: float(np.mean([row[key] for row in rows])) for key in rows[0]}
 
 
 def edit_metrics(model: Model, z_a: np.ndarray, z_b: np.ndarray, truth_a: np.ndarray, truth_b: np.ndarray, t: float,

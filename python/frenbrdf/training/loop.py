@@ -29,7 +29,8 @@ from ..data import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
 from ..losses import FrequencyLoss
 from ..models.autoencoder import AutoEncoder, Model
-from ..scoring import reconstruction_rows
+from ..presets import SELECTION_RULES
+from ..scoring import ScoringSet
 from .augment import BatchDrawer
 from .config import TrainConfig, selection_score
 from .prepared import Distributed, PreparedData, prepare, select_device
@@ -77,7 +78,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
     generator = torch.Generator().manual_seed(cfg.seed)
     history: list[dict] = []
     # The best epoch by each rule measured (best.pt holds cfg.select's pick): score, lower is better.
-    bests = {rule: {"epoch": -1, "val": math.inf} for rule in (("loss", "psnr") if cfg.render_every else ("loss",))}
+    bests = {rule: {"epoch": -1, "val": math.inf} for rule in (SELECTION_RULES if cfg.render_every else ("loss",))}
     first_epoch = 0
     if checkpoint is not None:
         network.load_state_dict(checkpoint["model"])
@@ -96,7 +97,9 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
     if not history:  # the untrained model's validation loss: the baseline every epoch improves on
         initial = evaluate_split(network, frequency, cfg, data, data.validation, device)
         history.append({"epoch": -1, **{f"val_{k}": v for k, v in initial.items()}})
-    validation_files = [files[name] for name in split.val]
+    # Read and rendered once; each render_every epochs then costs only the model's own renders.
+    validation_renders = (ScoringSet([files[name] for name in split.val], resolution=cfg.render_resolution,
+                                     seed=cfg.seed) if cfg.render_every else None)
     # Training wall time, carried over a resume; the validation renders are measurement, not training.
     clock_start, render_seconds = time.perf_counter(), 0.0
     seconds_before = history[-1].get("seconds", 0.0)
@@ -133,7 +136,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
                  **{f"val_{k}": v for k, v in validation.items()}}
         if cfg.render_every and ((epoch + 1) % cfg.render_every == 0 or epoch == cfg.epochs - 1):
             render_start = time.perf_counter()
-            entry.update(render_validation(network, data, cfg, validation_files))
+            entry.update(render_validation(network, data, cfg, validation_renders))
             render_seconds += time.perf_counter() - render_start
         entry["seconds"] = seconds_before + time.perf_counter() - clock_start - render_seconds
         history.append(entry)
@@ -158,16 +161,12 @@ def best_checkpoint(rule: str, cfg: TrainConfig) -> str:
     return "best.pt" if rule == cfg.select else f"best-{rule}.pt"
 
 
-def render_validation(network, data: PreparedData, cfg: TrainConfig, files) -> dict:
+def render_validation(network, data: PreparedData, cfg: TrainConfig, materials: ScoringSet) -> dict:
     """Mean render PSNR and ΔE of the validation materials as ``frenbrdf evaluate`` measures them
-    (:func:`frenbrdf.scoring.reconstruction_rows`: 4000 samples each, drawn from the run's seed, the same
-    every time)."""
+    (4000 samples each, drawn from the run's seed, the same every time)."""
     on_cpu = network if next(network.parameters()).device.type == "cpu" else copy.deepcopy(network).cpu()
-    model = Model(on_cpu, data.mapping, cfg.model, cfg.method)  # puts the network in eval mode
-    rows = reconstruction_rows(model, files, resolution=cfg.render_resolution, seed=cfg.seed,
-                               frequency_metric=False, progress=False)
-    return {"val_psnr": sum(r["psnr"] for r in rows) / len(rows),
-            "val_delta_e": sum(r["delta_e"] for r in rows) / len(rows)}
+    metrics = materials.mean_metrics(Model(on_cpu, data.mapping, cfg.model, cfg.method))  # eval mode
+    return {"val_psnr": metrics["psnr"], "val_delta_e": metrics["delta_e"]}
 
 
 def make_optimizer(network: torch.nn.Module, cfg: TrainConfig) -> torch.optim.Optimizer:

@@ -80,7 +80,7 @@ class Run:
         return self.best_by(self.config.select)
 
     def best_by(self, rule: str) -> dict:
-        """The history entry of the best epoch by ``rule`` (:data:`~frenbrdf.training.config.SELECTION_RULES`)."""
+        """The history entry of the best epoch by ``rule`` (:data:`frenbrdf.presets.SELECTION_RULES`)."""
         judged = [entry for entry in self.history if selection_score(entry, rule) is not None]
         if not judged:
             raise ValueError(f"{self.path}: no trained epoch has been measured by the rule {rule!r} yet")
