@@ -1,8 +1,10 @@
 """Helpers shared by the scripts of ``benches/``, and the conventions their charts follow.
 
-The scripts run as ``python benches/NAME.py`` (``benches/`` is then ``sys.path[0]``) and
-are also loaded by path (``tests/test_charts.py``), so each puts its own folder on
-``sys.path`` before ``import common``.
+The scripts live by kind: ``peers/`` (comparisons with other libraries), ``charts/`` (each
+chart and its sweeps), ``studies/`` (one-off measurements behind a doc); ``pretrained.py``
+packs the shipped model. They run as ``python benches/KIND/NAME.py`` and are also loaded by
+path (``tests/test_charts.py``), so each puts its own folder and ``benches/`` on ``sys.path``
+before ``import common``.
 
 Nothing heavy is imported here at module level: the SHT peer workers import this module in
 processes that time other libraries, so frenbrdf (and with it torch) and matplotlib are
@@ -165,7 +167,7 @@ def material_folder(data: Path | None, scratch: str | os.PathLike, n: int = 16) 
     """``data``, or without it the first ``n`` materials of the default bank written into ``scratch``."""
     if data is not None:
         return Path(data)
-    from frenbrdf.synth import write_bank
+    from frenbrdf.data.synth import write_bank
 
     write_bank(scratch, n=n, seed=0, progress=False)
     return Path(scratch)
@@ -207,7 +209,7 @@ def pyplot():
 
 def save_figure(figure, path: str | os.PathLike, dpi: int = 100) -> None:
     """Writes a figure as a PNG atomically (:func:`frenbrdf.render.save_figure`) and closes it."""
-    from frenbrdf.render import save_figure as save
+    from frenbrdf.render.renderer import save_figure as save
 
     save(figure, path, dpi=dpi)
     pyplot().close(figure)
@@ -244,7 +246,7 @@ def save_chart(out_dir: str | os.PathLike, name: str, rows: list[dict], report: 
     out_dir
         Folder of the three files (made if missing).
     rows
-        The plotted numbers, one dict per CSV row (:func:`frenbrdf.atomic.save_csv`).
+        The plotted numbers, one dict per CSV row (:func:`frenbrdf.io.atomic.save_csv`).
     report
         Everything else worth keeping (settings, details, :func:`run_metadata`).
     draw
@@ -255,7 +257,7 @@ def save_chart(out_dir: str | os.PathLike, name: str, rows: list[dict], report: 
     dict
         The paths written, under ``"csv"``, ``"json"`` and ``"png"``.
     """
-    from frenbrdf.atomic import save_csv, save_json
+    from frenbrdf.io.atomic import save_csv, save_json
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

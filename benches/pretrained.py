@@ -1,4 +1,4 @@
-"""Regenerates the model shipped in the package (python/frenbrdf/pretrained/) and its card (docs/pretrained.md).
+"""Regenerates the model shipped in the package (python/frenbrdf/models/pretrained/) and its card (docs/pretrained.md).
 
     frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/
     frenbrdf synth bank/
@@ -7,8 +7,8 @@
 Trains one model (``frenbrdf train`` with ``--config``: any TrainConfig keys over the
 method's preset; ``data``, ``out`` and ``seed`` are set here) on the MERL files and the
 bank together (a folder of links to both), evaluates its held-out test split
-(:func:`frenbrdf.scoring.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
-material pixels, encoder only), packs it (:func:`frenbrdf.pretrained.pack_pretrained`:
+(:func:`frenbrdf.render.scoring.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
+material pixels, encoder only), packs it (:func:`frenbrdf.models.pretrained.pack_pretrained`:
 float16 weights, compact f_ref), measures what float16 costs (the same test split through
 the packed model), and writes the card (``card.json`` beside the files, ``docs/pretrained.md``).
 ``--dest`` and ``--card`` default to the package folder and docs/pretrained.md.
@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from frenbrdf import Model, Run, pretrained
-from frenbrdf.atomic import write_text
-from frenbrdf.data import list_materials
-from frenbrdf.scoring import reconstruction_rows
+from frenbrdf import Model, Run
+from frenbrdf.data.folders import list_materials
+from frenbrdf.io.atomic import write_text
+from frenbrdf.models import pretrained
+from frenbrdf.render.scoring import reconstruction_rows
 from frenbrdf.training import load_config, train
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benches/: `import common` also when loaded by path
@@ -70,7 +71,7 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
     linked_data(folders, work / "data")
     cfg = load_config(config_path, data=str(work / "data"), out=str(work / "run"), seed=seed)
     cfg.progress = progress
-    run = Run(cfg.out) if reuse and (Path(cfg.out) / "best.pt").exists() else train(cfg)
+    run = Run(cfg.out) if reuse and (Path(cfg.out) / "best.pt").exists() else train(cfg, overwrite=True)
     test = [work / "data" / f"{name}.binary" for name in sorted(run.split.test)]
     held_out = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, progress=progress)
     refined = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, refine="latent",
@@ -98,7 +99,7 @@ def card_markdown(card: dict) -> str:
     return f"""# The pretrained model (version {card['version']})
 
 `frenbrdf reconstruct INPUT --out DIR` and `frenbrdf.Model.pretrained()` load the model
-packed in `python/frenbrdf/pretrained/` ({sum(card['bytes'].values()) / 1e6:.2f} MB:
+packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1e6:.2f} MB:
 {', '.join(f'`{k}` {v / 1e6:.2f} MB' for k, v in card['bytes'].items())}).
 
 - **Data**: {', '.join(f'`{d}`' for d in card['data'])}: {card['materials']['train']} training,

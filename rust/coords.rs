@@ -23,7 +23,7 @@ fn norm(v: Vec3) -> f64 {
 /// `v / |v|`, scaled first by its largest component so that tiny or huge vectors
 /// neither underflow nor overflow.
 #[inline]
-fn normalize(v: Vec3) -> Vec3 {
+pub(crate) fn normalize(v: Vec3) -> Vec3 {
     let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
     let u = [v[0] / largest, v[1] / largest, v[2] / largest];
     let length = norm(u);

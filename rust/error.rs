@@ -18,6 +18,11 @@ pub enum Error {
     #[error("{path}: {message}")]
     MerlFormat { path: PathBuf, message: String },
 
+    /// A file does not follow the RGL `.bsdf` (`tensor_file`) format, or describes a
+    /// material this crate cannot evaluate.
+    #[error("{path}: {message}")]
+    BsdfFormat { path: PathBuf, message: String },
+
     /// A caller passed an argument outside the function's domain.
     #[error("{0}")]
     InvalidArgument(String),
@@ -35,6 +40,13 @@ impl Error {
 
     pub(crate) fn merl_format(path: &Path, message: impl Into<String>) -> Self {
         Error::MerlFormat {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn bsdf_format(path: &Path, message: impl Into<String>) -> Self {
+        Error::BsdfFormat {
             path: path.to_path_buf(),
             message: message.into(),
         }

@@ -45,7 +45,7 @@ def mitsuba_jit():
     """
     if not HAVE_MITSUBA:
         pytest.skip("mitsuba is not installed (pip install mitsuba)")
-    from frenbrdf import mitsuba as fm
+    from frenbrdf.render import mitsuba as fm
 
     if fm.register() == fm.FALLBACK_VARIANT:
         if fm.packaged_libllvm() is None:
@@ -60,8 +60,9 @@ def mitsuba_jit():
 
 def bench_module(name: str):
     """A module of benches/ (not part of the installed package), imported as the scripts import it."""
-    if str(BENCHES) not in sys.path:
-        sys.path.insert(0, str(BENCHES))
+    for folder in (BENCHES, *(path for path in sorted(BENCHES.iterdir()) if path.is_dir())):
+        if str(folder) not in sys.path:
+            sys.path.insert(0, str(folder))
     return importlib.import_module(name)
 
 
@@ -96,7 +97,7 @@ def unit_vectors(rng: np.random.Generator, n: int) -> np.ndarray:
 def toy_table(rng: np.random.Generator) -> np.ndarray:
     """A Lambert + normalised Blinn–Phong material at the MERL bins, missing bins marked."""
     import frenbrdf
-    from frenbrdf.merl import CHANNEL_SCALES
+    from frenbrdf.io.merl import CHANNEL_SCALES
 
     grid = frenbrdf.merl_bin_grid()
     diffuse, specular, exponent = rng.uniform(0.05, 0.8, 3), rng.uniform(0.05, 1.0), rng.uniform(10, 300)

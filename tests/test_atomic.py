@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from frenbrdf.atomic import atomic_path, save_csv, save_json, write_text
+from frenbrdf.io.atomic import atomic_path, save_csv, save_json, write_text
 
 
 def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):

@@ -8,11 +8,18 @@ import numpy as np
 import pytest
 import torch
 
-from frenbrdf import analytic, presets, synth
-from frenbrdf.data import ALBEDO_INCIDENT_DEGREES, list_materials, mapped_bank, max_directional_albedo, split_materials
-from frenbrdf.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
-from frenbrdf.merl import merl_above_horizon
+from frenbrdf import presets
+from frenbrdf.data import analytic, synth
+from frenbrdf.data.folders import (
+    ALBEDO_INCIDENT_DEGREES,
+    list_materials,
+    mapped_bank,
+    max_directional_albedo,
+    split_materials,
+)
+from frenbrdf.io.merl import merl_above_horizon
 from frenbrdf.models.autoencoder import AutoEncoder
+from frenbrdf.models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.training import config_for, loss_terms, prepare
 from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, draw_gains

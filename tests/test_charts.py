@@ -16,8 +16,9 @@ from .conftest import BENCHES, mitsuba_jit, tiny
 
 
 def load_script(name: str):
-    """A script of benches/ as a module (benches/ is not a package)."""
-    spec = importlib.util.spec_from_file_location(name, BENCHES / f"{name}.py")
+    """A script of benches/ (any of its folders) as a module (benches/ is not a package)."""
+    (path,) = BENCHES.glob(f"**/{name}.py")
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -46,7 +47,7 @@ def test_samples_chart_writes_png_csv_and_json(toy_materials, tmp_path):
 
 def test_rendering_chart_writes_png_csv_and_json(tmp_path):
     mitsuba_jit()
-    from frenbrdf.synth import METALS, AnalyticMaterial, merl_table
+    from frenbrdf.data.synth import METALS, AnalyticMaterial, merl_table
 
     chart = load_script("chart_rendering")
     n, k = METALS["gold"]
@@ -111,10 +112,10 @@ def test_lfre_floor_evaluates_the_exact_brdf_where_the_loss_evaluates_a_predicti
 
     import torch
 
-    from frenbrdf.losses import FrequencyLossConfig
+    from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf
+    from frenbrdf.models.losses import FrequencyLossConfig
     from frenbrdf.models.mapping import LogRelativeMapping
-    from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
-    from frenbrdf.scoring import FrequencyMetric
+    from frenbrdf.render.scoring import FrequencyMetric
 
     from .conftest import write_keras_h5
 

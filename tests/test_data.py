@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import frenbrdf
-from frenbrdf.data import Split, list_materials, mapped_bank, read_tables, split_materials
-from frenbrdf.merl import N_BINS
+from frenbrdf.data.folders import Split, list_materials, mapped_bank, read_tables, split_materials
+from frenbrdf.io.merl import N_BINS
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.models.nbrdf import bin_geometry
 

@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 
 from frenbrdf import cli
-from frenbrdf.evaluation import (
+from frenbrdf.data.synth import write_bank
+from frenbrdf.render.figures import rendered_materials
+from frenbrdf.render.renderer import Scene, material_mask
+from frenbrdf.study.evaluation import (
     ROWS,
     EvaluateConfig,
     edit_pairs,
@@ -19,9 +22,6 @@ from frenbrdf.evaluation import (
     evaluation_set,
     image_metrics,
 )
-from frenbrdf.figures import rendered_materials
-from frenbrdf.render import Scene, material_mask
-from frenbrdf.synth import write_bank
 from frenbrdf.training import Run, train
 
 from .conftest import tiny
@@ -154,11 +154,11 @@ def test_refined_rows_appear_only_when_refinement_runs(tiny_runs, tmp_path):
 
 
 def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp_path):
-    """Each refined row is :func:`frenbrdf.reconstruct.reconstruct` run on the bins the encoder was given."""
-    from frenbrdf.merl import N_BINS, read_merl
-    from frenbrdf.reconstruct import BUDGETS, reconstruct
-    from frenbrdf.render import render_linear, tonemap
-    from frenbrdf.scoring import bin_directions, sample_bins
+    """Each refined row is :func:`frenbrdf.models.reconstruct.reconstruct` run on the bins the encoder was given."""
+    from frenbrdf.io.merl import N_BINS, read_merl
+    from frenbrdf.models.reconstruct import BUDGETS, reconstruct
+    from frenbrdf.render.renderer import render_linear, tonemap
+    from frenbrdf.render.scoring import bin_directions, sample_bins
 
     config = EvaluateConfig(samples=250, edits=3, resolution=32, edit_resolution=16, progress=False, seed=3,
                             refine="full")
@@ -182,8 +182,8 @@ def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp
 
 def test_frequency_metric_measures_a_latent_and_an_nbrdf_alike(tiny_runs, toy_materials):
     """A refined NBRDF is no decoder output; L_fre of the NBRDF decoded from z is L_fre of z."""
-    from frenbrdf.merl import read_merl
-    from frenbrdf.scoring import FrequencyMetric
+    from frenbrdf.io.merl import read_merl
+    from frenbrdf.render.scoring import FrequencyMetric
 
     model = Run(tiny_runs[0]).model()
     table = read_merl(sorted(toy_materials.glob("*.binary"))[0])
@@ -379,7 +379,7 @@ def test_cli_evaluate_all(tiny_runs, other_bank, tmp_path, capsys):
 def test_a_method_evaluated_twice_is_named_alike_in_every_seed(tmp_path):
     """Two runs of one method (e.g. trained with and without augmentation) keep one name across seeds,
     so the over-seeds comparison pairs them: the folder above the method's for ``--seeds`` runs."""
-    from frenbrdf.evaluation import run_label
+    from frenbrdf.study.evaluation import run_label
 
     assert {run_label(tmp_path / "bank-paper" / "frenbrdf" / f"seed-{s}", "frenbrdf") for s in (0, 1, 2)} == {
         "bank-paper"}
@@ -389,9 +389,9 @@ def test_a_method_evaluated_twice_is_named_alike_in_every_seed(tmp_path):
 
 
 def test_an_edit_at_its_ends_is_the_reconstruction_of_that_material(tiny_runs, toy_materials):
-    from frenbrdf.merl import read_merl
-    from frenbrdf.render import render_linear
-    from frenbrdf.scoring import edit_metrics, reconstruction_rows
+    from frenbrdf.io.merl import read_merl
+    from frenbrdf.render.renderer import render_linear
+    from frenbrdf.render.scoring import edit_metrics, reconstruction_rows
 
     model = Run(tiny_runs[0]).model()
     files = sorted(toy_materials.glob("*.binary"))[:2]

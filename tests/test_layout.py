@@ -1,4 +1,5 @@
-"""The package's structure: no import circles, rooms that fit in one reading, research outside the wheel."""
+"""The package's structure: layer folders that import only downwards, no import circles, rooms that fit in one
+reading, research outside the wheel (docs/architecture.md draws the layers)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,21 @@ import frenbrdf
 
 PACKAGE = Path(frenbrdf.__file__).resolve().parent
 MAX_LINES = 500
+
+#: The package's layers, bottom first, by the top-level module or folder each holds. A module may import
+#: only from its own layer or the ones below it; "" is the package's face, ``frenbrdf/__init__.py``.
+LAYERS = [
+    {"exceptions", "configs", "presets"},  # foundations: the standard library, numpy, torch
+    {"numerics"},  # thin wrappers over the Rust core
+    {"io"},  # raw file formats, checkpoints, atomic writes
+    {"models"},  # the networks, their losses, test-time refinement, the shipped model
+    {"data"},  # material folders and splits, analytic families, material files, fitting
+    {"render"},  # the metric renderer, lights, figures, image scores, mitsuba/
+    {"training"},
+    {"study"},  # evaluation, tables, statistics, variants, timing, selection
+    {"material"},  # a user's material: measurement files in, the reconstruct folder out
+    {"cli", "demo", ""},  # commands and the public face
+]
 
 
 def _module_name(path: Path) -> str:
@@ -32,8 +48,9 @@ def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
             if node.level:
                 anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
                 base = ".".join(anchor + ([node.module] if node.module else []))
-            # ``from pkg import name`` imports the submodule pkg.name when there is one.
-            targets = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in modules else base for alias in node.names]
+            # ``from pkg import name`` imports the submodule pkg.name when there is one; ``_native`` is the Rust core.
+            targets = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in modules or alias.name == "_native" else base
+                       for alias in node.names]
         else:
             continue
         found.update(target for target in targets if target in modules and target != name)
@@ -78,9 +95,34 @@ def test_no_module_imports_one_that_imports_it_back():
     assert _cycle(graph) is None, " -> ".join(_cycle(graph))
 
 
+def _layer(module: str) -> int:
+    top = module.split(".")[1] if "." in module else ""
+    (index,) = [i for i, members in enumerate(LAYERS) if top in members]
+    return index
+
+
+def test_every_top_level_module_and_folder_has_a_layer():
+    tops = {path.relative_to(PACKAGE).parts[0].removesuffix(".py") for path in PACKAGE.rglob("*.py")}
+    tops.discard("__init__")
+    placed = set().union(*LAYERS)
+    assert tops <= placed, f"top-level modules or folders in no layer of LAYERS: {sorted(tops - placed)}"
+
+
+def test_no_import_runs_back_up_a_layer():
+    modules = _modules()
+    upward = [f"{name} -> {target}" for name, path in modules.items() for target in _imports(name, path, modules)
+              if _layer(target) > _layer(name)]
+    assert not upward, "imports from a lower layer to a higher one:\n" + "\n".join(sorted(upward))
+
+
+def test_the_layer_check_sees_an_upward_import():
+    assert _layer("frenbrdf.io.merl") < _layer("frenbrdf.models.nbrdf") < _layer("frenbrdf.cli")
+    assert _layer("frenbrdf.render.mitsuba.bsdf") == _layer("frenbrdf.render.scoring")
+
+
 def test_the_import_graph_sees_known_edges():
     modules = _modules()
-    assert "frenbrdf.checkpoints" in _imports("frenbrdf.models.autoencoder", modules["frenbrdf.models.autoencoder"],
+    assert "frenbrdf.io.checkpoints" in _imports("frenbrdf.models.autoencoder", modules["frenbrdf.models.autoencoder"],
                                               modules)
     assert "frenbrdf.training.run" in _imports("frenbrdf.training.loop", modules["frenbrdf.training.loop"], modules)
 

@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 import torch
 
-from frenbrdf.data import list_materials, split_materials
-from frenbrdf.losses import (
+from frenbrdf.data.folders import list_materials, split_materials
+from frenbrdf.io.merl import merl_above_horizon
+from frenbrdf.models import NBRDFConfig, nbrdf_forward
+from frenbrdf.models.losses import (
     FrequencyLoss,
     FrequencyLossConfig,
     FrequencyTruth,
@@ -17,8 +19,6 @@ from frenbrdf.losses import (
     spectral_distance,
     weight_penalty,
 )
-from frenbrdf.merl import merl_above_horizon
-from frenbrdf.models import NBRDFConfig, nbrdf_forward
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import bin_geometry
 from frenbrdf.training import prepare

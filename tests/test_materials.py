@@ -1,4 +1,4 @@
-"""One loader for material files (frenbrdf.materials), and `frenbrdf render` of every format."""
+"""One loader for material files (frenbrdf.data.materials), and `frenbrdf render` of every format."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ import pytest
 
 import frenbrdf
 from frenbrdf.cli import main
-from frenbrdf.fitting import save_nbrdf
-from frenbrdf.materials import load_material_file
+from frenbrdf.data.fitting import save_nbrdf
+from frenbrdf.data.materials import load_material_file
+from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf
 from frenbrdf.models import NBRDF
 from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
-from frenbrdf.render import Scene, render
+from frenbrdf.render.renderer import Scene, render
 
 from .conftest import PUBLISHED, constant_table, needs_published, random_layers, random_nbrdf_params, write_keras_h5
 

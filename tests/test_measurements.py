@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import frenbrdf
-from frenbrdf.measurements import FORMS, MIN_SAMPLES, read_measurements
+from frenbrdf.material.measurements import FORMS, MIN_SAMPLES, read_measurements
 
 from .conftest import toy_table
 

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 import frenbrdf
 from frenbrdf import MerlFormatError
-from frenbrdf.merl import CHANNEL_SCALES, FILE_BYTES, SHAPE
+from frenbrdf.io.merl import CHANNEL_SCALES, FILE_BYTES, SHAPE
 
 HEADER = struct.pack("<3i", 90, 90, 180)
 

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import frenbrdf
-from frenbrdf.merl import SHAPE
+from frenbrdf.io.merl import SHAPE
 
 HALF_PI = np.pi / 2
 

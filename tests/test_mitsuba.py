@@ -19,11 +19,11 @@ import pytest
 import torch
 
 import frenbrdf
-from frenbrdf import mitsuba as fm
-from frenbrdf.analytic import METALS, AnalyticMaterial, merl_table
-from frenbrdf.fitting import save_nbrdf
+from frenbrdf.data.analytic import METALS, AnalyticMaterial, merl_table
+from frenbrdf.data.fitting import save_nbrdf
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, fold_difference
+from frenbrdf.render import mitsuba as fm
 
 from .conftest import HAVE_MITSUBA, mitsuba_jit
 
@@ -147,8 +147,8 @@ def test_nbrdf_eval_uses_the_training_convention_phi_h_zero(mi):
 
 
 def test_keras_h5_file_eval_equals_the_reference(mi, tmp_path):
-    """A Keras .h5 read by the plugin (frenbrdf.materials) evaluates as its NBRDF (the reference forward pass)."""
-    from frenbrdf.nbrdf_import import keras_nbrdf
+    """A Keras .h5 read by the plugin (frenbrdf.data.materials) evaluates as its NBRDF (the reference forward pass)."""
+    from frenbrdf.data.nbrdf_import import keras_nbrdf
 
     from .conftest import random_layers, write_keras_h5
 
@@ -383,7 +383,7 @@ def test_scalar_fallback_when_llvm_is_unusable(tmp_path):
 
 def test_packaged_llvm_is_chosen_only_when_the_system_has_none(monkeypatch):
     """DRJIT_LIBLLVM_PATH → the pip package's libLLVM only when unset, drjit not yet imported and the system's fails."""
-    from frenbrdf.mitsuba import variants
+    from frenbrdf.render.mitsuba import variants
 
     system_works = {"value": True}
     monkeypatch.setattr(variants, "packaged_libllvm", lambda: "/site/lib/libLLVM.so.19.1")
@@ -413,7 +413,7 @@ def test_packaged_libllvm_runs_the_llvm_variant():
     script = textwrap.dedent("""
         import numpy as np, drjit as dr
         from frenbrdf import mitsuba as fm
-        from frenbrdf.analytic import AnalyticMaterial, merl_table
+        from frenbrdf.data.analytic import AnalyticMaterial, merl_table
         assert fm.register() == "llvm_ad_rgb"
         image = fm.render_material(merl_table(AnalyticMaterial("grey", diffuse=(0.5, 0.5, 0.5))), spp=2, resolution=8)
         assert np.all(np.isfinite(image)) and image[4, 4].max() > 0

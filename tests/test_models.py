@@ -151,7 +151,7 @@ def test_decoded_materials_are_isotropic():
 
 def test_nbrdf_coordinates_at_the_bins_are_the_training_inputs():
     from frenbrdf.models.nbrdf import bin_geometry
-    from frenbrdf.scoring import bin_directions
+    from frenbrdf.render.scoring import bin_directions
 
     bins = np.random.default_rng(0).choice(90 * 90 * 180, 2000)
     wi, wo = bin_directions(bins)

@@ -10,9 +10,15 @@ import numpy as np
 import pytest
 
 import frenbrdf
-from frenbrdf.merl import CHANNEL_SCALES, SHAPE
+from frenbrdf.data.nbrdf_import import (
+    evaluate_keras_nbrdf,
+    import_nbrdf,
+    keras_nbrdf,
+    load_keras_nbrdf,
+    nbrdf_merl_table,
+)
+from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models.nbrdf import nbrdf_coordinates
-from frenbrdf.nbrdf_import import evaluate_keras_nbrdf, import_nbrdf, keras_nbrdf, load_keras_nbrdf, nbrdf_merl_table
 
 from .conftest import PUBLISHED, PUBLISHED_DIR, needs_published, random_layers, write_keras_h5
 

@@ -11,11 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import frenbrdf
+from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf
 from frenbrdf.models import ModelConfig
 from frenbrdf.models.autoencoder import AutoEncoder, Model
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import fold_difference, nbrdf_coordinates
-from frenbrdf.nbrdf_import import keras_nbrdf, load_keras_nbrdf
 
 from .conftest import PUBLISHED, needs_published, random_layers
 

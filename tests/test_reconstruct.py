@@ -9,9 +9,10 @@ import pytest
 import torch
 
 import frenbrdf
-from frenbrdf import cli, pretrained
-from frenbrdf.measurements import read_measurements
-from frenbrdf.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
+from frenbrdf import cli
+from frenbrdf.material.measurements import read_measurements
+from frenbrdf.models import pretrained
+from frenbrdf.models.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
 
 from .conftest import bench_module, tiny
 
@@ -143,7 +144,7 @@ def test_a_failing_input_leaves_no_output(run_dir, tmp_path, capsys):
 
 
 def test_a_failure_while_writing_leaves_no_output(run_dir, toy_materials, tmp_path, monkeypatch):
-    from frenbrdf import reconstruct_outputs
+    from frenbrdf.material import outputs as reconstruct_outputs
 
     def broken(path, image):
         raise OSError("disk full")
@@ -244,9 +245,9 @@ SHIPPED_QUALITY = {"none": (25.0, 5.0), "latent": (33.0, 2.0), "full": (38.0, 1.
 @pytest.mark.pretrained
 def test_pretrained_model_ships_and_reconstructs(tmp_path):
     """The packaged model loads, is the documented version and gives an unseen purple plastic back purple."""
-    from frenbrdf.evaluation import image_metrics
-    from frenbrdf.render import Scene, material_mask, render
-    from frenbrdf.synth import write_bank
+    from frenbrdf.data.synth import write_bank
+    from frenbrdf.render.renderer import Scene, material_mask, render
+    from frenbrdf.study.evaluation import image_metrics
 
     missing = [name for name in (pretrained.MODEL_FILE, pretrained.MAPPING_FILE, pretrained.CARD_FILE)
                if not (pretrained.PACKAGE_DIR / name).exists()]

@@ -7,7 +7,7 @@ import pytest
 
 from frenbrdf.models import NBRDF
 from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.render import Scene, environment_radiance, render, render_linear, save_png, tonemap
+from frenbrdf.render.renderer import Scene, environment_radiance, render, render_linear, save_png, tonemap
 
 from .conftest import constant_table, random_nbrdf_params
 

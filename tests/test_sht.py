@@ -8,8 +8,8 @@ import torch
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from frenbrdf.sht import SHT
-from frenbrdf.sht_torch import SHTAnalysis, SHTAnalysisFunction
+from frenbrdf.numerics.sht import SHT
+from frenbrdf.numerics.sht_torch import SHTAnalysis, SHTAnalysisFunction
 
 GRIDS = [("gauss", 0), ("equiangular", 1)]  # (grid, rings beyond lmax + 1 that it needs)
 

@@ -10,13 +10,13 @@ import pytest
 import torch
 
 import frenbrdf
-from frenbrdf import synth
-from frenbrdf.data import mapped_bank, read_tables, split_materials
-from frenbrdf.losses import FrequencyLossConfig, FrequencyTruth
-from frenbrdf.merl import CHANNEL_SCALES, SHAPE
+from frenbrdf.data import synth
+from frenbrdf.data.folders import mapped_bank, read_tables, split_materials
+from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models import NBRDF, NBRDFConfig
+from frenbrdf.models.losses import FrequencyLossConfig, FrequencyTruth
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
-from frenbrdf.render import Scene, render, render_linear
+from frenbrdf.render.renderer import Scene, render, render_linear
 from frenbrdf.training import train
 
 from .conftest import tiny, toy_table

@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from frenbrdf import cli
-from frenbrdf.losses import FrequencyLossConfig
-from frenbrdf.select import select_config
+from frenbrdf.models.losses import FrequencyLossConfig
+from frenbrdf.study.select import select_config
+from frenbrdf.study.variants import MeasureSettings, Variant, capacity_variants
 from frenbrdf.training import load_config
-from frenbrdf.variants import MeasureSettings, Variant, capacity_variants
 
 from .conftest import bench_module, tiny
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import frenbrdf
-from frenbrdf import synth
-from frenbrdf.merl import CHANNEL_SCALES, SHAPE
-from frenbrdf.synth import KIND_SHARES, KINDS, METALS, AnalyticMaterial
+from frenbrdf.data import synth
+from frenbrdf.data.synth import KIND_SHARES, KINDS, METALS, AnalyticMaterial
+from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 
 from .conftest import unit_vectors
 
@@ -333,7 +333,7 @@ def test_write_bank_writes_merl_files_and_a_manifest(tmp_path):
     assert paths == [out / f"{m.name}.binary" for m in bank]
     assert sorted(p.name for p in out.iterdir()) == sorted([*(p.name for p in paths), synth.MANIFEST_NAME])
     for path, material in zip(paths, bank):
-        assert path.stat().st_size == frenbrdf.merl.FILE_BYTES
+        assert path.stat().st_size == frenbrdf.io.merl.FILE_BYTES
         np.testing.assert_allclose(frenbrdf.read_merl(path), synth.merl_table(material), rtol=1e-15)
 
     manifest = json.loads((out / synth.MANIFEST_NAME).read_text())

@@ -14,11 +14,12 @@ import pytest
 import torch
 
 import frenbrdf
-from frenbrdf import checkpoints, cli, presets, training
-from frenbrdf.checkpoints import load as load_checkpoint
+from frenbrdf import cli, presets, training
 from frenbrdf.configs import to_dict
-from frenbrdf.data import list_materials, split_materials
-from frenbrdf.losses import LossConfig
+from frenbrdf.data.folders import list_materials, split_materials
+from frenbrdf.io import checkpoints
+from frenbrdf.io.checkpoints import load as load_checkpoint
+from frenbrdf.models.losses import LossConfig
 from frenbrdf.training import Run, TrainingDiverged, config_for, load_config, train
 
 from .conftest import tiny
@@ -318,7 +319,7 @@ def test_validation_renders_are_logged_and_pick_the_best_checkpoint(toy_material
     assert load_checkpoint(run.path / "best.pt")["epoch"] == by_psnr["epoch"]
     assert load_checkpoint(run.path / "best-loss.pt")["epoch"] == by_loss["epoch"]
     # The logged PSNR is what scoring the best checkpoint on the validation files gives.
-    from frenbrdf.scoring import reconstruction_rows
+    from frenbrdf.render.scoring import reconstruction_rows
 
     files = [toy_materials / f"{name}.binary" for name in run.split.val]
     rows = reconstruction_rows(run.model(), files, resolution=16, seed=cfg.seed, frequency_metric=False,

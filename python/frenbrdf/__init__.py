@@ -3,17 +3,12 @@
 The public API is re-exported here; ``frenbrdf._native`` is private.
 """
 
-from . import sht
+import importlib
+import sys
+
 from ._native import __version__
-from .coords import (
-    directions_to_rusinkiewicz,
-    half_diff_vectors,
-    rusinkiewicz_to_directions,
-    rusinkiewicz_to_half_diff,
-)
 from .exceptions import MerlFormatError
-from .knn import KnnInterpolator, knn_interpolate
-from .merl import (
+from .io.merl import (
     merl_above_horizon,
     merl_angles_to_bin,
     merl_bin_angles,
@@ -28,7 +23,27 @@ from .merl import (
     write_merl,
 )
 from .models import NBRDF, Model, interpolate
+from .numerics import sht, sht_torch
+from .numerics.coords import (
+    directions_to_rusinkiewicz,
+    half_diff_vectors,
+    rusinkiewicz_to_directions,
+    rusinkiewicz_to_half_diff,
+)
+from .numerics.knn import KnnInterpolator, knn_interpolate
 from .training import Run, TrainConfig, TrainResult, config_for, train
+
+# Module paths the README documented before the package had layer folders (docs/changelog.md).
+sys.modules[f"{__name__}.sht"] = sht
+sys.modules[f"{__name__}.sht_torch"] = sht_torch
+
+
+def __getattr__(name: str):
+    # ``frenbrdf.render.mitsuba`` imports Mitsuba 3, which takes seconds: load it on first use only.
+    if name == "mitsuba":
+        return importlib.import_module(".render.mitsuba", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "__version__",

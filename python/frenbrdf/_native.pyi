@@ -1,5 +1,8 @@
 """Type stubs for the private native module. Use the public API in `frenbrdf`."""
 
+import os
+from pathlib import Path
+
 import numpy as np
 import numpy.typing as npt
 
@@ -49,3 +52,46 @@ class ShtPlan:
     def analysis_adjoint(self, coeffs: npt.NDArray[np.floating]) -> npt.NDArray[np.floating]: ...
     def degrees_orders(self) -> I64: ...
     def rings(self) -> tuple[F64, F64]: ...
+
+# RGL measured BRDFs (`tensor_file` .bsdf, Dupuy & Jakob 2018)
+class BsdfMeasurement:
+    """A measured RGB BRDF of the RGL material database (an ``*_rgb.bsdf`` file), ready to evaluate."""
+
+    @staticmethod
+    def read(path: str | os.PathLike[str]) -> BsdfMeasurement:
+        """Reads and checks a ``.bsdf`` file.
+
+        Raises ``FileNotFoundError`` (and other ``OSError``) for the file system, and
+        ``frenbrdf.exceptions.BsdfFormatError`` for a malformed file or a spectral one
+        (only RGB files, with an ``rgb`` tensor, are supported).
+        """
+    def eval(self, wi: F64, wo: F64) -> F64:
+        """The BRDF at ``(n, 3)`` direction pairs (float64, C-contiguous, local frame with z the
+        normal; normalised here): ``(n, 3)`` RGB reflectance in 1/sr, not multiplied by cos θ_o,
+        negative measurements clamped to 0, and 0 where either direction is at or below the horizon.
+        Runs in parallel without the GIL.
+        """
+    @property
+    def path(self) -> Path:
+        """The file the measurement was read from."""
+    @property
+    def description(self) -> str:
+        """The file's ``description`` tensor ('' if it has none)."""
+    @property
+    def isotropic(self) -> bool:
+        """Whether the material is isotropic (at most two incident azimuths measured)."""
+    @property
+    def reduction(self) -> int:
+        """1, 2 or 4: an anisotropic measurement covers 2π / reduction of incident azimuths."""
+    @property
+    def jacobian(self) -> bool:
+        """Whether the stored RGB values are multiplied by D(m) / (4 σ(ω_i))."""
+    @property
+    def theta_i(self) -> F64:
+        """Incident elevations (radians) at which the material was measured."""
+    @property
+    def phi_i(self) -> F64:
+        """Incident azimuths (radians) at which the material was measured."""
+    @property
+    def fields(self) -> dict[str, tuple[str, tuple[int, ...]]]:
+        """Every tensor of the file: ``{name: (numpy dtype name, shape)}``."""

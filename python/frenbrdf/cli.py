@@ -9,6 +9,7 @@ import platform
 import sys
 from pathlib import Path
 
+from .exceptions import TrainingDiverged
 from .presets import AUGMENTATION, SELECTION_RULES, TRAINING, method_names
 
 
@@ -48,7 +49,7 @@ def _torch_version() -> str:
 
 
 def _synth(args: argparse.Namespace) -> int:
-    from .synth import write_bank
+    from .data.synth import write_bank
 
     paths = write_bank(args.out_dir, n=args.n, seed=args.seed, progress=not args.quiet)
     print(f"wrote {len(paths)} MERL files to {args.out_dir}")
@@ -56,7 +57,7 @@ def _synth(args: argparse.Namespace) -> int:
 
 
 def _import_nbrdf(args: argparse.Namespace) -> int:
-    from .nbrdf_import import import_nbrdf
+    from .data.nbrdf_import import import_nbrdf
 
     paths = import_nbrdf(args.weights, args.out_dir, progress=not args.quiet)
     print(f"wrote {len(paths)} MERL files to {args.out_dir}")
@@ -65,6 +66,7 @@ def _import_nbrdf(args: argparse.Namespace) -> int:
 
 def _train(args: argparse.Namespace) -> int:
     from .training import config_for, load_config, train
+    from .training.loop import check_run_folder
 
     if args.config and (args.training or args.augmentation):
         raise ValueError("--training and --augmentation set presets; with --config the file says everything")
@@ -72,6 +74,7 @@ def _train(args: argparse.Namespace) -> int:
         raise ValueError("give --seed or --seeds, not both")
     if args.seeds is not None and not args.out:
         raise ValueError("--seeds needs --out: each seed trains into OUT/seed-S")
+    configs = []  # every seed's config and run folder checked before any trains
     for seed in args.seeds if args.seeds is not None else [args.seed]:
         out = str(Path(args.out) / f"seed-{seed}") if args.seeds is not None else args.out
         overrides = {"method": args.method, "data": args.data, "out": out, "epochs": args.epochs, "seed": seed,
@@ -83,7 +86,10 @@ def _train(args: argparse.Namespace) -> int:
             cfg = config_for(args.method or "frenbrdf", training=args.training, augmentation=args.augmentation,
                              **{k: v for k, v in overrides.items() if v is not None and k != "method"})
         cfg.progress = not args.quiet
-        run = train(cfg, resume=args.resume)
+        check_run_folder(cfg, resume=args.resume, overwrite=args.overwrite)
+        configs.append(cfg)
+    for cfg in configs:
+        run = train(cfg, resume=args.resume, overwrite=args.overwrite)
         best = run.best  # the history entry of the selected epoch
         summary = {"run_dir": str(run.path), "method": cfg.method, "seed": cfg.seed, "best_epoch": best["epoch"],
                    "selected_by": cfg.select, "best_val_rec": best["val_rec"], "seconds": round(run.seconds, 1)}
@@ -100,8 +106,8 @@ def _train(args: argparse.Namespace) -> int:
 def _fit_nbrdf(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .fitting import FitConfig, fit_nbrdf, save_nbrdf
-    from .merl import read_merl
+    from .data.fitting import FitConfig, fit_nbrdf, save_nbrdf
+    from .io.merl import read_merl
 
     config = FitConfig(hidden=tuple(int(h) for h in args.hidden.split(",")), epochs=args.epochs, seed=args.seed)
     out = Path(args.out)
@@ -116,14 +122,14 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from .evaluation import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
+    from .study.evaluation import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
 
     config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
                             max_materials=args.max_materials, all_materials=args.all_materials,
                             refine=args.refine, progress=not args.quiet)
     if args.quick:
         config.edits, config.edit_resolution = min(args.edits, 120), 96
-    report = evaluate_seeds(args.runs, args.out, data=args.data, config=config)
+    report = evaluate_seeds(args.runs, args.out, data=args.data, config=config, overwrite=args.overwrite)
     print(seeds_markdown(report) if "comparison" in report else report_markdown(report))
     if args.json:
         print(json.dumps(report.get("comparison", report.get("summary")), indent=2))
@@ -131,13 +137,17 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.materials
-        from .mitsuba import render_material
+    from .io.paths import check_output_file, input_file
+
+    input_file(args.material, "material file")
+    check_output_file(args.out, (".png",))
+    if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.data.materials
+        from .render.mitsuba import render_material
 
         render_material(args.material, out_path=args.out, spp=args.spp, resolution=args.resolution)
     else:
-        from .materials import load_material_file
-        from .render import Scene, render, save_png
+        from .data.materials import load_material_file
+        from .render.renderer import Scene, render, save_png
 
         save_png(args.out, render(load_material_file(args.material), Scene(resolution=args.resolution)))
     print(f"wrote {args.out}")
@@ -145,9 +155,9 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _select(args: argparse.Namespace) -> int:
-    from .select import select_config
+    from .study.select import select_config
+    from .study.variants import base_config
     from .training import load_config
-    from .variants import base_config
 
     if args.front and (args.config or args.epochs is not None):
         raise ValueError("--config and --epochs set the training of candidates; with --front nothing is trained")
@@ -184,10 +194,10 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _reconstruct(args: argparse.Namespace) -> int:
-    from .reconstruct_outputs import reconstruct_file
+    from .material.outputs import reconstruct_file
 
     report = reconstruct_file(args.input, args.out, model=args.model, samples=args.samples, refine=args.refine,
-                              seed=args.seed, progress=not args.quiet)
+                              seed=args.seed, progress=not args.quiet, overwrite=args.overwrite)
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -252,6 +262,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "(needs --render-every)")
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+    train.add_argument("--overwrite", action="store_true", help="train into --out although it holds files (an "
+                       "earlier run's files are replaced); without it a non-empty --out is refused")
     train.add_argument("--json", action="store_true", help="print the summary as JSON")
     train.add_argument("--quiet", action="store_true", help="no progress bars")
     train.set_defaults(run=_train)
@@ -269,7 +281,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate = commands.add_parser("evaluate", help="reconstruction and editing tables and figures for runs")
     evaluate.add_argument("runs", nargs="+", help="run folders: one per method, of one seed or of several "
                           "(grouped by their split; several seeds give mean ± sd and paired intervals)")
-    evaluate.add_argument("--out", required=True, help="folder for the tables and figures")
+    evaluate.add_argument("--out", required=True, help="folder for the tables and figures (a new or empty one, or "
+                          "an earlier evaluation's)")
+    evaluate.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files")
     evaluate.add_argument("--data", metavar="DIR", help="folder of MERL files (default: the one the runs were "
                           "trained on); with --all, the folder whose materials to evaluate")
     evaluate.add_argument("--all", dest="all_materials", action="store_true",
@@ -316,8 +330,11 @@ def build_parser() -> argparse.ArgumentParser:
     rec = commands.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ of samples, or a "
                               "MERL file): NBRDF, MERL table, render and report in one folder")
     rec.add_argument("input", help="CSV or NPZ with columns wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b (or angles; see "
-                     "frenbrdf.measurements), or a MERL .binary file")
-    rec.add_argument("--out", required=True, help="result folder (created; files replaced atomically)")
+                     "frenbrdf.material.measurements), or a MERL .binary file")
+    rec.add_argument("--out", required=True, help="result folder: a new or empty one, or an earlier result "
+                     "folder, which is replaced whole (never the input's folder)")
+    rec.add_argument("--overwrite", action="store_true", help="replace --out even if it holds other files "
+                     "(they are deleted)")
     rec.add_argument("--model", default="pretrained", help="training run folder, checkpoint, or 'pretrained' "
                      "(the model shipped in the package; the default)")
     rec.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
@@ -347,7 +364,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.run(args)
-    except (ValueError, OSError) as error:  # bad input: a clear message, not a traceback
+    except (ValueError, OSError, TrainingDiverged) as error:  # bad input: a clear message, not a traceback
         parser.exit(2, f"frenbrdf {args.command}: error: {error}\n")
 
 

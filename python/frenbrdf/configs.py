@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import numbers
+import types
+import typing
 
 
 def to_dict(config) -> dict:
@@ -27,14 +30,54 @@ def from_dict(cls, data: dict, where: str = "config"):
     if unknown:
         raise ValueError(f"unknown key(s) {unknown} in {where}; valid keys: {sorted(fields)}")
     values = {}
+    hints = typing.get_type_hints(cls)
     for name, value in data.items():
         factory = fields[name].default_factory
         default = factory() if factory is not dataclasses.MISSING else None
         if dataclasses.is_dataclass(default):
             values[name] = from_dict(type(default), value, f"{where}.{name}")
         else:
-            values[name] = tuple(value) if isinstance(value, list) else value
+            values[name] = checked_value(value, hints[name], f"{where}: {name}")
     return cls(**values)
+
+
+def checked_value(value, hint, where: str):
+    """``value`` checked against a field's type (``int``, ``float``, ``str``, ``bool``, ``X | None``,
+    ``tuple[X, ...]``, ``tuple[X, Y]``); lists become tuples. A wrong type is a ValueError naming the setting:
+    ``"1"`` is not an integer, 1.5 is not an integer, ``true`` is not a number.
+
+    A config read from a file meets here what the code assumes, before any work is done.
+    """
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        options = [a for a in args if a is not type(None)]
+        return checked_value(value, options[0], where) if len(options) == 1 else value
+    if origin is tuple:
+        if isinstance(value, str) and args and args[-1] is Ellipsis and args[0] is str:
+            return (value,)  # one glob pattern for tuple[str, ...]
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f"{where} must be a list, got {value!r}")
+        if args and args[-1] is Ellipsis:
+            return tuple(checked_value(item, args[0], f"{where}[{i}]") for i, item in enumerate(value))
+        if args and len(value) != len(args):
+            raise ValueError(f"{where} must be a list of {len(args)} values, got {value!r}")
+        return tuple(checked_value(item, arg, f"{where}[{i}]") for i, (item, arg) in enumerate(zip(value, args)))
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise ValueError(f"{where} must be true or false, got {value!r}")
+    elif hint is int:
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise ValueError(f"{where} must be an integer, got {value!r}")
+        return int(value)
+    elif hint is float:
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ValueError(f"{where} must be a number, got {value!r}")
+        return float(value)
+    elif hint is str and not isinstance(value, str):
+        raise ValueError(f"{where} must be a string, got {value!r}")
+    return value
 
 
 def merge(base: dict, update: dict) -> dict:

@@ -16,9 +16,9 @@ from pathlib import Path
 import torch
 
 from ._native import __version__
-from .atomic import write_text
-from .evaluation import EvaluateConfig, evaluate_runs, report_markdown
+from .io.atomic import write_text
 from .presets import TRAINING, method_names
+from .study.evaluation import EvaluateConfig, evaluate_runs, report_markdown
 from .training import Run, config_for, train
 
 #: Evaluation settings of the demo: the full reconstruction table, a shorter editing table, and the rows of test-time
@@ -35,7 +35,7 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
     timings: dict[str, float] = {}
     start = time.perf_counter()
     if data is None:
-        from .synth import write_bank
+        from .data.synth import write_bank
 
         data = out / "data"
         if not (data / "bank.json").exists():  # a complete bank from an earlier run is reused
@@ -47,7 +47,7 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
         # The report folder holds everything the demo made, the coefficient cache too.
         cfg = config_for(method, training="demo", augmentation=augmentation, data=str(data), out=str(out / "runs" / method),
                          cache_dir=str(out / "cache"), progress=progress, **({"epochs": epochs} if epochs else {}))
-        runs.append(train(cfg))
+        runs.append(train(cfg, overwrite=True))  # the demo folder is its own: a rerun trains afresh
         timings[f"train {method}"] = time.perf_counter() - begin
     begin = time.perf_counter()
     report = evaluate_runs([run.path for run in runs], out / "evaluation", config=dataclasses.replace(DEMO_EVALUATION, progress=progress))

@@ -9,5 +9,14 @@ class MerlFormatError(ValueError):
     """
 
 
+class BsdfFormatError(ValueError):
+    """A file does not follow the RGL material database's ``.bsdf`` (``tensor_file``) format.
+
+    The message names the file and what was wrong: the magic number or version, the field
+    and byte offset where the file ends early or a size exceeds it, a field's dtype or
+    shape, or that the file is spectral (only RGB files are supported).
+    """
+
+
 class TrainingDiverged(RuntimeError):
     """A loss term became NaN or infinite; training stopped and the last good checkpoint is kept."""

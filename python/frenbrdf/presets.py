@@ -75,7 +75,7 @@ def method_names() -> tuple[str, ...]:
 
 def check_method(method: str) -> str:
     """``method`` if it names a preset, else ValueError naming the valid ones."""
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method must be one of {method_names()}, got {method!r}")
     return method
 

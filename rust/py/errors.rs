@@ -9,6 +9,7 @@ use crate::error::Error;
 
 // Defined in Python (frenbrdf/exceptions.py) so it has a docstring and a stable home.
 pyo3::import_exception!(frenbrdf.exceptions, MerlFormatError);
+pyo3::import_exception!(frenbrdf.exceptions, BsdfFormatError);
 
 impl From<Error> for PyErr {
     fn from(error: Error) -> PyErr {
@@ -29,6 +30,7 @@ impl From<Error> for PyErr {
                 }
             }
             Error::MerlFormat { .. } => MerlFormatError::new_err(message),
+            Error::BsdfFormat { .. } => BsdfFormatError::new_err(message),
             Error::InvalidArgument(_) => PyValueError::new_err(message),
         }
     }

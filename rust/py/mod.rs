@@ -1,6 +1,7 @@
 //! `frenbrdf._native`: thin PyO3 wrappers around the pure-Rust core. Each wrapper
 //! checks shapes, releases the GIL for the heavy work, and maps errors.
 
+mod bsdf;
 mod coords;
 mod errors;
 mod knn;
@@ -23,6 +24,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     coords::register(m)?;
     knn::register(m)?;
     sht::register(m)?;
+    bsdf::register(m)?;
     Ok(())
 }
 
@@ -51,8 +53,9 @@ fn as_vec3s<'a>(name: &str, array: &'a PyReadonlyArray2<'_, f64>) -> PyResult<&'
             "{name} must have shape (n, 3), got {shape:?}"
         )));
     }
-    let flat = array
-        .as_slice()
-        .map_err(|_| PyValueError::new_err(format!("{name} must be C-contiguous")))?;
+    // `as_slice` also accepts Fortran order, which would be read transposed.
+    let flat = (array.as_slice().ok())
+        .filter(|_| array.is_c_contiguous())
+        .ok_or_else(|| PyValueError::new_err(format!("{name} must be C-contiguous")))?;
     Ok(bytemuck::cast_slice(flat))
 }

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -11,8 +12,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from .. import checkpoints
 from ..configs import from_dict
+from ..io import checkpoints
 from .encoder import EncoderConfig, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .mapping import LogRelativeMapping, MappingConfig
@@ -20,6 +21,9 @@ from .nbrdf import NBRDF, NBRDFConfig, mapped_samples
 
 #: :meth:`Model.encode` passes larger sample sets through the encoder in chunks of this size.
 ENCODE_CHUNK = 16384
+#: The most parameters a model may have (1 GiB of float32): a config read from a file is checked against it before
+#: anything is allocated. The default model has about 1.6 million.
+MAX_PARAMETERS = 1 << 28
 
 
 @dataclass
@@ -30,6 +34,24 @@ class ModelConfig:
     encoder: EncoderConfig = field(default_factory=EncoderConfig)
     decoder: DecoderConfig = field(default_factory=DecoderConfig)
     mapping: MappingConfig = field(default_factory=MappingConfig)
+
+    def __post_init__(self):
+        if self.n_parameters > MAX_PARAMETERS:
+            raise ValueError(f"this model config has {self.n_parameters:,} parameters, more than the {MAX_PARAMETERS:,} "
+                             f"a model may have (encoder {self.encoder.hidden} → {self.encoder.latent}, decoder heads "
+                             f"{self.decoder.hidden} for an NBRDF of {self.nbrdf.hidden})")
+
+    @property
+    def n_parameters(self) -> int:
+        """How many parameters the network of this config has (computed, nothing allocated)."""
+        def mlp(sizes) -> int:
+            return sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:]))
+
+        from .encoder import SAMPLE_SIZE
+
+        latent = self.encoder.latent
+        return mlp([SAMPLE_SIZE, *self.encoder.hidden, latent]) + sum(
+            mlp([latent, *self.decoder.hidden, math.prod(shape)]) for shape in self.nbrdf.shapes())
 
     @classmethod
     def from_checkpoint(cls, checkpoint: dict) -> ModelConfig:
@@ -66,7 +88,7 @@ class Model:
                  loss: dict | None = None):
         self.network = network.eval()
         self.mapping, self.config, self.method = mapping, config, method
-        #: The training config's loss settings (a dict of :class:`frenbrdf.losses.LossConfig` keys): the
+        #: The training config's loss settings (a dict of :class:`frenbrdf.models.losses.LossConfig` keys): the
         #: objective :meth:`reconstruct` refines with. Empty: LossConfig's defaults.
         self.loss = dict(loss or {})
         #: The model card of a packaged model (:meth:`pretrained`); empty for run folders.
@@ -79,22 +101,48 @@ class Model:
         if path.is_dir():
             path = path / "best.pt"
         checkpoint = checkpoints.load(path)
-        return cls.from_checkpoint(checkpoint, checkpoints.load_mapping(path, checkpoint))
+        return cls.from_checkpoint(checkpoint, checkpoints.load_mapping(path, checkpoint), source=str(path))
 
     @classmethod
-    def from_checkpoint(cls, checkpoint: dict, mapping_state: dict) -> Model:
-        """A model from a loaded checkpoint (weights, ``config``, ``method``) and its mapping's state."""
-        config = ModelConfig.from_checkpoint(checkpoint)
+    def from_checkpoint(cls, checkpoint: dict, mapping_state: dict, *, source: str = "checkpoint") -> Model:
+        """A model from a loaded checkpoint (weights, ``config``, ``method``) and its mapping's state.
+
+        Everything is checked before the network is built: the config (types, sizes), that the weights
+        have the shapes the config gives them, and that they are finite. ``source`` names the file in errors.
+        """
+        try:
+            training = json.loads(checkpoint["config"])
+            if not isinstance(training, dict) or not isinstance(training.get("model"), dict):
+                raise ValueError("its training config holds no model settings")
+            config = from_dict(ModelConfig, training["model"], "its model config")
+            method, weights = checkpoint["method"], checkpoint["model"]
+            if not isinstance(weights, dict) or not all(isinstance(w, torch.Tensor) for w in weights.values()):
+                raise ValueError("its weights are not a dict of tensors")
+            with torch.device("meta"):  # the shapes the config gives the weights, nothing allocated
+                expected = {name: tuple(p.shape) for name, p in AutoEncoder(config).state_dict().items()}
+            given = {name: tuple(w.shape) for name, w in weights.items()}
+            if given != expected:
+                differ = sorted(set(given) ^ set(expected)) or [n for n in expected if given[n] != expected[n]]
+                name = differ[0]
+                raise ValueError(f"its weights do not match its model config: {name} is "
+                                 f"{given.get(name, 'missing')}, the config gives {expected.get(name, 'no such tensor')}")
+            bad = [name for name, w in weights.items() if not torch.all(torch.isfinite(w))]
+            if bad:
+                raise ValueError(f"its weights hold NaN or inf ({', '.join(bad[:3])}): the model is damaged")
+            mapping = LogRelativeMapping.from_state(mapping_state)
+        except (KeyError, TypeError, json.JSONDecodeError) as error:
+            raise ValueError(f"{source}: not a complete frenbrdf model (missing or wrong {error})") from None
+        except ValueError as error:
+            raise ValueError(f"{source}: {error}") from None
         network = AutoEncoder(config)
-        network.load_state_dict({name: value.float() for name, value in checkpoint["model"].items()})
-        loss = json.loads(checkpoint["config"]).get("loss", {})
-        return cls(network, LogRelativeMapping.from_state(mapping_state), config, checkpoint["method"], loss)
+        network.load_state_dict({name: value.float() for name, value in weights.items()})
+        return cls(network, mapping, config, method, training.get("loss", {}))
 
     @classmethod
     def pretrained(cls, folder: str | os.PathLike | None = None) -> Model:
-        """The model shipped inside the package (``frenbrdf/pretrained/``; docs/pretrained.md).
+        """The model shipped inside the package (``frenbrdf/models/pretrained/``; docs/pretrained.md).
 
-        ``folder``: a folder written by :func:`frenbrdf.pretrained.pack_pretrained` instead.
+        ``folder``: a folder written by :func:`frenbrdf.models.pretrained.pack_pretrained` instead.
 
         Raises
         ------
@@ -103,7 +151,7 @@ class Model:
         ValueError
             A packed file is damaged or of another format (the message names it).
         """
-        from ..pretrained import load_packed
+        from .pretrained import load_packed
 
         checkpoint, mapping_state, card = load_packed(folder)
         model = cls.from_checkpoint(checkpoint, mapping_state)
@@ -140,17 +188,19 @@ class Model:
         """Latent(s) ``(latent,)`` or ``(B, latent)`` → :class:`NBRDF` (index it for one of B)."""
         z = np.asarray(z, dtype=np.float32)
         latent = self.config.encoder.latent
-        if z.shape[-1:] != (latent,) or z.ndim > 2 or not np.all(np.isfinite(z)):
-            raise ValueError(f"z must be finite with shape ({latent},) or (B, {latent}), got {z.shape}")
+        if z.shape[-1:] != (latent,) or z.ndim > 2:
+            raise ValueError(f"z must have shape ({latent},) or (B, {latent}), got {z.shape}")
+        if not np.all(np.isfinite(z)):
+            raise ValueError("z must be finite, got NaN or inf")
         return NBRDF(self.network.decoder(torch.from_numpy(z.reshape(-1, latent))), self.mapping)
 
     def reconstruct(self, values, directions, *, refine="full"):
-        """Encodes samples, then refines the result on them (:func:`frenbrdf.reconstruct.reconstruct`).
+        """Encodes samples, then refines the result on them (:func:`frenbrdf.models.reconstruct.reconstruct`).
 
-        ``refine``: ``"none"``, ``"latent"``, ``"full"`` or a :class:`frenbrdf.reconstruct.RefineConfig`.
-        Returns a :class:`frenbrdf.reconstruct.Reconstruction` (``.z``, ``.nbrdf``, ``.timings``, ``.losses``).
+        ``refine``: ``"none"``, ``"latent"``, ``"full"`` or a :class:`frenbrdf.models.reconstruct.RefineConfig`.
+        Returns a :class:`frenbrdf.models.reconstruct.Reconstruction` (``.z``, ``.nbrdf``, ``.timings``, ``.losses``).
         """
-        from ..reconstruct import reconstruct
+        from .reconstruct import reconstruct
 
         return reconstruct(self, values, directions, refine=refine)
 

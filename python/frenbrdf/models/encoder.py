@@ -9,6 +9,8 @@ from torch import nn
 
 #: One sample: mapped RGB (3) and the NBRDF coordinates H, D (6).
 SAMPLE_SIZE = 9
+#: The widest layer (hidden or latent) and the most hidden layers of the encoder and the decoder's heads.
+MAX_WIDTH, MAX_LAYERS = 4096, 16
 
 
 def mlp(sizes: list[int], dropout: float = 0.0) -> nn.Sequential:
@@ -33,8 +35,10 @@ class EncoderConfig:
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
-        if min(self.hidden, default=1) < 1 or self.latent < 1:
-            raise ValueError(f"encoder sizes must be positive, got hidden={self.hidden}, latent={self.latent}")
+        if min(self.hidden, default=1) < 1 or self.latent < 1 or max(*self.hidden, self.latent) > MAX_WIDTH \
+                or len(self.hidden) > MAX_LAYERS:
+            raise ValueError(f"encoder sizes must lie in 1 … {MAX_WIDTH} (at most {MAX_LAYERS} hidden layers), got "
+                             f"hidden={self.hidden}, latent={self.latent}")
         if not 0.0 <= self.dropout < 1.0:
             raise ValueError(f"encoder dropout must lie in [0, 1), got {self.dropout}")
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from .encoder import mlp
+from .encoder import MAX_LAYERS, MAX_WIDTH, mlp
 
 
 @dataclass
@@ -26,8 +26,10 @@ class DecoderConfig:
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
-        if min(self.hidden, default=1) < 1 or not self.last_layer_scale > 0:
+        if min(self.hidden, default=1) < 1 or not (self.last_layer_scale > 0 and math.isfinite(self.last_layer_scale)):
             raise ValueError(f"decoder sizes and last_layer_scale must be positive, got {self}")
+        if max(self.hidden, default=1) > MAX_WIDTH or len(self.hidden) > MAX_LAYERS:
+            raise ValueError(f"decoder.hidden must be at most {MAX_LAYERS} widths in 1 … {MAX_WIDTH}, got {self.hidden}")
 
 
 class HyperNetwork(nn.Module):

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..merl import N_BINS, SHAPE, merl_lookup_directions
+from ..io.merl import N_BINS, SHAPE, merl_lookup_directions
 
 #: The constant c added to the ratio inside the logarithm, per form.
 FORM_OFFSETS = {"ratio": 0.0, "one_plus_ratio": 1.0}
@@ -67,6 +67,9 @@ class LogRelativeMapping:
             raise ValueError("the reference BRDF must be finite and non-negative")
         if offset not in FORM_OFFSETS.values():
             raise ValueError(f"the mapping's offset must be one of {sorted(FORM_OFFSETS.values())}, got {offset}")
+        if not (isinstance(epsilon, (int, float, np.floating, np.integer)) and 0 < epsilon < np.inf):
+            raise ValueError(f"the mapping's ε must be a positive number, got {epsilon!r} (with ε ≤ 0 the logarithm "
+                             "of a zero reflectance is not finite, and the material decodes to another)")
         self.reference = reference
         self.epsilon = float(epsilon)
         self.offset = float(offset)

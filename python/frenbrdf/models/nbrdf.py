@@ -15,14 +15,22 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..coords import half_diff_vectors, rusinkiewicz_to_half_diff
-from ..merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz, write_merl
+from ..io.merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz, write_merl
+from ..numerics.coords import half_diff_vectors, rusinkiewicz_to_half_diff
 from .mapping import LogRelativeMapping
 
 #: The NBRDF input: H and D as Cartesian 3-vectors.
 N_INPUTS = 6
 #: The output: RGB.
 N_OUTPUTS = 3
+#: The widest hidden layer and the most hidden layers an NBRDF may have (Sztrajman's has 21, HyperBRDF's 60): a
+#: width read from a file is checked against it before anything is evaluated (a width of 20000 takes minutes).
+MAX_WIDTH, MAX_LAYERS = 1024, 16
+#: How far from 1 the length of a given direction may be.
+UNIT_TOLERANCE = 1e-3
+#: The largest reflectance (1/sr) a model takes: MERL's grazing spikes reach 10⁵; far larger values overflow the
+#: networks' float32 (the log mapping turns 10³⁰ into a target the refinement overshoots to inf).
+MAX_REFLECTANCE = 1e8
 
 
 @dataclass
@@ -34,8 +42,9 @@ class NBRDFConfig:
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
-        if not self.hidden or min(self.hidden) < 1:
-            raise ValueError(f"nbrdf.hidden must be one or more positive layer widths, got {self.hidden}")
+        if not self.hidden or min(self.hidden) < 1 or max(self.hidden) > MAX_WIDTH or len(self.hidden) > MAX_LAYERS:
+            raise ValueError(f"nbrdf.hidden must be 1 to {MAX_LAYERS} positive layer widths, at most {MAX_WIDTH}, got "
+                             f"{self.hidden}")
 
     def shapes(self) -> list[tuple[int, ...]]:
         """Shapes of the parameter tensors, in order: weight (out, in), bias (out,), …"""
@@ -72,7 +81,7 @@ def merl_bin_inputs() -> tuple[np.ndarray, np.ndarray]:
     """The MERL bins above the horizon, bool ``(90, 90, 180)``, and their NBRDF inputs ``(n, 6)``.
 
     The inputs are (H, D) with φ_h = 0 in float64, from the bins' angles
-    (:func:`frenbrdf.coords.rusinkiewicz_to_half_diff`). The same for every material, so
+    (:func:`frenbrdf.numerics.coords.rusinkiewicz_to_half_diff`). The same for every material, so
     computed once (about 55 MB) and kept read-only.
     """
     above = merl_above_horizon()
@@ -96,7 +105,7 @@ def nbrdf_merl_table(reflectance) -> np.ndarray:
     -------
     numpy.ndarray
         float64 ``(3, 90, 90, 180)`` in physical units, ready for
-        :func:`frenbrdf.merl.write_merl`: the reflectance clamped to ≥ 0 on bins above
+        :func:`frenbrdf.io.merl.write_merl`: the reflectance clamped to ≥ 0 on bins above
         the horizon, ``−CHANNEL_SCALES[c]`` (stored value −1, MERL's missing marker) on
         the others.
     """
@@ -116,7 +125,7 @@ def fold_difference(d: np.ndarray) -> np.ndarray:
     BRDF unchanged (reciprocity); MERL stores only φ_d ∈ [0, π) for that reason, so every
     training sample has D_y ≥ 0. Folding (x, y, z) → (−x, −y, z) where y < 0 (or y = 0 and
     x < 0, φ_d = π) asks the network only about inputs it was trained on, and makes every
-    decoded BRDF exactly reciprocal. The Dr.Jit kernel (:mod:`frenbrdf.mitsuba.kernels`)
+    decoded BRDF exactly reciprocal. The Dr.Jit kernel (:mod:`frenbrdf.render.mitsuba.kernels`)
     folds the same way.
     """
     x, y = d[..., 0:1], d[..., 1:2]
@@ -161,8 +170,58 @@ def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.
         raise ValueError(f"wi and wo must have the shape of values {values.shape}, got {wi.shape} and {wo.shape}")
     if not np.all(np.isfinite(values)) or values.min() < 0:
         raise ValueError("values must be finite and ≥ 0 (leave missing samples out)")
+    if values.max() > MAX_REFLECTANCE:
+        raise ValueError(f"values must be ≤ {MAX_REFLECTANCE:g} (1/sr; MERL's highest spikes are about 1e5), got "
+                         f"{values.max():g}")
+    for name, d in (("wi", wi), ("wo", wo)):  # what frenbrdf.material.measurements checks of a file, for arrays
+        length = np.linalg.norm(d, axis=-1)
+        if not np.all(np.abs(length - 1) <= UNIT_TOLERANCE):
+            first = int(np.flatnonzero(~(np.abs(length - 1) <= UNIT_TOLERANCE))[0])
+            raise ValueError(f"{name} must hold unit vectors (length within {UNIT_TOLERANCE:g} of 1); row {first} "
+                             f"has length {length[first]:.6g}")
+        if not np.all(d[:, 2] > 0):
+            first = int(np.flatnonzero(~(d[:, 2] > 0))[0])
+            raise ValueError(f"{name} must lie above the surface (z > 0, the normal); row {first} has z = "
+                             f"{d[first, 2]:.6g} (a sample there has no weight: losses of 0 would read as a perfect fit)")
     mapped = mapping.forward(values, mapping.reference_at(wi, wo))
     return mapped, nbrdf_coordinates(wi, wo), np.clip(wi[:, 2], 0.0, 1.0)
+
+
+def check_params(params: list[torch.Tensor], where: str = "NBRDF") -> None:
+    """Checks NBRDF parameters ``[(B, out, in), (B, out), …]`` (any source: a decoder, a file): a chain of layers
+    from the 6 inputs to the 3 outputs, at most :data:`MAX_LAYERS` hidden layers of at most :data:`MAX_WIDTH`,
+    finite floating-point values. A ValueError names what is wrong."""
+    if not isinstance(params, (list, tuple)) or len(params) < 2 or len(params) % 2:
+        raise ValueError(f"{where}: the parameters must be (weight, bias) pairs, got {_describe(params)}")
+    if not all(isinstance(p, torch.Tensor) and p.is_floating_point() for p in params):
+        raise ValueError(f"{where}: the parameters must be floating-point tensors, got {_describe(params)}")
+    shapes = [tuple(p.shape) for p in params]
+    n_layers, fan_in = len(params) // 2, N_INPUTS
+    if n_layers > MAX_LAYERS + 1:
+        raise ValueError(f"{where}: {n_layers - 1} hidden layers; an NBRDF has at most {MAX_LAYERS}")
+    batch = shapes[0][0] if shapes[0] else None
+    for layer in range(n_layers):
+        weight, bias = shapes[2 * layer], shapes[2 * layer + 1]
+        last = layer == n_layers - 1
+        if len(weight) != 3 or len(bias) != 2 or weight[0] != batch or bias[0] != batch or weight[2] != fan_in \
+                or bias[1] != weight[1] or (last and weight[1] != N_OUTPUTS):
+            raise ValueError(f"{where}: layer {layer + 1} has weight {weight[1:]} and bias {bias[1:]}; an NBRDF maps "
+                             f"{N_INPUTS} inputs through (out, in) weights and (out,) biases to {N_OUTPUTS} outputs "
+                             f"(all shapes: {[s[1:] for s in shapes]})")
+        if not last and not 1 <= weight[1] <= MAX_WIDTH:
+            raise ValueError(f"{where}: hidden layer {layer + 1} is {weight[1]} wide; an NBRDF's are at most "
+                             f"{MAX_WIDTH}")
+        fan_in = weight[1]
+    bad = [index for index, p in enumerate(params) if not torch.all(torch.isfinite(p))]
+    if bad:
+        raise ValueError(f"{where}: parameter tensor {bad[0]} holds NaN or inf")
+
+
+def _describe(params) -> str:
+    if isinstance(params, (list, tuple)):
+        return "[" + ", ".join(f"{tuple(p.shape)} {p.dtype}" if isinstance(p, torch.Tensor) else type(p).__name__
+                               for p in params[:8]) + ("…" * (len(params) > 8)) + "]"
+    return type(params).__name__
 
 
 def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Tensor:
@@ -196,6 +255,7 @@ class NBRDF:
     """
 
     def __init__(self, params: list[torch.Tensor], mapping: LogRelativeMapping):
+        check_params(params)
         self.params = [p.detach().cpu().to(torch.float32) for p in params]
         self.mapping = mapping
 
@@ -220,19 +280,32 @@ class NBRDF:
         return out.reshape(*coords.shape[:-1], N_OUTPUTS).numpy().astype(np.float64)
 
     def __call__(self, wi, wo) -> np.ndarray:
-        """Reflectance at direction pairs, each ``(..., 3)`` → RGB ``(..., 3)``; 0 below the horizon."""
+        """Reflectance at direction pairs, each ``(..., 3)`` → RGB ``(..., 3)``; 0 below the horizon.
+
+        Raises ValueError where the reflectance is not finite (an NBRDF never returns inf or NaN)."""
         self._only()
         wi, wo = np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64)
-        rgb = self.mapping.inverse(self.mapped(nbrdf_coordinates(wi, wo)), self.mapping.reference_at(wi, wo))
         above = (wi[..., 2] > 0) & (wo[..., 2] > 0)
+        rgb = self._reflectance(nbrdf_coordinates(wi, wo), self.mapping.reference_at(wi, wo), above[..., None])
         return np.where(above[..., None], rgb, 0.0)
+
+    def _reflectance(self, coords, reference, where=True) -> np.ndarray:
+        """The reflectance at NBRDF inputs, checked to be finite (where ``where``)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            rgb = self.mapping.inverse(self.mapped(coords), reference)
+        bad = ~np.isfinite(rgb) & where
+        if bad.any():
+            raise ValueError(f"this NBRDF's reflectance is not finite at {int(bad.any(axis=-1).sum())} of "
+                             f"{int(np.size(bad) // 3)} direction pairs: its output overflows (decoded from an extreme "
+                             "latent, or refined with too large a learning rate or on extreme values)")
+        return rgb
 
     def merl_table(self) -> np.ndarray:
         """The material at every MERL bin, ``(3, 90, 90, 180)``, missing bins marked as MERL does."""
         self._only()
         above, _ = merl_bin_inputs()
         reference = self.mapping.reference_bins()[:, above.reshape(-1)].T
-        return nbrdf_merl_table(lambda inputs: self.mapping.inverse(self.mapped(inputs), reference))
+        return nbrdf_merl_table(lambda inputs: self._reflectance(inputs, reference))
 
     def to_merl(self, path: str | os.PathLike) -> None:
         """Writes the material as a MERL file (atomically)."""

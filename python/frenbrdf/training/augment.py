@@ -7,7 +7,7 @@ materials of the batch (docs/data.md gives the physical argument for each):
 - a *mix* t·a + (1 − t)·b of two training tables, at bins valid in both: each mapped value is
   un-mapped to reflectance with f_ref at its bin, mixed, and mapped again;
 - a *gained* table g_c · f, the gains scaled so that the material's largest directional albedo
-  (:func:`frenbrdf.data.max_directional_albedo`, computed once in ``prepare``) stays ≤ 1;
+  (:func:`frenbrdf.data.folders.max_directional_albedo`, computed once in ``prepare``) stays ≤ 1;
 - a *procedural* material (:mod:`.procedural`), evaluated exactly at the sampled bins, with
   its L_fre truth evaluated exactly at the SHT nodes.
 
@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..data import SampleBatch
-from ..merl import merl_above_horizon
+from ..data.folders import SampleBatch
+from ..io.merl import merl_above_horizon
 from ..models.nbrdf import bin_geometry
 from .config import TrainConfig
 from .procedural import NodeTruth, draw_procedural, values_at_bins

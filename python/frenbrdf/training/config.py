@@ -10,8 +10,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..configs import from_dict, merge, to_dict
-from ..losses import LossConfig
+from ..io.merl import N_BINS
 from ..models.autoencoder import ModelConfig
+from ..models.losses import LossConfig
 from ..presets import METHODS, SELECTION_RULES, augmentation_overrides, check_method, training_overrides
 
 
@@ -48,7 +49,7 @@ class AugmentConfig:
     together where needed so that the material's albedo stays ≤ 1."""
     procedural: float = 0.0
     """Fraction of batch materials drawn afresh every step from the analytic families of
-    :mod:`frenbrdf.synth` and evaluated exactly at the sampled bins."""
+    :mod:`frenbrdf.data.synth` and evaluated exactly at the sampled bins."""
     preset: str = "augmented"
     """The :data:`frenbrdf.presets.AUGMENTATION` entry these values came from (set by
     :func:`config_for`; "custom" for values set by hand)."""
@@ -138,8 +139,11 @@ class TrainConfig:
         for name in ("epochs", "batch_materials", "context_samples", "query_samples"):
             if int(getattr(self, name)) < 1:
                 problems.append(f"{name} must be ≥ 1, got {getattr(self, name)}")
-        if not (self.lr > 0 and math.isfinite(self.lr)):
-            problems.append(f"lr must be a positive number, got {self.lr}")
+        for name in ("context_samples", "query_samples"):  # drawn per material per step: a table has no more bins
+            if int(getattr(self, name)) > N_BINS:
+                problems.append(f"{name} must be ≤ {N_BINS} (the bins of a MERL table), got {getattr(self, name)}")
+        if not 0 < self.lr <= 1:
+            problems.append(f"lr must lie in (0, 1], got {self.lr}")
         for name in ("grad_clip", "weight_decay"):
             if not (getattr(self, name) >= 0 and math.isfinite(getattr(self, name))):
                 problems.append(f"{name} must be ≥ 0, got {getattr(self, name)}")
@@ -147,8 +151,8 @@ class TrainConfig:
             problems.append(f"context_jitter must lie in [0, 1], got {self.context_jitter}")
         if int(self.patience) < 0:
             problems.append(f"patience must be ≥ 0, got {self.patience}")
-        if int(self.render_every) < 0 or int(self.render_resolution) < 8:
-            problems.append(f"render_every must be ≥ 0 and render_resolution ≥ 8, got {self.render_every} and "
+        if int(self.render_every) < 0 or not 8 <= int(self.render_resolution) <= 1024:
+            problems.append(f"render_every must be ≥ 0 and render_resolution in 8 … 1024, got {self.render_every} and "
                             f"{self.render_resolution}")
         if self.select not in SELECTION_RULES:
             problems.append(f"select must be one of {SELECTION_RULES}, got {self.select!r}")

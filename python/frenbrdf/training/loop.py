@@ -5,7 +5,7 @@ folder holds ``config.json``, ``split.json``, ``mapping.npz`` (f_ref, once per r
 ``history.json``, ``last.pt`` (for ``--resume``) and ``best.pt`` (lowest validation
 reconstruction loss, or highest validation render PSNR: ``TrainConfig.select``);
 :class:`~frenbrdf.training.run.Run` opens one. Checkpoints
-(:mod:`frenbrdf.checkpoints`) hold the weights, optimiser, config, split and RNG state,
+(:mod:`frenbrdf.io.checkpoints`) hold the weights, optimiser, config, split and RNG state,
 written atomically. Under ``torchrun`` each step's batch of materials is sharded across
 ranks (DDP: gloo on CPU, NCCL on GPU).
 """
@@ -22,34 +22,63 @@ from pathlib import Path
 import torch
 from tqdm.auto import tqdm
 
-from .. import checkpoints
-from ..atomic import save_json
 from ..configs import to_dict
-from ..data import Split, list_materials, split_materials
+from ..data.folders import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
-from ..losses import FrequencyLoss
+from ..io import checkpoints
+from ..io.atomic import save_json
 from ..models.autoencoder import AutoEncoder, Model
+from ..models.losses import FrequencyLoss
 from ..presets import SELECTION_RULES
-from ..scoring import ScoringSet
+from ..render.scoring import ScoringSet
 from .augment import BatchDrawer
 from .config import TrainConfig, selection_score
 from .prepared import Distributed, PreparedData, prepare, select_device
 from .run import Run
 from .step import loss_terms, optimisation_step
 
+#: What a run folder holds: what :func:`train` writes there (``--overwrite`` replaces these).
+RUN_FILES = ("config.json", "split.json", "mapping.npz", "history.json", "last.pt", "best.pt", "best-loss.pt",
+             "best-psnr.pt")
 
-def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = None) -> Run:
-    """Trains one model; returns its run folder (see the module docstring for what it holds).
 
-    ``data_cache``: an (initially empty) dict passed to successive calls lets runs on the
-    same data, split and mapping read and map the materials once (sweeps of many runs).
-    """
-    start = time.perf_counter()
+def check_run_folder(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False) -> Path:
+    """Where :func:`train` may write, checked before any work: without ``resume`` a new or empty folder, or with
+    ``overwrite`` any folder (an earlier run's files are then removed before training); with ``resume`` a run
+    folder. Never the data folder, nor a folder holding it."""
+    from ..io.paths import check_output_folder
+
     if not cfg.out:
         raise ValueError("config.out (the run folder) is empty")
     if not cfg.data:
         raise ValueError("config.data (the folder of MERL files) is empty")
     run_dir = Path(cfg.out)
+    if resume:
+        if not (run_dir / "last.pt").is_file():
+            raise FileNotFoundError(f"{run_dir} holds no last.pt to resume from")
+        return run_dir
+    check_output_folder(run_dir, written_by="config.json", inputs=(Path(cfg.data).resolve(),), overwrite=True)
+    held = sorted(entry.name for entry in run_dir.iterdir() if not entry.name.startswith(".")) \
+        if run_dir.is_dir() else []
+    if held and not overwrite:
+        what = "a training run" if "config.json" in held else "files"
+        raise ValueError(f"{run_dir} already holds {what} ({', '.join(held[:4])}{' …' * (len(held) > 4)}); "
+                         "continue it with --resume (resume=True), replace it with --overwrite (overwrite=True), or "
+                         "choose another folder")
+    return run_dir
+
+
+def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, data_cache: dict | None = None) -> Run:
+    """Trains one model; returns its run folder (see the module docstring for what it holds).
+
+    ``resume``: continue the run in ``cfg.out`` from its ``last.pt``. Otherwise ``cfg.out`` must be new or
+    empty, unless ``overwrite``: then the files of an earlier run there are replaced (:func:`check_run_folder`).
+
+    ``data_cache``: an (initially empty) dict passed to successive calls lets runs on the
+    same data, split and mapping read and map the materials once (sweeps of many runs).
+    """
+    start = time.perf_counter()
+    run_dir = check_run_folder(cfg, resume=resume, overwrite=overwrite)
     files = {path.stem: path for path in list_materials(cfg.data)}
     device = select_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")))
     ranks = Distributed.start(device)
@@ -66,6 +95,9 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
     data = prepare(cfg, split, files, ranks, data_cache)  # reads every file: bad data fails here
     if ranks.main:
         run_dir.mkdir(parents=True, exist_ok=True)
+        if not resume:  # overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's)
+            for name in RUN_FILES:
+                (run_dir / name).unlink(missing_ok=True)
         save_json(run_dir / "config.json", to_dict(cfg))
         save_json(run_dir / "split.json", split.to_json())
         checkpoints.save_mapping(run_dir, data.mapping.state())
@@ -124,8 +156,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, data_cache: dict | None = N
             if terms.not_finite:
                 raise TrainingDiverged(
                     f"step {epoch * steps_per_epoch + step_in_epoch}: loss term(s) {terms.not_finite} became NaN/inf; "
-                    f"training stopped, the last good checkpoint is kept in {run_dir} (lower lr or eta, or set "
-                    "grad_clip)")
+                    f"training stopped, the last good checkpoint is kept in {run_dir} (lr {cfg.lr:g}, eta "
+                    f"{cfg.loss.eta:g}: lower them, or set grad_clip)")
             for name, value in terms.logged.items():
                 sums[name] = sums.get(name, 0.0) + value / steps_per_epoch
             bar.update()

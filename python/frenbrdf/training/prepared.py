@@ -1,6 +1,6 @@
 """What a run trains on: the split's materials read and mapped, and the true SH coefficients.
 
-:func:`prepare` is shared by training and by the step timing of :mod:`frenbrdf.timing`;
+:func:`prepare` is shared by training and by the step timing of :mod:`frenbrdf.study.timing`;
 :class:`Distributed` and :func:`select_device` say where a process runs (DDP under
 ``torchrun``: gloo on CPU, NCCL on GPU).
 """
@@ -19,8 +19,8 @@ import torch
 import torch.distributed as dist
 from tqdm.auto import tqdm
 
-from ..data import MaterialBank, Split, mapped_bank, max_directional_albedo, read_tables
-from ..losses import FrequencyTruth
+from ..data.folders import MaterialBank, Split, mapped_bank, max_directional_albedo, read_tables
+from ..models.losses import FrequencyTruth
 from ..models.mapping import LogRelativeMapping
 from .config import TrainConfig
 
@@ -73,7 +73,7 @@ class PreparedData:
     """True SH coefficients ``(M, S, 3, ncoeff)`` in bank order, or None without L_fre."""
     albedo: torch.Tensor | None = None
     """The training materials' largest directional albedo per channel ``(n_train, 3)``
-    (:func:`frenbrdf.data.max_directional_albedo`), computed for gain augmentation only."""
+    (:func:`frenbrdf.data.folders.max_directional_albedo`), computed for gain augmentation only."""
 
     @property
     def n_train(self) -> int:

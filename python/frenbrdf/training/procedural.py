@@ -1,13 +1,13 @@
 """Procedural training materials: analytic BRDFs drawn afresh, evaluated at MERL bins and at the
 SHT nodes of L_fre.
 
-A procedural material is drawn by :func:`frenbrdf.synth.draw_material` (random kind, colours,
-roughness, Fresnel, layers) and evaluated exactly with :func:`frenbrdf.analytic.evaluate`:
+A procedural material is drawn by :func:`frenbrdf.data.synth.draw_material` (random kind, colours,
+roughness, Fresnel, layers) and evaluated exactly with :func:`frenbrdf.data.analytic.evaluate`:
 
 - at sampled MERL bins (:func:`values_at_bins`), the samples the encoder and L_rec see, mapped
   with the run's mapping;
 - at the SHT grid nodes of each θ_h slice of L_fre (:class:`NodeTruth`), its true coefficients.
-  The tables' truth (:class:`frenbrdf.losses.FrequencyTruth`) interpolates measured bins onto
+  The tables' truth (:class:`frenbrdf.models.losses.FrequencyTruth`) interpolates measured bins onto
   the nodes; here the nodes are evaluated directly, with the same folding: φ_h = 0,
   φ_d ∈ [π, 2π) by reciprocity (exact for an isotropic BRDF), θ_d > π/2 mirrored or zero as
   ``extension`` says. Nodes whose directions fall below the horizon (no MERL bin there) take
@@ -19,14 +19,14 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from ..analytic import AnalyticMaterial, evaluate
-from ..coords import rusinkiewicz_to_directions
-from ..knn import KnnInterpolator
-from ..losses import FrequencyLossConfig
-from ..merl import merl_above_horizon, merl_bin_angles, merl_bin_to_angles, merl_lookup_directions
+from ..data.analytic import AnalyticMaterial, evaluate
+from ..data.synth import draw_material
+from ..io.merl import merl_above_horizon, merl_bin_angles, merl_bin_to_angles, merl_lookup_directions
+from ..models.losses import FrequencyLossConfig
 from ..models.mapping import LogRelativeMapping
-from ..sht import SHT
-from ..synth import draw_material
+from ..numerics.coords import rusinkiewicz_to_directions
+from ..numerics.knn import KnnInterpolator
+from ..numerics.sht import SHT
 
 
 def draw_procedural(generator: torch.Generator) -> AnalyticMaterial:

@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 
 from ..configs import from_dict
-from ..data import Split
+from ..data.folders import Split
 from ..models.autoencoder import Model
 from ..presets import AUGMENTATION
 from .config import TrainConfig, selection_score

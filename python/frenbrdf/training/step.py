@@ -1,6 +1,6 @@
 """One optimisation step, and the one place where the loss is composed.
 
-Training (:mod:`.loop`) and the step timing (:mod:`frenbrdf.timing`) both call
+Training (:mod:`.loop`) and the step timing (:mod:`frenbrdf.study.timing`) both call
 :func:`optimisation_step`, so what is timed is what trains.
 """
 
@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import torch
 
-from ..losses import FrequencyLoss, LossConfig, latent_penalty, reconstruction_loss, weight_penalty
+from ..models.losses import FrequencyLoss, LossConfig, latent_penalty, reconstruction_loss, weight_penalty
 from ..models.nbrdf import nbrdf_forward
 
 

@@ -1,0 +1,136 @@
+"""Evaluations per second of the native RGL ``.bsdf`` evaluator against Mitsuba 3's
+``measured`` plugin, measured side by side in one run.
+
+    python benches/peers/bsdf_eval.py [--file PATH.bsdf] [--n 20000] [--repeats 5] [--json results.json]
+
+1. The same ``--n`` random direction pairs (float32-rounded, so both see identical inputs)
+   evaluated by ``frenbrdf._native.BsdfMeasurement.eval`` (one batched call, rayon) and by
+   Mitsuba's ``measured`` BSDF in the ``scalar_rgb`` variant (its JIT variants crash on these
+   files), one ``eval`` call per pair from a Python loop, as Mitsuba's scalar variant
+   allows. Mitsuba's values (f·cos θ_o) are divided by cos θ_o and checked against ours
+   before anything is timed. The ratio therefore includes Python's per-call overhead on
+   Mitsuba's side: it is what evaluating these files from Python costs with each.
+2. One MERL table's 1,458,000 bins (90 θ_h × 90 θ_d × 180 φ_d, each at its bin position
+   ``frenbrdf._native.merl_bin_to_angles``, φ_h = 0) converted to direction pairs and
+   evaluated in one call (goal: well under a second on 2 cores). Pairs with a direction
+   below the horizon (MERL's unmeasured bins) are 0 and cheap.
+
+Prints the CPU's model (``lscpu``) and the thread count. Times are medians after a warm-up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from frenbrdf import _native
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
+from common import cpu_model, median_seconds  # noqa: E402
+
+SHARED_DATA = Path(os.environ.get("FRENBRDF_SHARED_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
+DEFAULT_FILE = SHARED_DATA / "rgl-measured" / "vch_golden_yellow_rgb.bsdf"
+
+
+def direction_pairs(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Uniform pairs over the upper hemisphere (z ≥ 0.02), rounded to float32."""
+    rng = np.random.default_rng(seed)
+
+    def upper() -> np.ndarray:
+        z = rng.uniform(0.02, 1.0, n)
+        phi = rng.uniform(0.0, 2 * np.pi, n)
+        rho = np.sqrt(1.0 - z * z)
+        return np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=1).astype(np.float32).astype(np.float64)
+
+    return upper(), upper()
+
+
+def merl_bin_directions() -> tuple[np.ndarray, np.ndarray]:
+    """(wi, wo) at every MERL bin, θ_h slowest, φ_d fastest."""
+    bins = np.stack(np.meshgrid(np.arange(90.0), np.arange(90.0), np.arange(180.0), indexing="ij"), -1).reshape(-1, 3)
+    angles = _native.merl_bin_to_angles(bins)
+    rusinkiewicz = np.stack([angles[:, 0], np.zeros(len(angles)), angles[:, 1], angles[:, 2]], axis=1)
+    return _native.rusinkiewicz_to_directions(rusinkiewicz)
+
+
+def mitsuba_eval(path: Path, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, float]:
+    """Mitsuba's f (its eval over cos θ_o) at the pairs, and the loop's time."""
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    bsdf = mi.load_dict({"type": "measured", "filename": str(path)})
+    ctx, si = mi.BSDFContext(), mi.SurfaceInteraction3f()
+    wi_list, wo_list = wi.tolist(), wo.tolist()
+    out = np.empty((len(wi), 3))
+
+    def loop() -> None:
+        for k in range(len(wi_list)):
+            si.wi = mi.Vector3f(wi_list[k])
+            out[k] = bsdf.eval(ctx, si, mi.Vector3f(wo_list[k]))
+
+    loop()
+    start = time.perf_counter()
+    loop()
+    return np.maximum(out / wo[:, 2:], 0.0), time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--file", type=Path, default=DEFAULT_FILE, help="an RGB .bsdf file of the RGL database")
+    parser.add_argument("--n", type=int, default=20_000, help="direction pairs of the peer comparison")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--json", type=Path, help="also write the results here")
+    args = parser.parse_args()
+    if not args.file.is_file():
+        sys.exit(f"{args.file} not found: pass --file or set FRENBRDF_SHARED_DATA")
+
+    measurement = _native.BsdfMeasurement.read(args.file)
+    wi, wo = direction_pairs(args.n)
+    ours = measurement.eval(wi, wo)
+    reference, mitsuba_s = mitsuba_eval(args.file, wi, wo)
+    scale = reference.max()
+    np.testing.assert_allclose(ours, reference, rtol=2e-4, atol=2e-6 * scale)
+    error = np.abs(ours - reference)
+
+    ours_s = median_seconds(lambda: measurement.eval(wi, wo), args.repeats)
+    big_wi, big_wo = direction_pairs(1_000_000, seed=1)
+    ours_big_s = median_seconds(lambda: measurement.eval(big_wi, big_wo), args.repeats)
+    merl_wi, merl_wo = merl_bin_directions()
+    merl_s = median_seconds(lambda: measurement.eval(merl_wi, merl_wo), args.repeats)
+    above = float(np.mean((merl_wi[:, 2] > 0) & (merl_wo[:, 2] > 0)))
+
+    results = {
+        "cpu": cpu_model(),
+        "threads": _native.num_threads(),
+        "file": args.file.name,
+        "pairs": args.n,
+        "max_abs_error": float(error.max()),
+        "max_value": float(scale),
+        "ours_evals_per_s": args.n / ours_s,
+        "ours_evals_per_s_1M_batch": 1e6 / ours_big_s,
+        "mitsuba_scalar_rgb_evals_per_s": args.n / mitsuba_s,
+        "ratio_ours_over_mitsuba": mitsuba_s / ours_s,
+        "merl_table_bins": len(merl_wi),
+        "merl_table_fraction_above_horizon": above,
+        "merl_table_s": merl_s,
+    }
+    print(f"CPU: {results['cpu']} ({results['threads']} threads); {args.file.name}")
+    print(f"agreement on {args.n} pairs: max abs error {error.max():.2e} (max value {scale:.3g})")
+    print(f"ours:    {results['ours_evals_per_s']:,.0f} evaluations/s ({args.n} pairs), "
+          f"{results['ours_evals_per_s_1M_batch']:,.0f}/s (1,000,000 pairs)")
+    print(f"Mitsuba: {results['mitsuba_scalar_rgb_evals_per_s']:,.0f} evaluations/s (scalar_rgb, one call per pair)")
+    print(f"ratio ours / Mitsuba: {results['ratio_ours_over_mitsuba']:.1f}×")
+    print(f"one MERL table ({len(merl_wi):,} bins, {above:.0%} with both directions above the horizon): "
+          f"{merl_s:.3f} s")
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

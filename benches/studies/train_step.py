@@ -1,0 +1,67 @@
+"""Training-step time of each method at default settings, and the share of L_fre.
+
+    python benches/studies/train_step.py [--data DIR] [--steps 20] [--device cpu|cuda]
+
+Without ``--data`` it writes 16 materials of the default synthetic bank to a temporary
+folder. For FreNBRDF it times the same step with and without the frequency term (same
+model, same samples), so the difference is what L_fre adds; it also times the parts of
+L_fre alone. Writes ``bench-results/train_step.{md,json}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import torch
+
+from frenbrdf.study.timing import time_training_step
+from frenbrdf.training import config_for
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
+from common import material_folder  # noqa: E402
+
+
+def time_method(method: str, data: Path, steps: int, device: torch.device, slices=None) -> dict:
+    """One method's preset, timed by :func:`frenbrdf.study.timing.time_training_step` (shared with chart 2)."""
+    cfg = config_for(method, data=str(data), out="", progress=False, cache_dir=str(data / ".cache"))
+    if slices is not None:
+        cfg.loss.frequency.slices = slices
+    return time_training_step(cfg, steps, device)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path)
+    parser.add_argument("--steps", type=int, default=30)
+    parser.add_argument("--device", default="cpu")
+    parser.add_argument("--slices", help="θ_h bin indices of the L_fre slices, e.g. 0,24,48,72 (default: the config's)")
+    parser.add_argument("--out", type=Path, default=Path("bench-results"))
+    args = parser.parse_args()
+    device = torch.device(args.device)
+    with tempfile.TemporaryDirectory() as scratch:
+        data = material_folder(args.data, scratch)
+        slices = tuple(int(i) for i in args.slices.split(",")) if args.slices else None
+        results = [time_method(method, data, args.steps, device, slices) for method in ("frenbrdf", "nbrdf", "hyperbrdf")]
+    lines = [f"Training step at default settings on {device} (torch threads: {torch.get_num_threads()}), "
+             f"median of {args.steps} steps; L_fre slices: {args.slices or 'default'}.", "",
+             "| method | NBRDF | step (ms) | without L_fre (ms) | L_fre adds |", "|---|---|---|---|---|"]
+    for r in results:
+        without = f"{1e3 * r['step_without_fre_s']:.1f}" if "step_without_fre_s" in r else "–"
+        share = f"{100 * r['fre_added_share']:.0f} %" if "fre_added_share" in r else "–"
+        lines.append(f"| {r['method']} | 6→{'→'.join(map(str, r['nbrdf_hidden']))}→3 | {1e3 * r['step_s']:.1f} | "
+                     f"{without} | {share} |")
+    fre = results[0]
+    lines += ["", f"L_fre alone: NBRDF at the grid nodes {1e3 * fre['fre_nbrdf_eval_s']:.1f} ms; "
+                  f"forward + backward (incl. SHT and its adjoint) {1e3 * fre['fre_forward_backward_s']:.1f} ms."]
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "train_step.md").write_text("\n".join(lines) + "\n")
+    (args.out / "train_step.json").write_text(json.dumps(results, indent=2) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

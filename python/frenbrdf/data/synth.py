@@ -1,0 +1,234 @@
+"""A seeded bank of physically based analytic BRDFs, written as MERL files.
+
+This is the project's embedded default data: with no measured materials at hand,
+:func:`write_bank` produces a folder of real MERL ``.binary`` files (and a ``bank.json``
+manifest) from isotropic analytic models whose colours and roughness are spread like
+those of the MERL database: many paints and plastics, several metals, a few fabrics and
+clear-coated materials, from rough to near-mirror.
+
+The materials come from the analytic families of :mod:`frenbrdf.data.analytic` (models,
+formulas, reciprocity and energy conservation are documented there); this module draws
+them at random (:func:`material_bank`), names them and writes them
+(:func:`write_bank`). The analytic names (``AnalyticMaterial``, ``evaluate``,
+``merl_table``, ``METALS``, ...) stay importable from here.
+
+Examples
+--------
+>>> from frenbrdf import synth
+>>> bank = synth.material_bank(100, seed=0)
+>>> bank[0].name, bank[0].kind
+('synth-000-orange-fabric', 'fabric')
+>>> table = synth.merl_table(bank[0])      # (3, 90, 90, 180), −1 × scale where missing
+>>> paths = synth.write_bank("bank", n=100)                     # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import colorsys
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..io.atomic import write_text
+from ..io.merl import write_merl
+from .analytic import (
+    METALS,
+    MIN_ROUGHNESS,
+    RGB,
+    SHEEN_ROUGHNESS_RANGE,
+    AnalyticMaterial,
+    evaluate,
+    merl_table,
+)
+from .microfacet import ggx_d, ggx_visibility
+
+__all__ = ["KINDS", "KIND_SHARES", "MANIFEST_NAME", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
+           "AnalyticMaterial", "draw_material", "evaluate", "ggx_d", "ggx_visibility", "material_bank", "merl_table", "write_bank"]
+
+#: The kinds of material in a bank, and the share of each.
+KIND_SHARES = {"plastic": 0.35, "metal": 0.25, "coated": 0.20, "fabric": 0.10, "diffuse": 0.10}
+KINDS = tuple(KIND_SHARES)
+
+#: The manifest written next to the tables by :func:`write_bank`.
+MANIFEST_NAME = "bank.json"
+
+
+# --- The bank ------------------------------------------------------------------------
+
+
+def _kind_counts(n: int) -> dict[str, int]:
+    """How many materials of each kind a bank of ``n`` holds.
+
+    Shares of :data:`KIND_SHARES`, rounded by largest remainder; every kind at least
+    once when ``n`` allows it.
+    """
+    target = np.array(list(KIND_SHARES.values())) * n
+    counts = np.floor(target).astype(int)
+    if n >= len(KINDS):
+        counts = np.maximum(counts, 1)
+    while counts.sum() < n:
+        counts[np.argmax(target - counts)] += 1
+    while counts.sum() > n:  # only after raising small kinds to 1: take from the most over-served
+        counts[np.argmax(np.where(counts > 1, counts - target, -np.inf))] -= 1
+    return dict(zip(KINDS, counts.tolist()))
+
+
+def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
+    return float(np.exp(rng.uniform(np.log(low), np.log(high))))
+
+
+def _linear(display_rgb) -> RGB:
+    """Display (gamma 2.2) colour → linear reflectance."""
+    return tuple(float(c) ** 2.2 for c in display_rgb)
+
+
+def _paint_colour(rng: np.random.Generator) -> RGB:
+    """A paint- or plastic-like albedo: moderate saturation, some dark, some bright."""
+    hue = rng.uniform()
+    saturation = 0.95 * rng.beta(1.6, 2.2)
+    value = rng.uniform(0.08, 0.3) if rng.uniform() < 0.2 else rng.uniform(0.3, 0.95)
+    return _linear(colorsys.hsv_to_rgb(hue, saturation, value))
+
+
+_HUE_NAMES = ((0.04, "red"), (0.11, "orange"), (0.19, "yellow"), (0.45, "green"), (0.54, "cyan"),
+              (0.72, "blue"), (0.83, "purple"), (0.95, "pink"), (1.01, "red"))
+
+
+def _colour_name(rgb: RGB) -> str:
+    """A short name for a linear colour, e.g. ``dark-blue`` or ``grey``."""
+    hue, saturation, value = colorsys.rgb_to_hsv(*(c ** (1 / 2.2) for c in rgb))
+    if saturation < 0.15:
+        return "black" if value < 0.2 else "grey" if value < 0.7 else "white"
+    name = next(label for bound, label in _HUE_NAMES if hue < bound)
+    return f"dark-{name}" if value < 0.35 else name
+
+
+def _sample_metal(rng: np.random.Generator, roughness_range=(0.01, 0.6)) -> tuple[str, dict]:
+    metal = list(METALS)[rng.integers(len(METALS))]
+    n, k = METALS[metal]
+    params = {"metal_n": n, "metal_k": k, "roughness": _log_uniform(rng, *roughness_range)}
+    if rng.uniform() < 0.3:  # a tinted (anodised, lacquered) variant; brightest channel stays 1
+        params["tint"] = _linear(colorsys.hsv_to_rgb(rng.uniform(), rng.uniform(0.15, 0.5), 1.0))
+        metal = f"tinted-{metal}"
+    return metal, params
+
+
+def _sample_diffuse(rng: np.random.Generator) -> tuple[str, dict]:
+    colour = _paint_colour(rng)
+    return _colour_name(colour), {"diffuse": colour}
+
+
+def _sample_plastic(rng: np.random.Generator) -> tuple[str, dict]:
+    colour = _paint_colour(rng)
+    return _colour_name(colour), {"diffuse": colour, "specular": 1.0,
+                                  "roughness": _log_uniform(rng, 0.01, 0.6), "ior": rng.uniform(1.4, 1.7)}
+
+
+def _sample_fabric(rng: np.random.Generator) -> tuple[str, dict]:
+    colour = _paint_colour(rng)
+    # The sheen is a paler, brighter version of the cloth's colour.
+    hue, saturation, _ = colorsys.rgb_to_hsv(*(c ** (1 / 2.2) for c in colour))
+    sheen = _linear(colorsys.hsv_to_rgb(hue, 0.5 * saturation, rng.uniform(0.5, 1.0)))
+    return _colour_name(colour), {"diffuse": colour, "sheen": sheen,
+                                  "sheen_roughness": rng.uniform(*SHEEN_ROUGHNESS_RANGE)}
+
+
+def _sample_coated(rng: np.random.Generator) -> tuple[str, dict]:
+    coat = {"coat": rng.uniform(0.6, 1.0), "coat_roughness": _log_uniform(rng, 0.01, 0.15),
+            "coat_ior": rng.uniform(1.45, 1.6)}
+    if rng.uniform() < 0.4:  # metallic paint: a rough metal under the clear coat
+        label, base = _sample_metal(rng, roughness_range=(0.15, 0.6))
+    else:
+        label, base = _sample_diffuse(rng)
+    return label, {**base, **coat}
+
+
+_SAMPLERS = {"diffuse": _sample_diffuse, "plastic": _sample_plastic, "metal": _sample_metal,
+             "fabric": _sample_fabric, "coated": _sample_coated}
+
+
+def draw_material(rng: np.random.Generator, kind: str | None = None, name: str = "{label}-{kind}") -> AnalyticMaterial:
+    """One random analytic material, drawn as the bank draws them.
+
+    Parameters
+    ----------
+    rng
+        The source of every random choice (colours, roughness, Fresnel, layers).
+    kind
+        One of :data:`KINDS`; None draws it with the probabilities of :data:`KIND_SHARES`.
+    name
+        The material's name, a template in which ``{label}`` (e.g. ``copper``) and ``{kind}``
+        are filled in.
+    """
+    if kind is None:
+        kind = KINDS[rng.choice(len(KINDS), p=np.array(list(KIND_SHARES.values())))]
+    if kind not in _SAMPLERS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+    label, params = _SAMPLERS[kind](rng)
+    return AnalyticMaterial(name=name.format(label=label, kind=kind), **params)
+
+
+def material_bank(n: int = 100, seed: int = 0) -> list[AnalyticMaterial]:
+    """A deterministic bank of ``n`` analytic materials.
+
+    Kinds follow :data:`KIND_SHARES` (every kind appears once ``n ≥ 5``) in a shuffled
+    order; colours, roughness and the other parameters are drawn from
+    ``numpy.random.default_rng(seed)``. Names look like ``synth-007-copper-metal``.
+
+    Raises
+    ------
+    ValueError
+        ``n < 1``.
+    """
+    if n < 1:
+        raise ValueError(f"a material bank needs n >= 1 materials, got {n}")
+    rng = np.random.default_rng(seed)
+    kinds = [kind for kind, count in _kind_counts(n).items() for _ in range(count)]
+    width = max(3, len(str(n - 1)))
+    bank = []
+    for index, kind in enumerate(rng.permutation(kinds)):
+        bank.append(draw_material(rng, str(kind), name=f"synth-{index:0{width}d}-{{label}}-{{kind}}"))
+    return bank
+
+
+def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, progress: bool = True) -> list[Path]:
+    """Writes :func:`material_bank` ``(n, seed)`` as MERL files and a manifest.
+
+    Each material becomes ``out_dir / f"{name}.binary"``; ``out_dir / "bank.json"`` then
+    records ``n``, ``seed`` and every material's parameters. The manifest is written
+    last, so its presence means the bank is complete. All files are written atomically.
+
+    Parameters
+    ----------
+    out_dir
+        Destination folder, created if needed.
+    n, seed
+        Passed to :func:`material_bank`.
+    progress
+        Show a progress bar.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The MERL files, in bank order.
+
+    Raises
+    ------
+    ValueError
+        ``n < 1``.
+    """
+    from tqdm import tqdm
+
+    bank = material_bank(n, seed)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for material in tqdm(bank, desc="synthesising BRDFs", unit="material", disable=not progress):
+        path = out_dir / f"{material.name}.binary"
+        write_merl(path, merl_table(material))
+        paths.append(path)
+    manifest = {"n": n, "seed": seed, "materials": [{"file": p.name, **m.to_dict()} for p, m in zip(paths, bank)]}
+    write_text(out_dir / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
+    return paths

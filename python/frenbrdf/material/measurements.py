@@ -1,0 +1,255 @@
+"""A user's measurements of one material: scattered (ω_i, ω_o, RGB) samples from a file.
+
+Three inputs are read, each into :class:`Measurements`:
+
+CSV (``.csv``)
+    A header row, then one sample per row. Either the *vector form*,
+    ``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b``, or an *angle form*,
+    ``theta_i,phi_i,theta_o,phi_o,r,g,b`` (radians) or
+    ``theta_i_deg,phi_i_deg,theta_o_deg,phi_o_deg,r,g,b`` (degrees), with
+    ω = (sin θ cos φ, sin θ sin φ, cos θ). Columns may come in any order; no other columns.
+NPZ (``.npz``)
+    One 1-D array per column of one of the forms above, named as the columns.
+MERL (``.binary``)
+    A MERL table sampled at ``samples`` random valid bins (default 4000) or at all of them;
+    the table is kept as the truth.
+
+Directions are unit vectors in the local shading frame (z = the surface normal, both above
+the surface: z > 0). Lengths may be off by at most :data:`UNIT_TOLERANCE` (1e-3); they are
+then normalised. ``r, g, b`` is the BRDF value in 1/sr (reflectance as MERL tables hold it
+in physical units, not multiplied by cos θ_i), ≥ 0, finite. At least :data:`MIN_SAMPLES`
+samples, at most :data:`MAX_SAMPLES`. Every error names the file and the row, 1-based as a
+spreadsheet shows it (the CSV header is row 1; in an NPZ, row k is the k-th sample).
+
+A CSV is read row by row into one float64 array (memory about 8 bytes a value, the data's own
+size); an NPZ's declared sizes are checked before it is decompressed.
+"""
+
+from __future__ import annotations
+
+import array
+import csv
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..io.paths import checked_npz, input_file
+from ..models.nbrdf import MAX_REFLECTANCE, UNIT_TOLERANCE
+
+#: The fewest samples accepted: fewer say too little about a material for the encoder.
+MIN_SAMPLES = 50
+#: The most samples accepted (a MERL table holds 1.1 million): 20 million rows of a CSV take 1.4 GB to hold.
+MAX_SAMPLES = 20_000_000
+#: ``UNIT_TOLERANCE`` (:data:`frenbrdf.models.nbrdf.UNIT_TOLERANCE`): how far from 1 a direction's length may be (it
+#: is then normalised); ``MAX_REFLECTANCE``: the largest value a model takes.
+__all__ = ["MAX_REFLECTANCE", "MAX_SAMPLES", "MIN_SAMPLES", "UNIT_TOLERANCE", "Measurements", "merl_measurements",
+           "read_measurements"]
+#: The column names of each form, and the colour columns they share.
+COLOURS = ("r", "g", "b")
+FORMS = {
+    "vectors": ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z", *COLOURS),
+    "radians": ("theta_i", "phi_i", "theta_o", "phi_o", *COLOURS),
+    "degrees": ("theta_i_deg", "phi_i_deg", "theta_o_deg", "phi_o_deg", *COLOURS),
+}
+
+
+@dataclass
+class Measurements:
+    """Samples of one material."""
+
+    values: np.ndarray
+    """``(N, 3)`` float64 BRDF values (1/sr), ≥ 0."""
+    wi: np.ndarray
+    """``(N, 3)`` unit incident directions, local frame, z > 0."""
+    wo: np.ndarray
+    """``(N, 3)`` unit outgoing directions."""
+    source: str
+    """The file read."""
+    kind: str
+    """``"csv"``, ``"npz"`` or ``"merl"``."""
+    table: np.ndarray | None = None
+    """The whole MERL table ``(3, 90, 90, 180)`` when the input was one (the truth), else None."""
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+
+def read_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
+    """Reads a CSV, NPZ or MERL file (see the module docstring).
+
+    Parameters
+    ----------
+    path
+        The file; its suffix picks the format (a MERL file may also be recognised by its size).
+    samples
+        MERL input only: sample this many random valid bins (from ``seed``), or all of them (None).
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError
+        No such file, or a folder.
+    ValueError
+        Anything wrong with the contents (the message names the file and the row), or not a regular file
+        (a FIFO).
+    """
+    from ..io.merl import FILE_BYTES
+
+    path = input_file(path, "measurement file")
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        return _checked(path, "csv", *_read_csv(path))
+    if suffix == ".npz":
+        return _checked(path, "npz", *_read_npz(path))
+    if suffix == ".binary" or path.stat().st_size == FILE_BYTES:
+        return merl_measurements(path, samples=samples, seed=seed)
+    raise ValueError(f"{path}: unknown measurement format; give a .csv or .npz of samples "
+                     f"(columns {','.join(FORMS['vectors'])}) or a MERL .binary file")
+
+
+def merl_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
+    """A MERL file sampled at ``samples`` random valid bins (drawn from ``seed``) or at all of them (None)."""
+    from ..io.merl import N_BINS, read_merl
+    from ..render.scoring import bin_directions, sample_bins, valid_bins
+
+    if samples is not None and samples < 1:
+        raise ValueError(f"samples must be ≥ 1 or all, got {samples}")
+    table = read_merl(path)
+    flat = table.reshape(3, N_BINS)
+    try:  # more samples than the table holds: all of them (a count is capped at what the data hold)
+        bins = valid_bins(table) if samples is None else sample_bins(table, np.random.default_rng(seed), samples)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
+    wi, wo = bin_directions(bins)
+    return Measurements(flat[:, bins].T.copy(), wi, wo, str(path), "merl", table)
+
+
+def _form(columns, where: str) -> str:
+    """Which form a set of column names is, or a ValueError naming what is missing or extra."""
+    for form, names in FORMS.items():
+        if set(columns) == set(names) and len(columns) == len(names):
+            return form
+    best = min(FORMS, key=lambda form: len(set(FORMS[form]) ^ set(columns)))
+    missing = [name for name in FORMS[best] if name not in columns]
+    extra = [name for name in columns if name not in FORMS[best]]
+    raise ValueError(f"{where}: the columns must be {','.join(FORMS['vectors'])} (or an angle form: "
+                     f"{','.join(FORMS['radians'])} in radians, {','.join(FORMS['degrees'])} in degrees); "
+                     f"missing {missing}, unexpected {extra}")
+
+
+def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The columns of a CSV file by name, and the (1-based) row number of each sample.
+
+    Streamed: each row is parsed as it is read into one flat float64 buffer, so memory stays near the
+    data's own size (8 bytes a value) whatever the file's length."""
+    data, rows = array.array("d"), array.array("q")
+    header, number = None, 0
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as file:
+            for number, cells in enumerate(csv.reader(file), start=1):
+                if not any(cell.strip() for cell in cells):
+                    continue
+                if header is None:
+                    header = _header(path, cells, number)
+                    continue
+                if len(cells) != len(header):
+                    raise ValueError(f"{path}: row {number}: {len(cells)} values, the header names {len(header)} "
+                                     "columns")
+                try:
+                    data.extend(map(float, cells))
+                except ValueError:
+                    column = next(i for i, cell in enumerate(cells) if not _is_number(cell))
+                    raise ValueError(f"{path}: row {number}, column {header[column]}: {cells[column].strip()[:40]!r} "
+                                     "is not a number") from None
+                rows.append(number)
+                if len(rows) > MAX_SAMPLES:
+                    raise ValueError(f"{path}: more than {MAX_SAMPLES:,} samples; give at most that many")
+    except csv.Error as error:  # a field beyond csv's limit (131,072 characters), a NUL byte, …
+        raise ValueError(f"{path}: row {number + 1}: not readable as CSV ({error})") from None
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{path}: not UTF-8 text (the byte {error.object[error.start:error.end]!r} is not UTF-8); "
+                         "save the file as UTF-8 CSV") from None
+    if header is None:
+        raise ValueError(f"{path}: the file is empty (a header row and samples are needed)")
+    values = np.frombuffer(data, dtype=np.float64).reshape(-1, len(header))
+    return {name: values[:, column] for column, name in enumerate(header)}, np.frombuffer(rows, dtype=np.int64)
+
+
+def _header(path: Path, cells: list[str], number: int) -> list[str]:
+    """The column names of a CSV's first row, checked."""
+    header = [cell.strip() for cell in cells]
+    if any(_is_number(cell) for cell in header):
+        raise ValueError(f"{path}: row {number} must be a header naming the columns, "
+                         f"e.g. {','.join(FORMS['vectors'])}")
+    if len(set(header)) != len(header):
+        raise ValueError(f"{path}: row {number}: a column is named twice: {header}")
+    _form(header, f"{path}: row {number} (header)")
+    return header
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    # The declared sizes are checked before anything is decompressed (a zip bomb declares gigabytes).
+    columns = checked_npz(path, ".npz file of samples", member_bytes=MAX_SAMPLES * 8 + 4096, members=len(FORMS["vectors"]))
+    _form(list(columns), str(path))
+    lengths = {name: array.shape for name, array in columns.items()}
+    if any(len(shape) != 1 for shape in lengths.values()) or len(set(lengths.values())) != 1:
+        raise ValueError(f"{path}: every array must be 1-D with one entry per sample, got shapes {lengths}")
+    try:
+        columns = {name: array.astype(np.float64) for name, array in columns.items()}
+    except (TypeError, ValueError):
+        raise ValueError(f"{path}: the arrays must be numbers, got dtypes "
+                         f"{ {name: str(a.dtype) for name, a in columns.items()} }") from None
+    return columns, np.arange(1, len(next(iter(columns.values()))) + 1)
+
+
+def _directions(columns: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    if "wi_x" in columns:
+        return (np.stack([columns[f"{d}_{axis}"] for axis in "xyz"], axis=-1) for d in ("wi", "wo"))
+    suffix, scale = ("_deg", np.pi / 180) if "theta_i_deg" in columns else ("", 1.0)
+    out = []
+    for d in ("i", "o"):
+        theta, phi = columns[f"theta_{d}{suffix}"] * scale, columns[f"phi_{d}{suffix}"] * scale
+        out.append(np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1))
+    return out[0], out[1]
+
+
+def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.ndarray) -> Measurements:
+    """Checks every sample, naming the first bad row; returns the samples with unit directions."""
+    def fail(bad: np.ndarray, what: str):
+        first = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{path}: row {rows[first]}: {what} ({int(bad.sum())} such row(s) in all)")
+
+    if len(rows) < MIN_SAMPLES:
+        raise ValueError(f"{path}: {len(rows)} samples; at least {MIN_SAMPLES} are needed")
+    if len(rows) > MAX_SAMPLES:
+        raise ValueError(f"{path}: {len(rows):,} samples; give at most {MAX_SAMPLES:,}")
+    for name, column in columns.items():
+        if not np.all(np.isfinite(column)):
+            fail(~np.isfinite(column), f"column {name} is NaN or infinite")
+    values = np.stack([columns[c] for c in COLOURS], axis=-1)
+    if values.min() < 0:
+        fail(np.any(values < 0, axis=1), "negative reflectance (r, g, b must be ≥ 0)")
+    if values.max() > MAX_REFLECTANCE:
+        fail(np.any(values > MAX_REFLECTANCE, axis=1), f"reflectance above {MAX_REFLECTANCE:g} 1/sr (MERL's highest "
+             "spikes are about 1e5; is the unit right?)")
+    wi, wo = _directions(columns)
+    for name, d in (("ω_i", wi), ("ω_o", wo)):
+        length = np.linalg.norm(d, axis=-1)
+        off = np.abs(length - 1) > UNIT_TOLERANCE
+        if off.any():
+            fail(off, f"{name} has length {length[off][0]:.6g}, not a unit vector (tolerance {UNIT_TOLERANCE:g})")
+        below = d[:, 2] <= 0
+        if below.any():
+            fail(below, f"{name} is at or below the horizon (z = {d[below][0, 2]:.6g} ≤ 0; directions are in "
+                        "the local shading frame, z = the normal)")
+    return Measurements(values, wi / np.linalg.norm(wi, axis=-1, keepdims=True),
+                        wo / np.linalg.norm(wo, axis=-1, keepdims=True), str(path), kind)

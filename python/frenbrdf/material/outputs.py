@@ -1,0 +1,138 @@
+"""``frenbrdf reconstruct``'s work: a measurement file in, a result folder out.
+
+:func:`reconstruct_file` reads the samples (:mod:`frenbrdf.material.measurements`), loads the model
+(a run folder, a checkpoint, or the packaged one), reconstructs and refines
+(:func:`frenbrdf.models.reconstruct.reconstruct`), computes everything, and only then writes the
+folder, all of it or nothing:
+
+``material.pt``
+    The NBRDF (:func:`frenbrdf.data.fitting.save_nbrdf`), which ``frenbrdf render`` and the
+    Mitsuba plugin load.
+``material.binary``
+    Its MERL table.
+``render.png``
+    The reconstruction on the metric renderer's sphere; with a MERL input also
+    ``truth.png`` and ``comparison.png`` (truth | reconstruction).
+``reconstruction.json``
+    The input, the model, the refinement, the latent, seconds and loss per stage, and with a
+    MERL input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
+    material pixels, :func:`frenbrdf.render.scoring.image_metrics`) and L_fre.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from ..data.fitting import save_nbrdf
+from ..io.atomic import save_json
+from ..io.merl import write_merl
+from ..io.paths import check_output_folder, replace_folder, staging_folder
+from ..models.autoencoder import Model
+from ..models.reconstruct import Reconstruction, refine_config
+from ..render.renderer import Scene, material_mask, render, save_png
+from .measurements import Measurements, read_measurements
+
+#: The file names of the result folder.
+FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.png", "truth": "truth.png",
+         "comparison": "comparison.png", "report": "reconstruction.json"}
+
+
+def load_model(model: str | os.PathLike) -> Model:
+    """``"pretrained"`` (the packaged model, :meth:`Model.pretrained`), a run folder or a checkpoint file."""
+    if str(model) == "pretrained":
+        return Model.pretrained()
+    path = Path(model)
+    if not path.exists():
+        raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file "
+                                "or 'pretrained')")
+    return Model.load(path)
+
+
+def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
+                     samples: int | None = 4000, refine: str = "full", seed: int = 0, resolution: int = 256,
+                     progress: bool = True, overwrite: bool = False) -> dict:
+    """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
+
+    Parameters
+    ----------
+    source
+        A CSV or NPZ of samples, or a MERL file (:func:`frenbrdf.material.measurements.read_measurements`).
+    out_dir
+        The result folder, created whole or replacing an earlier one whole (:func:`check_out` says which
+        folders may be written; nothing is computed when this one may not).
+    model
+        ``"pretrained"``, a run folder or a checkpoint.
+    samples
+        MERL input: random valid bins given to the model (None: all).
+    refine
+        ``"none"``, ``"latent"`` or ``"full"`` (:data:`frenbrdf.models.reconstruct.BUDGETS`).
+    seed
+        Seeds the MERL sampling and the refinement's mini-batches.
+    overwrite
+        Replace ``out_dir`` even when it holds files this function did not write (they are deleted).
+
+    Returns
+    -------
+    dict
+        What ``reconstruction.json`` holds.
+    """
+    out = check_out(source, out_dir, model, overwrite=overwrite)
+    config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress)
+    measurements = read_measurements(source, samples=samples, seed=seed)
+    loaded = load_model(model)
+    result = loaded.reconstruct(measurements.values, (measurements.wi, measurements.wo), refine=config)
+    scene = Scene(resolution=resolution)
+    images = {"render": render(result.nbrdf, scene)}
+    report = {"input": {"path": str(source), "kind": measurements.kind, "samples": len(measurements)},
+              "model": {"path": str(model), "method": loaded.method, **({"version": loaded.card.get("version")}
+                                                                          if loaded.card else {})},
+              "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary()}
+    if measurements.table is not None:
+        images["truth"] = render(measurements.table, scene)
+        images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
+        report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
+    report["files"] = sorted(FILES[name] for name in ["nbrdf", "merl", "report", *images])
+    table = result.nbrdf.merl_table()
+    _write_folder(out, result, table, images, report)
+    return report
+
+
+def truth_metrics(model: Model, result: Reconstruction, measurements: Measurements, truth_image: np.ndarray,
+                  image: np.ndarray, scene: Scene) -> dict[str, float]:
+    """RMSE, PSNR, SSIM and ΔE of the renders over the lit material pixels, and L_fre against the true table."""
+    from ..render.scoring import FrequencyMetric, image_metrics
+
+    metrics = image_metrics(truth_image, image, material_mask(scene))
+    metrics["lfre"] = FrequencyMetric()(model, measurements.table, result.nbrdf)
+    return metrics
+
+
+def check_out(source: str | os.PathLike, out_dir: str | os.PathLike, model: str | os.PathLike = "pretrained", *,
+              overwrite: bool = False) -> Path:
+    """Where :func:`reconstruct_file` may write, checked before any work (:func:`frenbrdf.io.paths.check_output_folder`):
+    a new or empty folder, or an earlier result folder (``reconstruction.json`` and only its files); never the
+    folder of the input or of the model; another folder only with ``overwrite``."""
+    inputs = (source,) if str(model) == "pretrained" else (source, model)
+    return check_output_folder(out_dir, written_by=FILES["report"], owned=tuple(FILES.values()), inputs=inputs,
+                               overwrite=overwrite)
+
+
+def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: dict, report: dict) -> None:
+    """Writes the result into a hidden folder beside ``out``, then puts it in place whole, in one rename
+    (:func:`frenbrdf.io.paths.replace_folder`): an earlier folder is replaced whole, never mixed with this one."""
+    staging = staging_folder(out)
+    try:
+        save_nbrdf(staging / FILES["nbrdf"], result.nbrdf)
+        write_merl(staging / FILES["merl"], table)
+        for name, image in images.items():
+            save_png(staging / FILES[name], image)
+        save_json(staging / FILES["report"], report)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    replace_folder(staging, out)

@@ -1,0 +1,141 @@
+"""The model shipped inside the package, and how a run folder is packed into one.
+
+This folder holds, beside this module, the packed model that :meth:`frenbrdf.Model.pretrained`
+and ``frenbrdf reconstruct --model pretrained`` load (``benches/pretrained.py`` trains and
+packs it; ``docs/pretrained.md`` is its model card):
+
+``model.pt``
+    The network's weights in float16 (halves the size; float32 again when loaded), the
+    method and the training config (JSON), with :data:`FORMAT`.
+``mapping.npz``
+    f_ref compactly: ln(f_ref + ε) quantised to 16 bits over its range, stored as differences
+    along φ_d and compressed. 1.3 MB instead of 17.5 MB for a per-bin f_ref of 10 MERL-derived
+    materials, with a relative error of (f_ref + ε) — and so of every decoded reflectance
+    + ε — below 1e-4 (``docs/pretrained.md`` has the table of the options measured).
+    A per-channel f_ref is 3 numbers and stored as they are.
+``card.json``
+    The model card: :data:`VERSION`, the training command, data, seed, held-out quality.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ...io import checkpoints
+from ...io.atomic import atomic_path, save_json
+
+#: Where the shipped model lives: this package folder.
+PACKAGE_DIR = Path(__file__).resolve().parent
+#: The packed files.
+MODEL_FILE, MAPPING_FILE, CARD_FILE = "model.pt", "mapping.npz", "card.json"
+#: The format of the packed files that :func:`pack_pretrained` writes and :func:`load_packed` reads.
+FORMAT = 1
+#: The version of the shipped model (the card's ``version``; docs/pretrained.md states it).
+VERSION = "1"
+#: Quantisation levels of ln(f_ref + ε): 16 bits.
+LEVELS = 65535
+
+
+def pack_mapping(state: dict) -> dict[str, np.ndarray]:
+    """A mapping's state (:meth:`LogRelativeMapping.state`) as compact arrays (see the module docstring)."""
+    reference = np.asarray(state["reference"], dtype=np.float64)
+    packed = {"epsilon": np.float64(state["epsilon"]), "offset": np.float64(state.get("offset", 0.0))}
+    if reference.ndim == 1:  # per channel: three numbers
+        return {**packed, "reference": reference}
+    log = np.log(reference + state["epsilon"])
+    low, high = float(log.min()), float(log.max())
+    levels = np.round((log - low) / max(high - low, 1e-30) * LEVELS).astype(np.int32)
+    # Differences along φ_d are small where f_ref is smooth, which is what makes it compress.
+    steps = np.diff(levels, axis=-1, prepend=0).astype(np.int32)
+    return {**packed, "log_steps": steps.astype(np.int16) if np.abs(steps).max() < 2**15 else steps,
+            "log_range": np.array([low, high])}
+
+
+def unpack_mapping(packed) -> dict:
+    """The inverse of :func:`pack_mapping`: a mapping state with f_ref as float64."""
+    epsilon, offset = float(packed["epsilon"]), float(packed["offset"])
+    if "reference" in packed:
+        return {"reference": np.asarray(packed["reference"], dtype=np.float64), "epsilon": epsilon, "offset": offset}
+    low, high = (float(v) for v in packed["log_range"])
+    levels = np.cumsum(np.asarray(packed["log_steps"], dtype=np.int64), axis=-1)
+    reference = np.maximum(np.exp(levels / LEVELS * (high - low) + low) - epsilon, 0.0)
+    return {"reference": reference, "epsilon": epsilon, "offset": offset}
+
+
+def pack_pretrained(run_dir: str | os.PathLike, dest: str | os.PathLike | None = None, *, card: dict | None = None,
+                    half: bool = True) -> dict[str, int]:
+    """Packs a run folder's best checkpoint into ``dest`` (default: the package's own folder).
+
+    Parameters
+    ----------
+    run_dir
+        A training run folder (``best.pt``, ``mapping.npz``).
+    dest
+        Folder of the three packed files (made if missing).
+    card
+        What the model card says beyond what the checkpoint knows (training command, data,
+        held-out quality); ``format``, ``version``, ``method`` and ``model`` are added.
+    half
+        Store the weights as float16 (else float32).
+
+    Returns
+    -------
+    dict
+        Bytes of each file written.
+    """
+    run_dir = Path(run_dir)
+    dest = Path(dest) if dest is not None else PACKAGE_DIR
+    checkpoint = checkpoints.load(run_dir / "best.pt")
+    mapping = checkpoints.load_mapping(run_dir / "best.pt", checkpoint)
+    dtype = torch.float16 if half else torch.float32
+    packed = {"format": FORMAT, "method": checkpoint["method"], "config": checkpoint["config"],
+              "model": {name: value.to(dtype) for name, value in checkpoint["model"].items()}}
+    dest.mkdir(parents=True, exist_ok=True)
+    with atomic_path(dest / MODEL_FILE) as temporary:
+        torch.save(packed, temporary)
+    with atomic_path(dest / MAPPING_FILE) as temporary:
+        np.savez_compressed(temporary, **pack_mapping(mapping))
+    config = json.loads(checkpoint["config"])
+    save_json(dest / CARD_FILE, {"version": VERSION, **(card or {}), "format": FORMAT, "method": checkpoint["method"],
+                                 "model": config["model"], "weights": "float16" if half else "float32"})
+    return {name: (dest / name).stat().st_size for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE)}
+
+
+def load_packed(folder: str | os.PathLike | None = None) -> tuple[dict, dict, dict]:
+    """The packed model of ``folder`` (default: the package's): a checkpoint-like dict (``model``, ``config``,
+    ``method``), the mapping state and the card.
+
+    Raises
+    ------
+    FileNotFoundError
+        A packed file is absent (the package ships no model).
+    ValueError
+        A packed file is damaged or of another format; the message names it.
+    """
+    folder = Path(folder) if folder is not None else PACKAGE_DIR
+    missing = [name for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE) if not (folder / name).is_file()]
+    if missing:
+        raise FileNotFoundError(f"no pretrained model: {folder} lacks {', '.join(missing)}. This installation of "
+                                "frenbrdf ships without one; train one and pass its run folder with --model RUN_DIR, "
+                                "or pack one with benches/pretrained.py (docs/pretrained.md)")
+    path = folder / MODEL_FILE
+    try:
+        packed = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as error:  # torch raises several types for damaged files
+        raise ValueError(f"{path}: not a readable packed model ({error})") from None
+    if not isinstance(packed, dict) or not {"format", "model", "config", "method"} <= set(packed):
+        raise ValueError(f"{path}: not a packed frenbrdf model")
+    if packed["format"] != FORMAT:
+        raise ValueError(f"{path}: packed-model format {packed['format']!r}; this frenbrdf reads format {FORMAT}")
+    try:
+        with np.load(folder / MAPPING_FILE) as saved:
+            mapping = unpack_mapping(saved)
+        card = json.loads((folder / CARD_FILE).read_text())
+    except Exception as error:  # numpy and json raise several types for damaged files
+        raise ValueError(f"{folder}: a damaged {MAPPING_FILE} or {CARD_FILE} ({error})") from None
+    return packed, mapping, card

@@ -1,0 +1,259 @@
+"""A user's own material: encode its samples, then refine at test time.
+
+:func:`reconstruct` (``Model.reconstruct``, ``frenbrdf reconstruct``) runs up to three stages:
+
+0. **encode** — the set encoder's latent z of the samples (:meth:`frenbrdf.Model.encode`).
+1. **latent** — z optimised on the samples with the model's training objective: the
+   cos θ_i-weighted reconstruction loss in the mapped space (L1 or MSE, as the model was
+   trained) + λ2 · the latent penalty; the decoder stays fixed.
+2. **weights** — the decoded NBRDF's own weights optimised, starting from the decoder's
+   output (a per-material fit that starts where the encoder left off), with the same
+   reconstruction loss + λ1 · the weight penalty.
+
+Named budgets (:data:`BUDGETS`): ``"none"`` (stage 0), ``"latent"`` (0 + 1), ``"full"``
+(0 + 1 + 2). Each stage is deterministic from :attr:`RefineConfig.seed` unless its
+wall-clock budget (:attr:`RefineConfig.seconds`) stops it first.
+
+Samples come as arrays or from a file (:mod:`frenbrdf.material.measurements`): CSV or NPZ rows
+``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b`` — unit directions in the local shading frame
+(z = the normal, z > 0), BRDF values in 1/sr (≥ 0, not multiplied by cos θ_i); or angle
+columns ``theta_i,phi_i,theta_o,phi_o`` (radians; ``…_deg`` in degrees); or a MERL file.
+:func:`frenbrdf.material.outputs.reconstruct_file` writes a result folder (``frenbrdf reconstruct``).
+
+Examples
+--------
+>>> model = frenbrdf.Model.load("runs/frenbrdf")                        # doctest: +SKIP
+>>> result = model.reconstruct(values, (wi, wo), refine="full")          # doctest: +SKIP
+>>> result.nbrdf(wi, wo), result.timings, result.losses                  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from .losses import LossConfig, latent_penalty, reconstruction_loss, weight_penalty
+from .nbrdf import NBRDF, mapped_samples, nbrdf_forward
+
+#: Stages of :func:`reconstruct`, in order.
+STAGES = ("encode", "latent", "weights")
+
+
+@dataclass
+class RefineConfig:
+    """How much test-time refinement :func:`reconstruct` does."""
+
+    latent_steps: int = 0
+    """Adam steps on the latent z (stage 1; 0 skips it)."""
+    weight_steps: int = 0
+    """Adam steps on the decoded NBRDF's weights (stage 2; 0 skips it)."""
+    latent_lr: float = 1e-2
+    """Adam learning rate of stage 1."""
+    weight_lr: float = 1e-3
+    """Adam learning rate of stage 2."""
+    batch: int = 4096
+    """Samples per step, drawn at random (from ``seed``) when there are more; all of them when fewer."""
+    seconds: float | None = None
+    """Wall-clock budget of *each* refinement stage: a stage stops after this many seconds even if
+    steps remain (None: no limit). A stage stopped by time is no longer deterministic."""
+    seed: int = 0
+    """Seeds the mini-batches."""
+    progress: bool = False
+    """Show a progress bar per stage."""
+
+    def __post_init__(self):
+        problems = []
+        for name in ("latent_steps", "weight_steps"):
+            if int(getattr(self, name)) < 0:
+                problems.append(f"{name} must be ≥ 0, got {getattr(self, name)}")
+        for name in ("latent_lr", "weight_lr"):  # Adam's steps are about lr in size: larger ones overflow
+            if not 0 < getattr(self, name) <= 1:
+                problems.append(f"{name} must lie in (0, 1], got {getattr(self, name)}")
+        if int(self.batch) < 1:
+            problems.append(f"batch must be ≥ 1, got {self.batch}")
+        if self.seconds is not None and not self.seconds > 0:
+            problems.append(f"seconds must be positive or None, got {self.seconds}")
+        if problems:
+            raise ValueError("invalid refinement: " + "; ".join(problems))
+
+
+#: The named budgets of ``refine=``, at the knees of chart 8 (docs/charts/chart8_refine.png; CPU seconds of one
+#: thread per material, a MERL-trained model, 4000 samples). Latent: 100 steps take 0.4 s and give +6.9 dB in
+#: distribution (400 steps add 2.5 dB for 1.3 s more); full: 300 weight steps after them take 1.2–1.4 s and reach
+#: 46–49 dB, within 1 dB of fit-nbrdf's 3 epochs or above it in a tenth of its time (1000 steps: +3–4 dB for 2 s more).
+BUDGETS = {
+    "none": RefineConfig(),
+    "latent": RefineConfig(latent_steps=100),
+    "full": RefineConfig(latent_steps=100, weight_steps=300),
+}
+
+
+def refine_config(refine: str | RefineConfig) -> RefineConfig:
+    """A :class:`RefineConfig` from a budget name of :data:`BUDGETS`, or the config itself."""
+    if isinstance(refine, RefineConfig):
+        return refine
+    if refine not in BUDGETS:
+        raise ValueError(f"refine must be one of {tuple(BUDGETS)} or a RefineConfig, got {refine!r}")
+    return dataclasses.replace(BUDGETS[refine])
+
+
+@dataclass
+class Reconstruction:
+    """What :func:`reconstruct` found for one material."""
+
+    z: np.ndarray
+    """The latent ``(latent,)`` after stage 1 (the encoder's when stage 1 did not run)."""
+    nbrdf: NBRDF
+    """The material: ``model.decode(z)``, or the refined weights after stage 2."""
+    timings: dict[str, float] = field(default_factory=dict)
+    """Seconds per stage that ran (``encode``, ``latent``, ``weights``)."""
+    losses: dict[str, float] = field(default_factory=dict)
+    """Per stage that ran, the reconstruction loss (mapped space, cos θ_i-weighted, the model's L1 or MSE)
+    on all given samples after it: comparable between stages."""
+    steps: dict[str, int] = field(default_factory=dict)
+    """Steps each refinement stage took (fewer than asked when its ``seconds`` ran out)."""
+
+    def summary(self) -> dict:
+        """JSON-ready: the latent, timings, losses and steps."""
+        return {"z": [float(v) for v in self.z], "timings_s": self.timings, "losses": self.losses,
+                "steps": self.steps}
+
+
+@dataclass
+class _Samples:
+    """One material's samples as tensors: NBRDF inputs, mapped values and cos θ_i, with a leading batch of 1."""
+
+    coords: torch.Tensor
+    values: torch.Tensor
+    cos_in: torch.Tensor
+
+    def __len__(self) -> int:
+        return self.coords.shape[1]
+
+    def batch(self, size: int, generator: torch.Generator) -> _Samples:
+        if len(self) <= size:
+            return self
+        rows = torch.randint(len(self), (size,), generator=generator)
+        return _Samples(self.coords[:, rows], self.values[:, rows], self.cos_in[:, rows])
+
+
+def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full") -> Reconstruction:
+    """Encodes one material's samples and refines the result at test time (see the module docstring).
+
+    Parameters
+    ----------
+    model
+        A :class:`frenbrdf.Model`.
+    values
+        Reflectance ``(N, 3)`` (physical units, ≥ 0).
+    directions
+        ``(wi, wo)``, unit vectors ``(N, 3)`` each, above the surface.
+    refine
+        A budget name of :data:`BUDGETS` (``"none"``, ``"latent"``, ``"full"``) or a :class:`RefineConfig`.
+    """
+    config = refine_config(refine)
+    loss = _loss_config(model)
+    mapped, coords, cos_in = mapped_samples(model.mapping, values, directions)
+    samples = _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in)))
+    result = Reconstruction(np.zeros(0), None)
+
+    start = time.perf_counter()
+    z = torch.from_numpy(model.encode(values, directions).astype(np.float32))[None]
+    result.timings["encode"] = time.perf_counter() - start
+    with torch.no_grad():
+        params = model.network.decoder(z)
+    result.losses["encode"] = _sample_loss(params, samples, loss.kind)
+    if not math.isfinite(result.losses["encode"]):
+        raise ValueError("the model's decoded NBRDF is not finite on these samples before any refinement: the model "
+                         "is damaged, or the samples lie far outside what it was trained on")
+
+    if config.latent_steps:
+        z = z.clone().requires_grad_(True)
+
+        def latent_objective(batch: _Samples) -> torch.Tensor:
+            predicted = nbrdf_forward(model.network.decoder(z), batch.coords)
+            return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind) \
+                + loss.lambda_latent * latent_penalty(z)
+
+        with _frozen(model.network):
+            _optimise("latent", [z], latent_objective, config.latent_steps, config.latent_lr, samples, config, result)
+        z = z.detach()
+        with torch.no_grad():
+            params = model.network.decoder(z)
+        result.losses["latent"] = _sample_loss(params, samples, loss.kind)
+
+    if config.weight_steps:
+        params = [p.detach().clone().requires_grad_(True) for p in params]
+
+        def weight_objective(batch: _Samples) -> torch.Tensor:
+            predicted = nbrdf_forward(params, batch.coords)
+            return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind) \
+                + loss.lambda_weights * weight_penalty(params, loss.weight_penalty)
+
+        _optimise("weights", params, weight_objective, config.weight_steps, config.weight_lr, samples, config, result)
+        result.losses["weights"] = _sample_loss(params, samples, loss.kind)
+
+    result.z = z[0].detach().numpy().astype(np.float64)
+    result.nbrdf = NBRDF([p.detach() for p in params], model.mapping)  # checked: finite weights
+    result.nbrdf(*(np.asarray(d, dtype=np.float64) for d in directions))  # raises where its reflectance overflows
+    return result
+
+
+def _loss_config(model) -> LossConfig:
+    """The model's training loss settings that refinement uses (LossConfig's defaults for what it lacks)."""
+    kept = {"kind", "lambda_weights", "weight_penalty", "lambda_latent"}
+    return LossConfig(**{key: value for key, value in model.loss.items() if key in kept})
+
+
+def _optimise(stage: str, parameters: list[torch.Tensor], objective: Callable[[_Samples], torch.Tensor], steps: int,
+              lr: float, samples: _Samples, config: RefineConfig, result: Reconstruction) -> None:
+    """Adam on ``parameters`` for ``steps`` steps or ``config.seconds``; records the time and steps taken."""
+    optimizer = torch.optim.Adam(parameters, lr=lr)
+    generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
+    start, taken = time.perf_counter(), 0
+    for _ in tqdm(range(steps), desc=f"refine {stage}", disable=not config.progress, leave=False):
+        if config.seconds is not None and time.perf_counter() - start > config.seconds:
+            break
+        value = objective(samples.batch(config.batch, generator))
+        if not torch.isfinite(value):  # finite at the start (checked), so the steps made it so
+            setting = "latent_lr" if stage == "latent" else "weight_lr"
+            raise ValueError(f"refinement ({stage}) diverged at step {taken} with {setting} {lr:g}: the loss is "
+                             f"{float(value)}; try a smaller {setting}")
+        optimizer.zero_grad(set_to_none=True)
+        value.backward()
+        optimizer.step()
+        taken += 1
+    result.timings[stage] = time.perf_counter() - start
+    result.steps[stage] = taken
+
+
+@torch.no_grad()
+def _sample_loss(params: list[torch.Tensor], samples: _Samples, kind: str, chunk: int = 1 << 16) -> float:
+    """The reconstruction loss on all samples (in chunks: a whole MERL table is 1.1 million)."""
+    total = 0.0
+    for start in range(0, len(samples), chunk):
+        rows = slice(start, start + chunk)
+        part = _Samples(samples.coords[:, rows], samples.values[:, rows], samples.cos_in[:, rows])
+        error = reconstruction_loss(nbrdf_forward(params, part.coords), part.values, part.cos_in, kind)
+        total += float(error) * part.coords.shape[1]
+    return total / len(samples)
+
+
+@contextmanager
+def _frozen(module: torch.nn.Module):
+    """The module's parameters need no gradient inside the block (only the latent is optimised)."""
+    flags = [p.requires_grad for p in module.parameters()]
+    module.requires_grad_(False)
+    try:
+        yield
+    finally:
+        for parameter, flag in zip(module.parameters(), flags):
+            parameter.requires_grad_(flag)

@@ -1,0 +1,112 @@
+"""The figures of an evaluation (:func:`frenbrdf.study.evaluation.evaluate_runs`): histograms, renders, an edit.
+
+- ``histograms.png``: per method, the per-material RMSE, PSNR, SSIM and ΔE, with the mean
+  (solid) and ± one standard deviation (dashed).
+- ``renders.png``: truth | each method (and its refined render beside it, when the evaluation refined),
+  for the materials :func:`rendered_materials` picks.
+- ``interpolation.png``: the first edited pair at t = 0, the interior weights and 1.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .renderer import Scene, render_linear, save_figure, tonemap
+
+#: Per-material metrics shown in ``histograms.png``, one column each.
+HISTOGRAM_METRICS = (("rmse", "RMSE"), ("psnr", "PSNR"), ("ssim", "SSIM"), ("delta_e", "ΔE"))
+
+
+def rendered_materials(names: list[str], per_material: dict[str, list[dict]], first: int = 4,
+                       worst: int = 4) -> tuple[list[str], list[str]]:
+    """The materials of ``renders.png``: the first ``first`` names, and the ``worst`` others with the
+    highest ΔE averaged over the methods (highest first), so the hard cases are always in the picture."""
+    mean_delta_e = {name: np.mean([row["delta_e"] for rows in per_material.values() for row in rows
+                                   if row["material"] == name]) for name in names[first:]}
+    return names[:first], sorted(mean_delta_e, key=lambda name: -mean_delta_e[name])[:worst]
+
+
+def write_figures(out: Path, shown: list[str], renders: dict, per_material: dict, models: dict, latents: dict,
+                  edit_pair: tuple[str, str] | None, edit_truth_linear: dict, weights, edit_resolution: int) -> None:
+    """Writes the three figures into ``out``.
+
+    Parameters
+    ----------
+    shown
+        Materials of ``renders.png``, in order (:func:`rendered_materials`).
+    renders
+        Material → ``{"truth": image, method: image, …}`` (display images), in the order of the columns of
+        ``renders.png`` (e.g. ``"<method> refined"`` after each method).
+    per_material
+        Method → reconstruction rows (each with the :data:`HISTOGRAM_METRICS`).
+    models, latents
+        Method → model, and method → material → latent (to decode the interpolation strip).
+    edit_pair
+        The two materials of ``interpolation.png`` (None: no figure, there was no pair).
+    edit_truth_linear
+        Material → linear render at ``edit_resolution``.
+    weights
+        The interior interpolation weights.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = list(models)
+    figure, axes = plt.subplots(len(methods), len(HISTOGRAM_METRICS), figsize=(4 * len(HISTOGRAM_METRICS),
+                                                                                3 * len(methods)), squeeze=False)
+    for row, method in enumerate(methods):
+        for col, (metric, label) in enumerate(HISTOGRAM_METRICS):
+            values = np.array([r[metric] for r in per_material[method]])
+            values = values[np.isfinite(values)]
+            axis = axes[row, col]
+            axis.hist(values, bins=20, color="#4c72b0", alpha=0.8)
+            if len(values):
+                mean, std = values.mean(), values.std()
+                axis.axvline(mean, color="k", linestyle="-")
+                for edge in (mean - std, mean + std):
+                    axis.axvline(edge, color="k", linestyle="--")
+            axis.set_title(f"{method}: {label}")
+    figure.tight_layout()
+    save_figure(figure, out / "histograms.png")
+    plt.close(figure)
+
+    columns = list(renders[shown[0]])  # truth, then each method (and its refined render)
+    figure, axes = plt.subplots(len(shown), len(columns), figsize=(2 * len(columns), 2 * len(shown)), squeeze=False)
+    for row, name in enumerate(shown):
+        for col, key in enumerate(columns):
+            axes[row, col].imshow(renders[name][key])
+            axes[row, col].set_xticks([])
+            axes[row, col].set_yticks([])
+            if row == 0:
+                axes[row, col].set_title(key, fontsize=9)
+        axes[row, 0].set_ylabel(name, fontsize=7)
+    figure.tight_layout()
+    save_figure(figure, out / "renders.png")
+    plt.close(figure)
+
+    if edit_pair is None:
+        return
+    a, b = edit_pair
+    scene = Scene(resolution=edit_resolution)
+    strip = (0.0, *weights, 1.0)  # the end points too, for a person to see where edits go
+    figure, axes = plt.subplots(1 + len(methods), len(strip), figsize=(1.6 * len(strip), 1.7 * (1 + len(methods))),
+                                squeeze=False)
+    for col, t in enumerate(strip):
+        axes[0, col].imshow(tonemap((1 - t) * edit_truth_linear[a] + t * edit_truth_linear[b]))
+        axes[0, col].set_title(f"t = {t:g}", fontsize=9)
+        for row, method in enumerate(methods, start=1):
+            z = (1 - t) * latents[method][a] + t * latents[method][b]
+            axes[row, col].imshow(tonemap(render_linear(models[method].decode(z)[0], scene)))
+    for row, label in enumerate(["truth", *methods]):
+        axes[row, 0].set_ylabel(label, fontsize=9)
+    for axis in axes.flat:
+        axis.set_xticks([])
+        axis.set_yticks([])
+    figure.suptitle(f"{a} → {b}", fontsize=9)
+    figure.tight_layout()
+    save_figure(figure, out / "interpolation.png")
+    plt.close(figure)

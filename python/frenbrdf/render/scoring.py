@@ -1,0 +1,222 @@
+"""Scoring one model on materials: what every evaluation measures, in one place.
+
+Each material is encoded from N random valid bins of its table (:func:`sample_bins`), decoded
+(or refined at test time, :func:`frenbrdf.models.reconstruct.reconstruct`), rendered and compared with
+the render of the true table (:func:`image_metrics`: RMSE, PSNR, SSIM and the colour difference ΔE
+over the lit material pixels), and its frequency loss measured (:class:`FrequencyMetric`).
+:func:`reconstruction_rows` does all of it for a list of MERL files; ``frenbrdf evaluate``
+(:mod:`frenbrdf.study.evaluation`), the chart sweeps and the validation renders of training use it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from ..io.merl import N_BINS, SHAPE, merl_bin_angles, read_merl
+from ..models.autoencoder import Model
+from ..models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
+from ..models.nbrdf import NBRDF, merl_bin_inputs
+from ..models.reconstruct import STAGES, Reconstruction, RefineConfig, refine_config
+from ..models.reconstruct import reconstruct as refine_samples
+from .renderer import Scene, material_mask, render_linear, tonemap
+
+
+def image_metrics(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray | None = None) -> dict[str, float]:
+    """RMSE, PSNR, SSIM and colour difference ΔE of two display images in [0, 1] ``(H, W, 3)`` over
+    the pixels of ``mask`` ``(H, W)`` (default: all; evaluation passes :func:`frenbrdf.render.material_mask`).
+
+    RMSE and PSNR (data range 1) are those of the masked pixels; SSIM is scikit-image's SSIM
+    map averaged over them (its 7×7 windows near the silhouette still see some background);
+    ``delta_e`` is :func:`delta_e`.
+    """
+    from skimage.metrics import structural_similarity
+
+    mask = np.ones(truth.shape[:2], dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+    if mask.shape != truth.shape[:2] or truth.shape != prediction.shape or not mask.any():
+        raise ValueError(f"images {truth.shape} and {prediction.shape} need a non-empty mask of shape "
+                         f"{truth.shape[:2]}, got {mask.shape}")
+    mse = float(np.mean((truth[mask] - prediction[mask]) ** 2))
+    psnr = 10 * np.log10(1.0 / mse) if mse > 0 else float("inf")
+    _, ssim_map = structural_similarity(truth, prediction, data_range=1.0, channel_axis=-1, full=True)
+    return {"rmse": float(np.sqrt(mse)), "psnr": float(psnr), "ssim": float(ssim_map[mask].mean()),
+            "delta_e": delta_e(truth, prediction, mask)}
+
+
+def delta_e(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray) -> float:
+    """Mean CIEDE2000 colour difference of two display images in [0, 1] ``(H, W, 3)`` over ``mask``.
+
+    The images are read as sRGB (scikit-image's ``rgb2lab``, D65); ours are gamma 2.2, which
+    sRGB's curve follows to within a few per cent. ΔE ≈ 1 is the smallest difference a person
+    sees side by side; above ~5 the colours read as different.
+    """
+    from skimage.color import deltaE_ciede2000, rgb2lab
+
+    return float(deltaE_ciede2000(rgb2lab(truth[mask]), rgb2lab(prediction[mask])).mean())
+
+
+def bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(ω_i, ω_o) of flat bin indices (φ_h = 0), each ``(len(bins), 3)``.
+
+    The angles of :func:`frenbrdf.merl_bin_rusinkiewicz` at those bins only (the same
+    values, without building the whole grid).
+    """
+    from ..numerics.coords import rusinkiewicz_to_directions
+
+    theta_h, theta_d, phi_d = merl_bin_angles()
+    i, j, k = np.unravel_index(np.asarray(bins), SHAPE[1:])
+    return rusinkiewicz_to_directions(np.stack([theta_h[i], np.zeros(i.shape), theta_d[j], phi_d[k]], axis=-1))
+
+
+class FrequencyMetric:
+    """L_fre between a true table and a decoded latent (or an NBRDF, e.g. refined), in the model's mapped space.
+
+    The settings are fixed (default: :class:`FrequencyLossConfig`'s), whatever the model was
+    trained with, so that values of different models compare.
+    """
+
+    def __init__(self, config: FrequencyLossConfig = FrequencyLossConfig()):
+        self.truth, self.loss = FrequencyTruth(config), FrequencyLoss(config)
+
+    def __call__(self, model: Model, table: np.ndarray, material: np.ndarray | NBRDF) -> float:
+        """L_fre of ``material``: a latent ``(latent,)`` of ``model``, or an NBRDF of one material."""
+        return float(spectral_distance(self.predicted_coefficients(model, material), self.true_coefficients(model, table)))
+
+    def true_coefficients(self, model: Model, table: np.ndarray) -> np.ndarray:
+        """The truth L_fre compares with: the table mapped as ``model`` maps, kNN-interpolated onto the SHT grid
+        and analysed, ``(S, 3, ncoeff)``."""
+        flat = table.reshape(3, N_BINS)
+        valid = np.all(flat >= 0, axis=0)
+        with np.errstate(invalid="ignore"):
+            mapped = model.mapping.forward(np.where(valid, flat, 0.0), model.mapping.reference_bins())
+        return self.truth.coefficients(np.nan_to_num(mapped).T, valid)
+
+    @torch.no_grad()
+    def predicted_coefficients(self, model: Model, material: np.ndarray | NBRDF) -> np.ndarray:
+        """The SH coefficients of a decoded latent or an NBRDF at the grid nodes, ``(S, 3, ncoeff)``."""
+        params = (material.params if isinstance(material, NBRDF)
+                  else model.network.decoder(torch.from_numpy(material[None].astype(np.float32))))
+        return self.loss.predicted_coefficients(params)[0].numpy()
+
+
+def valid_bins(table: np.ndarray) -> np.ndarray:
+    """The measured bins (flat indices) of a MERL table: valid in every channel and above the horizon (what a
+    model may be given; a value stored below the horizon is no measurement).
+
+    Raises ValueError when there is none."""
+    above = merl_bin_inputs()[0].reshape(-1)
+    bins = np.flatnonzero(np.all(table.reshape(3, N_BINS) >= 0, axis=0) & above)
+    if len(bins) == 0:
+        raise ValueError("the MERL table holds no bin measured in every channel above the horizon")
+    return bins
+
+
+def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np.ndarray:
+    """``samples`` random measured bins (flat indices, :func:`valid_bins`) of a MERL table, without replacement:
+    all of them when the table holds no more (a count is capped at what the data hold)."""
+    bins = valid_bins(table)
+    if samples < 1:
+        raise ValueError(f"samples must be ≥ 1, got {samples}")
+    return bins if samples >= len(bins) else rng.choice(bins, size=samples, replace=False)
+
+
+def bin_samples(table: np.ndarray, bins: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """A table's reflectance at ``bins`` ``(N, 3)`` and the bins' directions ``(ω_i, ω_o)``: what an encoder takes."""
+    return table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins)
+
+
+def encode_and_render(model: Model, values: np.ndarray, directions, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Encodes samples, decodes and renders the result: (z, display image)."""
+    z = model.encode(values, directions)
+    return z, tonemap(render_linear(model.decode(z)[0], scene))
+
+
+def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Encodes a table from the samples at ``bins``, decodes and renders it: (z, display image)."""
+    return encode_and_render(model, *bin_samples(table, bins), scene)
+
+
+def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene,
+                           config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
+    """Encodes a table from the samples at ``bins`` and refines on them (:func:`frenbrdf.models.reconstruct.reconstruct`),
+    renders the result: (reconstruction, display image, seconds of the refinement stages, beyond encoding)."""
+    result = refine_samples(model, *bin_samples(table, bins), refine=config)
+    seconds = sum(result.timings.get(stage, 0.0) for stage in STAGES if stage != "encode")
+    return result, tonemap(render_linear(result.nbrdf, scene)), seconds
+
+
+def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
+                        frequency_metric: FrequencyMetric | None | bool = None, refine: str = "none",
+                        progress: bool = True, latents: dict | None = None) -> list[dict]:
+    """Reconstruction metrics of one model on MERL files (e.g. a validation split), one row each.
+
+    Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
+    order of ``files``, as :func:`evaluate_runs` draws them), refined on them with the budget
+    ``refine`` (:data:`frenbrdf.models.reconstruct.BUDGETS`; ``"none"``: the encoder alone), decoded,
+    rendered and compared with the render of the true table: RMSE, PSNR, SSIM, ΔE and L_fre
+    (``frequency_metric``: None for the default one, an instance to reuse across calls, False for no L_fre).
+    ``latents``: a dict to receive each material's latent by name (the refined one with ``refine``), for editing.
+    """
+    refinement = dataclasses.replace(refine_config(refine), seed=seed)
+    rng = np.random.default_rng(seed)
+    scene = Scene(resolution=resolution)
+    mask = material_mask(scene)
+    if frequency_metric is None:
+        frequency_metric = FrequencyMetric()
+    rows = []
+    for path in tqdm(list(files), desc="reconstruction", disable=not progress, leave=False):
+        path = Path(path)
+        table = read_merl(path)
+        bins = sample_bins(table, rng, samples)
+        if refine == "none":
+            z, image = reconstruct(model, table, bins, scene)
+            decoded = z  # what L_fre measures: the latent, or the refined NBRDF itself
+        else:
+            result, image, _ = refined_reconstruction(model, table, bins, scene, refinement)
+            z, decoded = result.z, (result.nbrdf if refinement.weight_steps else result.z)
+        metrics = image_metrics(tonemap(render_linear(table, scene)), image, mask)
+        if frequency_metric is not False:
+            metrics["lfre"] = frequency_metric(model, table, decoded)
+        rows.append({"material": path.stem, **metrics})
+        if latents is not None:
+            latents[path.stem] = z
+    return rows
+
+
+class ScoringSet:
+    """MERL files read once, to score many models on (training's validation renders, every few epochs).
+
+    Each material keeps the encoder's samples, drawn from ``seed`` as :func:`reconstruction_rows` draws
+    them, and the display render of its true table; the tables themselves are not kept (no L_fre).
+    :meth:`mean_metrics` then costs only the models' encode, decode and render.
+    """
+
+    def __init__(self, files, *, samples: int = 4000, resolution: int = 64, seed: int = 0):
+        rng = np.random.default_rng(seed)
+        self.scene = Scene(resolution=resolution)
+        self.mask = material_mask(self.scene)
+        self.materials = []
+        for path in files:
+            table = read_merl(path)
+            self.materials.append((bin_samples(table, sample_bins(table, rng, samples)),
+                                   tonemap(render_linear(table, self.scene))))
+
+    def mean_metrics(self, model: Model) -> dict[str, float]:
+        """RMSE, PSNR, SSIM and ΔE of ``model``'s encoder-only reconstructions, averaged over the materials."""
+        rows = [image_metrics(truth, encode_and_render(model, values, directions, self.scene)[1], self.mask)
+                for (values, directions), truth in self.materials]
+        return {key: float(np.mean([row[key] for row in rows])) for key in rows[0]}
+
+
+def edit_metrics(model: Model, z_a: np.ndarray, z_b: np.ndarray, truth_a: np.ndarray, truth_b: np.ndarray, t: float,
+                 scene: Scene, mask: np.ndarray) -> dict[str, float]:
+    """Image metrics of the edit decode((1 − t)·z_a + t·z_b) against the truth (1 − t)·a + t·b, given the true
+    tables' linear renders ``truth_a``, ``truth_b`` (rendering is linear in the BRDF: the blend of the renders is
+    the render of the blended table)."""
+    truth = tonemap((1 - t) * truth_a + t * truth_b)
+    image = tonemap(render_linear(model.decode((1 - t) * z_a + t * z_b)[0], scene))
+    return image_metrics(truth, image, mask)

@@ -1,0 +1,103 @@
+use std::path::PathBuf;
+
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use super::{as_vec3s, to_numpy};
+use crate::bsdf::MeasuredBsdf;
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<BsdfMeasurement>()?;
+    Ok(())
+}
+
+/// A measured RGB BRDF of the RGL material database (an `*_rgb.bsdf` file: Dupuy &
+/// Jakob 2018's adaptive parameterisation in a `tensor_file`), ready to evaluate.
+#[pyclass(frozen, module = "frenbrdf._native")]
+struct BsdfMeasurement {
+    inner: MeasuredBsdf,
+}
+
+#[pymethods]
+impl BsdfMeasurement {
+    /// Reads and checks a `.bsdf` file. Raises `FileNotFoundError` (and other `OSError`s)
+    /// for the file system, `BsdfFormatError` for a malformed or spectral file.
+    #[staticmethod]
+    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let inner = py.detach(|| MeasuredBsdf::read(&path))?;
+        Ok(BsdfMeasurement { inner })
+    }
+
+    /// The BRDF at `(n, 3)` direction pairs `wi`, `wo` (float64, C-contiguous, local
+    /// frame with z the normal; normalised here): `(n, 3)` RGB reflectance in 1/sr, not
+    /// multiplied by cos θ_o, negative measurements clamped to 0, and 0 where either
+    /// direction is at or below the horizon.
+    fn eval<'py>(
+        &self,
+        py: Python<'py>,
+        wi: PyReadonlyArray2<'py, f64>,
+        wo: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (wi, wo) = (as_vec3s("wi", &wi)?, as_vec3s("wo", &wo)?);
+        let rgb = py.detach(|| self.inner.eval(wi, wo))?;
+        Ok(to_numpy(py, (rgb.len(), 3), rgb.into_flattened()))
+    }
+
+    /// The file the measurement was read from.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.inner.path().to_path_buf()
+    }
+    /// The file's `description` tensor, decoded as UTF-8 ('' if it has none).
+    #[getter]
+    fn description(&self) -> &str {
+        self.inner.description()
+    }
+    /// Whether the material is isotropic (at most two incident azimuths measured).
+    #[getter]
+    fn isotropic(&self) -> bool {
+        self.inner.isotropic()
+    }
+    /// 1, 2 or 4: an anisotropic measurement covers 2π / `reduction` of incident
+    /// azimuths and is extended by mirror symmetry.
+    #[getter]
+    fn reduction(&self) -> u32 {
+        self.inner.reduction()
+    }
+    /// Whether the stored RGB values are multiplied by D(m) / (4 σ(ω_i)).
+    #[getter]
+    fn jacobian(&self) -> bool {
+        self.inner.jacobian()
+    }
+    /// Incident elevations (radians, float64) at which the material was measured.
+    #[getter]
+    fn theta_i<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let values: Vec<f64> = self.inner.theta_i().iter().map(|&v| v as f64).collect();
+        to_numpy(py, values.len(), values)
+    }
+    /// Incident azimuths (radians, float64) at which the material was measured.
+    #[getter]
+    fn phi_i<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let values: Vec<f64> = self.inner.phi_i().iter().map(|&v| v as f64).collect();
+        to_numpy(py, values.len(), values)
+    }
+    /// Every tensor of the file: `{name: (dtype, shape)}`, dtype named as numpy names it.
+    #[getter]
+    fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let fields = PyDict::new(py);
+        for field in self.inner.fields() {
+            fields.set_item(&field.name, (field.dtype.name(), PyTuple::new(py, &field.shape)?))?;
+        }
+        Ok(fields)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "BsdfMeasurement({:?}, description={:?}, isotropic={})",
+            self.inner.path().display().to_string(),
+            self.inner.description(),
+            if self.inner.isotropic() { "True" } else { "False" }
+        )
+    }
+}
