@@ -7,7 +7,8 @@ import importlib
 import sys
 
 from ._native import __version__
-from .exceptions import MerlFormatError
+from .exceptions import BsdfFormatError, MerlFormatError
+from .io.bsdf import MeasuredBSDF, read_bsdf
 from .io.merl import (
     merl_above_horizon,
     merl_angles_to_bin,
@@ -49,6 +50,8 @@ __all__ = [
     "__version__",
     "sht",
     "KnnInterpolator",
+    "BsdfFormatError",
+    "MeasuredBSDF",
     "MerlFormatError",
     "Model",
     "NBRDF",
@@ -69,6 +72,7 @@ __all__ = [
     "merl_bin_to_angles",
     "merl_lookup",
     "merl_lookup_directions",
+    "read_bsdf",
     "read_merl",
     "rusinkiewicz_to_directions",
     "rusinkiewicz_to_half_diff",

@@ -107,13 +107,13 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from .data.fitting import FitConfig, fit_nbrdf, save_nbrdf
-    from .io.merl import read_merl
+    from .io.measured import read_table
 
     config = FitConfig(hidden=tuple(int(h) for h in args.hidden.split(",")), epochs=args.epochs, seed=args.seed)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for path in map(Path, args.materials):
-        nbrdf = fit_nbrdf(read_merl(path), config, progress=not args.quiet)
+        nbrdf = fit_nbrdf(read_table(path), config, progress=not args.quiet)
         save_nbrdf(out / f"{path.stem}.pt", nbrdf)
         if args.merl:
             nbrdf.to_merl(out / f"{path.stem}.binary")
@@ -208,6 +208,13 @@ def _reconstruct(args: argparse.Namespace) -> int:
     return 0
 
 
+def _convert(args: argparse.Namespace) -> int:
+    from .material.convert import convert
+
+    print(f"wrote {convert(args.input, args.output, samples=args.samples, seed=args.seed, overwrite=args.overwrite)}")
+    return 0
+
+
 def _sample_count(text: str) -> int | None:
     if text == "all":
         return None
@@ -237,7 +244,8 @@ def build_parser() -> argparse.ArgumentParser:
     imported.add_argument("--quiet", action="store_true", help="no progress bar")
     imported.set_defaults(run=_import_nbrdf)
 
-    train = commands.add_parser("train", help="train FreNBRDF or a baseline on a folder of MERL files")
+    train = commands.add_parser("train", help="train FreNBRDF or a baseline on a folder of MERL files and .bsdf "
+                                "measurements")
     train.add_argument("--method", choices=method_names(), help="default: frenbrdf")
     train.add_argument("--data", help="folder of MERL files")
     train.add_argument("--out", help="run folder (created)")
@@ -269,7 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.set_defaults(run=_train)
 
     fit = commands.add_parser("fit-nbrdf", help="fit one NBRDF per material (Sztrajman et al.; the quality ceiling)")
-    fit.add_argument("materials", nargs="+", help="MERL files")
+    fit.add_argument("materials", nargs="+", help="MERL files or .bsdf measurements")
     fit.add_argument("--out", required=True, help="folder for the fitted NBRDFs (<name>.pt)")
     fit.add_argument("--hidden", default="21,21", help="hidden widths (default 21,21)")
     fit.add_argument("--epochs", type=int, default=10)
@@ -284,7 +292,7 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--out", required=True, help="folder for the tables and figures (a new or empty one, or "
                           "an earlier evaluation's)")
     evaluate.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files")
-    evaluate.add_argument("--data", metavar="DIR", help="folder of MERL files (default: the one the runs were "
+    evaluate.add_argument("--data", metavar="DIR", help="folder of MERL files and .bsdf measurements (default: the one the runs were "
                           "trained on); with --all, the folder whose materials to evaluate")
     evaluate.add_argument("--all", dest="all_materials", action="store_true",
                           help="evaluate every material of --data DIR that no run trained or validated on "
@@ -303,8 +311,8 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars")
     evaluate.set_defaults(run=_evaluate)
 
-    render = commands.add_parser("render", help="render a material (MERL .binary, saved NBRDF .pt or Keras "
-                                 "NBRDF .h5) on a sphere")
+    render = commands.add_parser("render", help="render a material (MERL .binary, RGL .bsdf measurement, saved "
+                                 "NBRDF .pt or Keras NBRDF .h5) on a sphere")
     render.add_argument("material")
     render.add_argument("--out", required=True, help="PNG file")
     render.add_argument("--resolution", type=int, default=256)
@@ -327,10 +335,10 @@ def build_parser() -> argparse.ArgumentParser:
     select.add_argument("--quiet", action="store_true", help="no progress bars")
     select.set_defaults(run=_select)
 
-    rec = commands.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ of samples, or a "
-                              "MERL file): NBRDF, MERL table, render and report in one folder")
+    rec = commands.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ of samples, a "
+                              "MERL file or an RGL .bsdf): NBRDF, MERL table, render and report in one folder")
     rec.add_argument("input", help="CSV or NPZ with columns wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b (or angles; see "
-                     "frenbrdf.material.measurements), or a MERL .binary file")
+                     "frenbrdf.material.measurements), a MERL .binary file or an RGL .bsdf measurement")
     rec.add_argument("--out", required=True, help="result folder: a new or empty one, or an earlier result "
                      "folder, which is replaced whole (never the input's folder)")
     rec.add_argument("--overwrite", action="store_true", help="replace --out even if it holds other files "
@@ -338,7 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--model", default="pretrained", help="training run folder, checkpoint, or 'pretrained' "
                      "(the model shipped in the package; the default)")
     rec.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
-                     help="MERL input: random valid bins given to the model (default 4000), or all")
+                     help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
                      "space, for editing), full (then the NBRDF's weights; the default: chart 8)")
@@ -346,6 +354,16 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--json", action="store_true", help="print the report as JSON")
     rec.add_argument("--quiet", action="store_true", help="no progress bars")
     rec.set_defaults(run=_reconstruct)
+
+    convert = commands.add_parser("convert", help="an RGL .bsdf measurement into a MERL .binary table, or a .bsdf "
+                                  "or MERL file into a CSV/NPZ of samples that reconstruct reads")
+    convert.add_argument("input", help="a .bsdf measurement or a MERL .binary file")
+    convert.add_argument("output", help="a .binary (MERL table), .csv or .npz (samples) file to write")
+    convert.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
+                         help="CSV/NPZ output: random valid MERL bins to sample (default 4000), or all")
+    convert.add_argument("--seed", type=int, default=0, help="seeds the sampling (default 0)")
+    convert.add_argument("--overwrite", action="store_true", help="replace the output file if it exists")
+    convert.set_defaults(run=_convert)
 
     demo = commands.add_parser("demo", help="the main job: synthesise data, train all methods, evaluate, report")
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")

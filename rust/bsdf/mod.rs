@@ -87,15 +87,15 @@ impl MeasuredBsdf {
         };
         expect_leading("vndf", &vndf_shape, &[n_phi, n_theta], "(phi_i, theta_i, ny, nx)")?;
         expect_leading("rgb", &rgb_shape, &[n_phi, n_theta, 3], "(phi_i, theta_i, 3, ny, nx)")?;
-        if let Some(i) = sigma.iter().position(|&v| !(v > 0.0)) {
+        if let Some(i) = sigma.iter().position(|&v| !v.is_finite() || v <= 0.0) {
             return Err(file.error(format!(
-                "field `sigma` value {i} is {}; a projected area is positive",
+                "field `sigma` value {i} is {}; a projected area is finite and positive",
                 sigma[i]
             )));
         }
-        if let Some(i) = ndf.iter().position(|&v| !(v >= 0.0)) {
+        if let Some(i) = ndf.iter().position(|&v| !v.is_finite() || v < 0.0) {
             return Err(file.error(format!(
-                "field `ndf` value {i} is {}; a distribution is not negative",
+                "field `ndf` value {i} is {}; a distribution is finite and not negative",
                 ndf[i]
             )));
         }

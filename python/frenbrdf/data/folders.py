@@ -29,7 +29,8 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..io.merl import N_BINS, read_merl
+from ..io.measured import SUFFIXES, read_table
+from ..io.merl import N_BINS
 from ..models.mapping import LogRelativeMapping
 from ..models.nbrdf import bin_geometry
 
@@ -37,24 +38,28 @@ from ..models.nbrdf import bin_geometry
 
 
 def list_materials(folder: str | os.PathLike) -> list[Path]:
-    """The MERL files (``*.binary``) of a folder, sorted by name.
+    """The measured materials of a folder, sorted by name: MERL files (``*.binary``) and RGL
+    measurements (``*.bsdf``), which may be mixed (:mod:`frenbrdf.io.measured` reads either).
 
     Raises
     ------
     FileNotFoundError, NotADirectoryError
         The folder does not exist or is a file.
     ValueError
-        The folder holds no ``.binary`` file.
+        The folder holds no material file, or two files of one name (``a.binary`` and ``a.bsdf``).
     """
     folder = Path(folder)
     if not folder.exists():
         raise FileNotFoundError(f"data folder {folder} does not exist")
     if not folder.is_dir():
         raise NotADirectoryError(f"data folder {folder} is not a folder")
-    files = sorted(folder.glob("*.binary"))
+    files = sorted((path for suffix in SUFFIXES for path in folder.glob(f"*{suffix}")), key=lambda path: path.name)
     if not files:
-        raise ValueError(f"data folder {folder} holds no MERL files (*.binary); "
+        raise ValueError(f"data folder {folder} holds no material files (*.binary or *.bsdf); "
                          "create some with `frenbrdf synth` or `frenbrdf import-nbrdf`")
+    stems = [path.stem for path in files]
+    if twice := sorted({stem for stem in stems if stems.count(stem) > 1}):
+        raise ValueError(f"data folder {folder} holds two files of each of the materials {twice}; keep one of each")
     return files
 
 
@@ -192,7 +197,7 @@ def read_tables(files, progress: bool = True) -> np.ndarray:
     """MERL files → ``(M, 3, N_BINS)`` float64 reflectance with missing bins as NaN."""
     tables = np.empty((len(files), 3, N_BINS), dtype=np.float64)
     for i, path in enumerate(tqdm(files, desc="reading materials", disable=not progress, leave=False)):
-        table = read_merl(path).reshape(3, N_BINS)
+        table = read_table(path).reshape(3, N_BINS)
         missing = np.any(table < 0, axis=0)
         table[:, missing] = np.nan
         tables[i] = table

@@ -17,7 +17,8 @@ from __future__ import annotations
 import os
 
 #: What :func:`load_material_file` reads, for messages.
-SUPPORTED = "a MERL .binary file, an NBRDF saved by fit-nbrdf (.pt) or a published Keras NBRDF (.h5)"
+SUPPORTED = ("a MERL .binary file, an RGL .bsdf measurement, an NBRDF saved by fit-nbrdf (.pt) or a published "
+             "Keras NBRDF (.h5)")
 
 
 def load_material_file(path: str | os.PathLike):
@@ -26,16 +27,17 @@ def load_material_file(path: str | os.PathLike):
     Parameters
     ----------
     path
-        A MERL ``.binary`` file; an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`
+        A MERL ``.binary`` file; an RGL ``.bsdf`` measurement; an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`
         (``.pt``); or a published Keras NBRDF ``.h5`` (:mod:`frenbrdf.data.nbrdf_import`).
         Other names are read as a MERL file when they have a MERL file's size, else as a
         saved NBRDF.
 
     Returns
     -------
-    numpy.ndarray or frenbrdf.NBRDF
-        The MERL table ``(3, 90, 90, 180)`` in physical units (missing bins negative), or
-        one NBRDF (a Keras file's network with its output ``exp(x) − 1``).
+    numpy.ndarray, frenbrdf.io.bsdf.MeasuredBSDF or frenbrdf.NBRDF
+        The MERL table ``(3, 90, 90, 180)`` in physical units (missing bins negative), the
+        measurement (callable like an NBRDF), or one NBRDF (a Keras file's network with its
+        output ``exp(x) − 1``).
 
     Raises
     ------
@@ -55,6 +57,10 @@ def load_material_file(path: str | os.PathLike):
         return keras_nbrdf(load_keras_nbrdf(path))
     if path.suffix == ".pt":
         return load_nbrdf(path)
+    if path.suffix == ".bsdf":
+        from ..io.bsdf import read_bsdf
+
+        return read_bsdf(path)
     if path.suffix == ".binary" or path.stat().st_size == FILE_BYTES:
         return read_merl(path)
     try:

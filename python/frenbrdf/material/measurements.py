@@ -1,6 +1,6 @@
 """A user's measurements of one material: scattered (ω_i, ω_o, RGB) samples from a file.
 
-Three inputs are read, each into :class:`Measurements`:
+Four inputs are read, each into :class:`Measurements`:
 
 CSV (``.csv``)
     A header row, then one sample per row. Either the *vector form*,
@@ -13,6 +13,9 @@ NPZ (``.npz``)
 MERL (``.binary``)
     A MERL table sampled at ``samples`` random valid bins (default 4000) or at all of them;
     the table is kept as the truth.
+RGL measurement (``.bsdf``)
+    A real gonio-photometer measurement (:mod:`frenbrdf.io.bsdf`), evaluated at the
+    directions of ``samples`` random valid MERL bins; the measurement itself is the truth.
 
 Directions are unit vectors in the local shading frame (z = the surface normal, both above
 the surface: z > 0). Lengths may be off by at most :data:`UNIT_TOLERANCE` (1e-3); they are
@@ -68,9 +71,12 @@ class Measurements:
     source: str
     """The file read."""
     kind: str
-    """``"csv"``, ``"npz"`` or ``"merl"``."""
+    """``"csv"``, ``"npz"``, ``"merl"`` or ``"bsdf"``."""
     table: np.ndarray | None = None
-    """The whole MERL table ``(3, 90, 90, 180)`` when the input was one (the truth), else None."""
+    """The whole MERL table ``(3, 90, 90, 180)`` when the input was one (or a ``.bsdf`` at every bin), else None."""
+    truth: object = None
+    """What renders as the truth: the MERL table, or the :class:`frenbrdf.io.bsdf.MeasuredBSDF` itself; None for
+    scattered samples."""
 
     def __len__(self) -> int:
         return len(self.values)
@@ -102,27 +108,31 @@ def read_measurements(path: str | os.PathLike, *, samples: int | None = 4000, se
         return _checked(path, "csv", *_read_csv(path))
     if suffix == ".npz":
         return _checked(path, "npz", *_read_npz(path))
-    if suffix == ".binary" or path.stat().st_size == FILE_BYTES:
+    if suffix in (".binary", ".bsdf") or path.stat().st_size == FILE_BYTES:
         return merl_measurements(path, samples=samples, seed=seed)
     raise ValueError(f"{path}: unknown measurement format; give a .csv or .npz of samples "
-                     f"(columns {','.join(FORMS['vectors'])}) or a MERL .binary file")
+                     f"(columns {','.join(FORMS['vectors'])}), a MERL .binary file or an RGL .bsdf measurement")
 
 
 def merl_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
-    """A MERL file sampled at ``samples`` random valid bins (drawn from ``seed``) or at all of them (None)."""
-    from ..io.merl import N_BINS, read_merl
+    """A MERL file, or an RGL ``.bsdf`` measurement, sampled at ``samples`` random valid MERL bins (drawn from
+    ``seed``) or at all of them (None). A ``.bsdf`` is evaluated at each bin's directions, as the model's
+    training tables were sampled, and is itself kept as the truth to render."""
+    from ..io.measured import as_table, is_bsdf, read_truth
+    from ..io.merl import N_BINS
     from ..render.scoring import bin_directions, sample_bins, valid_bins
 
     if samples is not None and samples < 1:
         raise ValueError(f"samples must be ≥ 1 or all, got {samples}")
-    table = read_merl(path)
+    truth = read_truth(path)
+    table = as_table(truth)
     flat = table.reshape(3, N_BINS)
     try:  # more samples than the table holds: all of them (a count is capped at what the data hold)
         bins = valid_bins(table) if samples is None else sample_bins(table, np.random.default_rng(seed), samples)
     except ValueError as error:
         raise ValueError(f"{path}: {error}") from None
     wi, wo = bin_directions(bins)
-    return Measurements(flat[:, bins].T.copy(), wi, wo, str(path), "merl", table)
+    return Measurements(flat[:, bins].T.copy(), wi, wo, str(path), "bsdf" if is_bsdf(path) else "merl", table, truth)
 
 
 def _form(columns, where: str) -> str:
@@ -243,7 +253,7 @@ def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.nda
              "spikes are about 1e5; is the unit right?)")
     wi, wo = _directions(columns)
     for name, d in (("ω_i", wi), ("ω_o", wo)):
-        length = np.linalg.norm(d, axis=-1)
+        length = np.sqrt(np.einsum("ij,ij->i", d, d))  # no (N, 3) temporary: memory stays near the data's
         off = np.abs(length - 1) > UNIT_TOLERANCE
         if off.any():
             fail(off, f"{name} has length {length[off][0]:.6g}, not a unit vector (tolerance {UNIT_TOLERANCE:g})")
@@ -251,5 +261,5 @@ def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.nda
         if below.any():
             fail(below, f"{name} is at or below the horizon (z = {d[below][0, 2]:.6g} ≤ 0; directions are in "
                         "the local shading frame, z = the normal)")
-    return Measurements(values, wi / np.linalg.norm(wi, axis=-1, keepdims=True),
-                        wo / np.linalg.norm(wo, axis=-1, keepdims=True), str(path), kind)
+        d /= length[:, None]  # in place: these arrays are this function's own
+    return Measurements(values, wi, wo, str(path), kind)

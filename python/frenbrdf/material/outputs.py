@@ -12,10 +12,10 @@ folder, all of it or nothing:
     Its MERL table.
 ``render.png``
     The reconstruction on the metric renderer's sphere; with a MERL input also
-    ``truth.png`` and ``comparison.png`` (truth | reconstruction).
+    ``truth.png`` and ``comparison.png`` (truth | reconstruction); a ``.bsdf`` truth renders as measured.
 ``reconstruction.json``
-    The input, the model, the refinement, the latent, seconds and loss per stage, and with a
-    MERL input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
+    The input, the model, the refinement, the latent, seconds and loss per stage, and with a MERL or
+    ``.bsdf`` input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
     material pixels, :func:`frenbrdf.render.scoring.image_metrics`) and L_fre.
 """
 
@@ -92,8 +92,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
               "model": {"path": str(model), "method": loaded.method, **({"version": loaded.card.get("version")}
                                                                           if loaded.card else {})},
               "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary()}
-    if measurements.table is not None:
-        images["truth"] = render(measurements.table, scene)
+    if measurements.truth is not None:
+        images["truth"] = render(measurements.truth, scene)
         images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
         report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
     report["files"] = sorted(FILES[name] for name in ["nbrdf", "merl", "report", *images])

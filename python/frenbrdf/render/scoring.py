@@ -17,7 +17,8 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..io.merl import N_BINS, SHAPE, merl_bin_angles, read_merl
+from ..io.measured import as_table, read_truth
+from ..io.merl import N_BINS, SHAPE, merl_bin_angles
 from ..models.autoencoder import Model
 from ..models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
 from ..models.nbrdf import NBRDF, merl_bin_inputs
@@ -170,7 +171,8 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
     rows = []
     for path in tqdm(list(files), desc="reconstruction", disable=not progress, leave=False):
         path = Path(path)
-        table = read_merl(path)
+        truth = read_truth(path)
+        table = as_table(truth)
         bins = sample_bins(table, rng, samples)
         if refine == "none":
             z, image = reconstruct(model, table, bins, scene)
@@ -178,7 +180,7 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
         else:
             result, image, _ = refined_reconstruction(model, table, bins, scene, refinement)
             z, decoded = result.z, (result.nbrdf if refinement.weight_steps else result.z)
-        metrics = image_metrics(tonemap(render_linear(table, scene)), image, mask)
+        metrics = image_metrics(tonemap(render_linear(truth, scene)), image, mask)
         if frequency_metric is not False:
             metrics["lfre"] = frequency_metric(model, table, decoded)
         rows.append({"material": path.stem, **metrics})
@@ -201,9 +203,10 @@ class ScoringSet:
         self.mask = material_mask(self.scene)
         self.materials = []
         for path in files:
-            table = read_merl(path)
+            truth = read_truth(path)
+            table = as_table(truth)
             self.materials.append((bin_samples(table, sample_bins(table, rng, samples)),
-                                   tonemap(render_linear(table, self.scene))))
+                                   tonemap(render_linear(truth, self.scene))))
 
     def mean_metrics(self, model: Model) -> dict[str, float]:
         """RMSE, PSNR, SSIM and ΔE of ``model``'s encoder-only reconstructions, averaged over the materials."""

@@ -33,7 +33,7 @@ from tqdm.auto import tqdm
 
 from ..data.folders import list_materials
 from ..io.atomic import save_json, write_text
-from ..io.merl import read_merl
+from ..io.measured import as_table, read_truth
 from ..io.paths import check_output_folder
 from ..models.autoencoder import Model
 from ..models.reconstruct import BUDGETS, refine_config
@@ -279,10 +279,11 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     per_material = {m: [] for m in models}
     renders = {}
     for name in tqdm(names, desc="reconstruction", disable=not show):
-        table = read_merl(files[name])
+        truth = read_truth(files[name])  # a .bsdf renders as measured, not through its table
+        table = as_table(truth)
         bins = sample_bins(table, rng, config.samples)
-        edit_truth_linear[name] = render_linear(table, edit_scene)
-        truth_image = tonemap(render_linear(table, scene))
+        edit_truth_linear[name] = render_linear(truth, edit_scene)
+        truth_image = tonemap(render_linear(truth, scene))
         renders[name] = {"truth": truth_image}
         for method, model in models.items():
             z, image = reconstruct(model, table, bins, scene)

@@ -124,7 +124,11 @@ def load_material(material) -> Material:
 
 def _load_file(path: Path) -> Material:
     """A material file (any :func:`frenbrdf.data.materials.load_material_file` reads) → :class:`Material`."""
+    from ...io.bsdf import MeasuredBSDF
+
     loaded = load_material_file(path)
+    if isinstance(loaded, MeasuredBSDF):  # the plugin looks measurements up in their table at the MERL bins
+        loaded = loaded.table()
     if isinstance(loaded, np.ndarray):
         return material_from_table(loaded, name=path.stem)
     return material_from_nbrdf(loaded, name=path.stem)

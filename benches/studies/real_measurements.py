@@ -1,0 +1,135 @@
+"""Real measurements: how well a model gives back gonio-photometer measurements no training saw.
+
+    python benches/studies/real_measurements.py ../shared/data/rgl-measured/*.bsdf \
+        --fits ../shared/data/rgl-nbrdf --model pretrained --out docs/results/real
+
+For each RGL ``.bsdf`` measurement: the model encodes it from ``--samples`` random valid MERL bins
+(evaluated on the measurement itself), then refines on the same samples (``latent``: z only, the
+latent space; ``full``: then the NBRDF's weights), and each result is rendered and compared with the
+render of the measurement itself (not of a quantised table). Beside them, the published per-material
+NBRDF fit of the same material (``--fits``: its Keras ``.h5``, fitted to 640k samples) and a
+``fit-nbrdf`` fit to the same samples as the model saw. Writes ``real.md`` (a table per material
+and the means), ``real.json`` and ``real.png`` (truth | fit | encoder | latent | full, per row).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from frenbrdf.data.fitting import FitConfig, fit_nbrdf
+from frenbrdf.data.materials import load_material_file
+from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.io.measured import read_truth
+from frenbrdf.material.outputs import load_model
+from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import bin_samples, image_metrics, refined_reconstruction, sample_bins
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
+from common import pyplot, run_metadata, save_figure  # noqa: E402
+
+COLUMNS = ("published fit", "fit-nbrdf", "encoder", "latent", "full")
+
+
+def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, scene: Scene, fit_epochs: int):
+    """The rows and images of one measurement."""
+    truth = read_truth(path)
+    table = truth.table()
+    truth_image = tonemap(render_linear(truth, scene))
+    mask = material_mask(scene)
+    bins = sample_bins(table, np.random.default_rng(seed), samples)
+    images, rows = {"truth": truth_image}, {}
+    published = fits / f"{path.stem}.h5" if fits else None
+    if published is not None and published.exists():
+        images["published fit"] = tonemap(render_linear(load_material_file(published), scene))
+    # fit-nbrdf on the very samples the model sees: a table holding only them (others missing).
+    sparse = np.full_like(table, -1.0)
+    flat, dense = sparse.reshape(3, -1), table.reshape(3, -1)
+    flat[:, bins] = dense[:, bins]
+    start = time.perf_counter()
+    fitted = fit_nbrdf(sparse, FitConfig(epochs=fit_epochs, seed=seed), progress=False)
+    rows["fit-nbrdf"] = {"seconds": time.perf_counter() - start}
+    images["fit-nbrdf"] = tonemap(render_linear(fitted, scene))
+    for budget in ("none", "latent", "full"):
+        config = dataclasses.replace(refine_config(budget), seed=seed, progress=False)
+        start = time.perf_counter()
+        if budget == "none":
+            values, directions = bin_samples(table, bins)
+            image = tonemap(render_linear(model.decode(model.encode(values, directions))[0], scene))
+        else:
+            _, image, _ = refined_reconstruction(model, table, bins, scene, config)
+        name = "encoder" if budget == "none" else budget
+        rows[name] = {"seconds": time.perf_counter() - start}
+        images[name] = image
+    for name, image in images.items():
+        if name != "truth":
+            rows.setdefault(name, {}).update(image_metrics(truth_image, image, mask))
+    return rows, images
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("measurements", nargs="+", help=".bsdf files")
+    parser.add_argument("--model", default="pretrained", help="'pretrained', a run folder or a checkpoint")
+    parser.add_argument("--fits", help="folder of the published per-material NBRDF fits (<name>.h5)")
+    parser.add_argument("--samples", type=int, default=4000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--resolution", type=int, default=256)
+    parser.add_argument("--fit-epochs", type=int, default=10, help="fit-nbrdf epochs (its default)")
+    parser.add_argument("--out", required=True, help="folder for real.md, real.json, real.png")
+    args = parser.parse_args(argv)
+    model, scene = load_model(args.model), Scene(resolution=args.resolution)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    results, grid = {}, []
+    for path in tqdm([Path(p) for p in args.measurements], desc="measurements"):
+        rows, images = measure(path, model, Path(args.fits) if args.fits else None, samples=args.samples,
+                               seed=args.seed, scene=scene, fit_epochs=args.fit_epochs)
+        results[path.stem] = rows
+        grid.append((path.stem, images))
+    means = {column: {key: float(np.mean(values)) for key in ("psnr", "delta_e", "seconds")
+                      if (values := [r[column][key] for r in results.values() if key in r.get(column, {})])}
+             for column in COLUMNS}
+    report = {"run": run_metadata(), "model": args.model, "samples": args.samples, "seed": args.seed,
+              "resolution": args.resolution, "materials": results, "mean": means}
+    save_json(out / "real.json", report)
+    write_text(out / "real.md", markdown(report))
+    plt = pyplot()
+    columns = ["truth", *COLUMNS]
+    figure, axes = plt.subplots(len(grid), len(columns), figsize=(2 * len(columns), 2 * len(grid)), squeeze=False)
+    for row, (name, images) in zip(axes, grid):
+        for axis, column in zip(row, columns):
+            axis.imshow(images.get(column, np.zeros_like(images["truth"])))
+            axis.set_xticks([]), axis.set_yticks([])
+            metrics = results[name].get(column)
+            label = column if column == "truth" else f"{column}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}"
+            axis.set_title(label, fontsize=7)
+        row[0].set_ylabel(name, fontsize=7)
+    save_figure(figure, out / "real.png")
+    print(markdown(report))
+    return 0
+
+
+def markdown(report: dict) -> str:
+    lines = [f"Model `{report['model']}`, {report['samples']} samples (seed {report['seed']}), renders "
+             f"{report['resolution']}²; PSNR dB / ΔE against the render of the measurement itself; seconds per material.",
+             "", "| material | " + " | ".join(COLUMNS) + " |", "|---|" + "---|" * len(COLUMNS)]
+    def cell(metrics):
+        return f"{metrics['psnr']:.1f} / {metrics['delta_e']:.2f}" if metrics and "psnr" in metrics else "–"
+    for name, rows in report["materials"].items():
+        lines.append(f"| {name} | " + " | ".join(cell(rows.get(c)) for c in COLUMNS) + " |")
+    lines.append("| **mean** | " + " | ".join(cell(report["mean"].get(c)) for c in COLUMNS) + " |")
+    lines.append("| seconds | " + " | ".join(f"{report['mean'][c].get('seconds', float('nan')):.1f}"
+                                            if report["mean"].get(c) else "–" for c in COLUMNS) + " |")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

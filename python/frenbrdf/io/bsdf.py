@@ -1,0 +1,114 @@
+"""Real measurements: the RGB ``.bsdf`` files of the RGL material database.
+
+The files hold a gonio-photometer measurement in the adaptive parameterisation of Dupuy &
+Jakob 2018 ("An Adaptive Parameterization for Efficient Material Acquisition and Rendering",
+ACM TOG 37(6)). The Rust core reads and checks them (``rust/bsdf/``) and evaluates the BRDF
+at any direction pairs; :func:`read_bsdf` wraps that in a :class:`MeasuredBSDF`, callable
+like a decoded NBRDF, so that every renderer and metric takes a measurement as it is.
+
+Examples
+--------
+>>> import frenbrdf
+>>> paper = frenbrdf.read_bsdf("paper_white_rgb.bsdf")            # doctest: +SKIP
+>>> paper(wi, wo).shape                                           # doctest: +SKIP
+(1000, 3)
+>>> frenbrdf.write_merl("paper_white.binary", paper.table())      # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._native import BsdfMeasurement
+from ..numerics._arrays import rows
+
+#: The suffix of the files :func:`read_bsdf` reads.
+SUFFIX = ".bsdf"
+
+
+class MeasuredBSDF:
+    """A measured material read from an RGL ``.bsdf`` file (:func:`read_bsdf`).
+
+    Call it as ``m(wi, wo)`` with unit directions ``(..., 3)`` in the local shading frame
+    (z = the normal): it returns ``(..., 3)`` RGB reflectance in 1/sr, not multiplied by
+    cos θ, with negative measured values clamped to 0 and 0 below the horizon.
+    """
+
+    def __init__(self, native: BsdfMeasurement):
+        self._native = native
+
+    @property
+    def path(self) -> Path:
+        """The file read."""
+        return Path(self._native.path)
+
+    @property
+    def name(self) -> str:
+        """The material's name: the file's stem."""
+        return self.path.stem
+
+    @property
+    def description(self) -> str:
+        """The file's own description ('' if it has none)."""
+        return self._native.description
+
+    @property
+    def isotropic(self) -> bool:
+        """Whether the material was measured as isotropic."""
+        return self._native.isotropic
+
+    def __call__(self, wi, wo) -> np.ndarray:
+        wi_rows, leading = rows("wi", wi, 3)
+        wo_rows, leading_o = rows("wo", wo, 3)
+        if leading != leading_o:
+            raise ValueError(f"wi and wo must have the same shape, got {np.shape(wi)} and {np.shape(wo)}")
+        return self._native.eval(wi_rows, wo_rows).reshape(*leading, 3)
+
+    def table(self) -> np.ndarray:
+        """The measurement at every MERL bin: a table ``(3, 90, 90, 180)`` in 1/sr, with the
+        negative "missing" markers of MERL files where a bin's directions lie below the horizon."""
+        return _as_table(self)
+
+    def __repr__(self) -> str:
+        return f"MeasuredBSDF({str(self.path)!r}, description={self.description!r})"
+
+
+def read_bsdf(path: str | os.PathLike) -> MeasuredBSDF:
+    """Reads an RGL RGB ``.bsdf`` measurement.
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError, PermissionError
+        The file cannot be opened.
+    frenbrdf.BsdfFormatError
+        The file is not a ``tensor_file`` v1.0 RGB BSDF (wrong magic or version, truncated, a
+        field of the wrong type or shape, a spectral file); the message names the file and what
+        was wrong.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_file():
+        raise IsADirectoryError(f"{path} is not a regular file (a .bsdf measurement is expected)")
+    return MeasuredBSDF(BsdfMeasurement.read(path))
+
+
+def _as_table(measurement: MeasuredBSDF) -> np.ndarray:
+    from .merl import SHAPE, merl_above_horizon
+
+    wi, wo = _bin_directions()
+    table = np.full((3, *SHAPE[1:]), -1.0)
+    valid = merl_above_horizon()
+    table[:, valid] = measurement(wi[valid], wo[valid]).T
+    return table
+
+
+@functools.lru_cache(maxsize=1)
+def _bin_directions() -> tuple[np.ndarray, np.ndarray]:
+    from .merl import merl_bin_directions
+
+    wi, wo = merl_bin_directions()
+    wi.flags.writeable = wo.flags.writeable = False
+    return wi, wo
