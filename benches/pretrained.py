@@ -107,8 +107,9 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
   {card['best_epoch']}, {card['training_seconds']} s.
-- **Regenerate**: `frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/`, `frenbrdf synth bank/`,
-  then `{card['command']}`.
+- **Regenerate**: `frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/`,
+  `frenbrdf import-nbrdf` of the RGL fits but the four measured materials into `rgl-train/`
+  ([measurements.md](measurements.md) names them), `frenbrdf synth bank/`, then `{card['command']}`.
 - **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
   compressed (relative error of f_ref + ε below 1e-4).
 
@@ -134,6 +135,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--merl", help="folder of MERL files (frenbrdf import-nbrdf)")
     parser.add_argument("--bank", help="folder of bank MERL files (frenbrdf synth)")
+    parser.add_argument("--data", action="append", default=[], metavar="DIR",
+                        help="another folder of material files (repeatable), e.g. the RGL fits")
     parser.add_argument("--config", required=True, help="training config JSON (any TrainConfig keys)")
     parser.add_argument("--work", default="pretrained-work", help="folder of the linked data and the run")
     parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR), help="where the packed files go")
@@ -142,9 +145,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reuse", action="store_true", help="evaluate, pack and document WORK/run again, untrained")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
-    folders = [Path(f) for f in (args.merl, args.bank) if f]
+    folders = [Path(f) for f in (args.merl, args.bank, *args.data) if f]
     if not folders:
-        parser.error("give --merl, --bank or both")
+        parser.error("give --merl, --bank, --data or several")
     card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
                  progress=not args.quiet, reuse=args.reuse)
     print(json.dumps(card["held_out"], indent=2))

@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import frenbrdf
 
 
@@ -36,6 +38,7 @@ def _stub_signatures(stub: str) -> dict[str, list[str] | None]:
                     is_property = any(getattr(d, "id", None) == "property" for d in member.decorator_list)
                     key = node.name if member.name == "__init__" else f"{node.name}.{member.name}"
                     found[key] = None if is_property else parameters(member)
+            found.setdefault(node.name, None)  # a class built by a static method has no __init__ to list
     return found
 
 
@@ -81,3 +84,16 @@ def test_cli_rejects_unknown_commands():
     result = subprocess.run([sys.executable, "-m", "frenbrdf.cli", "frobnicate"], capture_output=True, text=True)
     assert result.returncode == 2
     assert "invalid choice" in result.stderr
+
+
+def test_cli_version_and_help_read_as_plain_text(capsys):
+    from frenbrdf import cli
+
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--version"])
+    assert stop.value.code == 0 and capsys.readouterr().out.strip() == f"frenbrdf {frenbrdf.__version__}"
+    parser = cli.build_parser()
+    subcommands = next(action for action in parser._actions if action.choices and "train" in action.choices)
+    for text in [parser.format_help(), *(sub.format_help() for sub in subcommands.choices.values())]:
+        for markup in ("``", ":mod:", ":func:", ":class:"):
+            assert markup not in text, text

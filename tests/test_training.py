@@ -270,6 +270,18 @@ def test_patience_stops_when_validation_stops_improving(toy_materials, tmp_path)
     assert [entry["epoch"] for entry in run.history] == [-1, 0, 1, 2]
 
 
+def test_a_plateau_halves_the_learning_rate_and_a_resume_keeps_it(toy_materials, tmp_path):
+    # No epoch improves on the first (epoch 0 is the best): the rate halves at epochs 2 and 4.
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "run", epochs=5, lr=1e-30, lr_plateau=2)
+    run = train(cfg)
+    assert [entry["lr"] for entry in run.history[1:]] == pytest.approx([1e-30, 1e-30, 1e-30, 5e-31, 5e-31])
+    cfg.epochs = 7
+    resumed = train(cfg, resume=True)
+    assert [entry["lr"] for entry in resumed.history[-2:]] == pytest.approx([2.5e-31, 2.5e-31])
+    with pytest.raises(ValueError, match="lr_plateau"):
+        tiny("nbrdf", toy_materials, tmp_path / "bad", lr_plateau=-1)
+
+
 def test_dropout_and_weight_decay_change_nothing_when_off(toy_materials, tmp_path):
     from frenbrdf.models.autoencoder import AutoEncoder
     from frenbrdf.training.loop import make_optimizer

@@ -16,7 +16,11 @@ L_fre settings:
 - the rank correlation over materials of L_fre with the render PSNR and ΔE: does a lower L_fre mean
   a better render?
 
-Writes ``<out>/lfre_floor.{json,md}``.
+``--variant`` measures an L_fre variant of :data:`frenbrdf.presets.FREQUENCY_VARIANTS` instead of the
+paper's reading (``--damping`` overrides the measured fit's λ); ``--data`` reads the materials from another
+folder than the runs'; materials without a published fit in ``--weights`` are skipped.
+
+Writes ``<out>/<name>.{json,md}`` (``--name``, default ``lfre_floor``, or ``lfre_floor_<variant>``).
 """
 
 from __future__ import annotations
@@ -33,7 +37,8 @@ from scipy.stats import spearmanr
 from frenbrdf.data.nbrdf_import import evaluate_keras_nbrdf, load_keras_nbrdf
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.io.merl import read_merl
-from frenbrdf.models.losses import spectral_distance
+from frenbrdf.models.losses import frequency_variant, spectral_distance
+from frenbrdf.numerics.sht import SHT
 from frenbrdf.render.scoring import FrequencyMetric, reconstruction_rows
 from frenbrdf.training import Run
 
@@ -47,12 +52,12 @@ def exact_coefficients(metric: FrequencyMetric, model, weights: Path) -> np.ndar
     """The published NBRDF behind a table at L_fre's grid nodes, mapped as ``model`` maps: ``(S, 3, ncoeff)``."""
     if model.mapping.per_bin:
         raise ValueError("the floor is measured for models with a per-channel f_ref (not the hyperbrdf preset)")
-    coords = metric.loss.node_coords.numpy().astype(np.float64)
+    loss = metric.parts(model)[1]
+    coords = loss.node_coords.numpy().astype(np.float64)
     physical = np.maximum(evaluate_keras_nbrdf(load_keras_nbrdf(weights), coords[:, :3], coords[:, 3:]), 0.0)
     mapped = model.mapping.forward(physical, model.mapping.reference)
     with torch.no_grad():
-        maps = metric.loss.maps_from_nodes(torch.from_numpy(mapped[None]))
-        return metric.loss.sht(maps)[0].numpy()
+        return loss.coefficients_from_nodes(torch.from_numpy(mapped[None]))[0].numpy()
 
 
 def shares(squared: np.ndarray, degrees: np.ndarray) -> dict:
@@ -63,9 +68,11 @@ def shares(squared: np.ndarray, degrees: np.ndarray) -> dict:
     return {"bands": by_band, "slices": [float(x) for x in squared.sum(axis=(1, 2)) / total]}
 
 
-def measure(run: Run, weights_dir: Path, metric: FrequencyMetric, degrees: np.ndarray, resolution: int) -> list[dict]:
+def measure(run: Run, weights_dir: Path, metric: FrequencyMetric, degrees: np.ndarray, resolution: int,
+            data: Path | None = None) -> list[dict]:
     model = run.model()
-    files = [run.data / f"{name}.binary" for name in run.split.test]
+    files = [(data or run.data) / f"{name}.binary" for name in run.split.test
+             if (weights_dir / f"{name}.h5").exists()]
     latents: dict = {}
     rows = reconstruction_rows(model, files, resolution=resolution, frequency_metric=False, progress=False,
                                latents=latents)
@@ -110,18 +117,24 @@ def main() -> int:
     parser.add_argument("--weights", required=True, type=Path, help="folder of the published NBRDF fits (.h5)")
     parser.add_argument("--resolution", type=int, default=128)
     parser.add_argument("--out", type=Path, default=Path("docs/charts"))
+    parser.add_argument("--variant", default="paper", help="the L_fre variant measured (frenbrdf.presets.FREQUENCY_VARIANTS)")
+    parser.add_argument("--damping", type=float, help="λ of the measured fit (default: the config's)")
+    parser.add_argument("--data", type=Path, help="the materials' folder (default: each run's)")
+    parser.add_argument("--name", help="file name of the results, without suffix")
     args = parser.parse_args()
     start = time.perf_counter()
-    metric = FrequencyMetric()
-    degrees = metric.loss.sht.plan(torch.float64).degrees_orders()[:, 0]
+    config = frequency_variant(args.variant, **({"damping": args.damping} if args.damping else {}))
+    metric = FrequencyMetric(config)
+    degrees = SHT(config.nlat, config.nlon, config.lmax, config.grid).degrees_orders()[:, 0]
+    name = args.name or ("lfre_floor" if args.variant == "paper" else f"lfre_floor_{args.variant}")
     groups: dict[str, list[dict]] = {}
     for path in args.runs:
         run = Run(path)
-        rows = measure(run, args.weights, metric, degrees, args.resolution)
+        rows = measure(run, args.weights, metric, degrees, args.resolution, args.data)
         groups.setdefault(run.method, []).extend(rows)
         print(f"{path}: L_fre {np.mean([r['lfre'] for r in rows]):.3f}, floor {np.mean([r['floor'] for r in rows]):.3f}",
               flush=True)
-    summary = {"slices": list(metric.loss.config.slices), "groups": {}}
+    summary = {"slices": list(config.slices), "variant": args.variant, "frequency": vars(config), "groups": {}}
     for label, rows in groups.items():
         lfre = [r["lfre"] for r in rows]
         summary["groups"][label] = {
@@ -133,8 +146,8 @@ def main() -> int:
     report = {"runs": [str(p) for p in args.runs], "run": run_metadata(), "summary": summary, "materials": groups,
               "seconds": time.perf_counter() - start}
     args.out.mkdir(parents=True, exist_ok=True)
-    save_json(args.out / "lfre_floor.json", report)
-    write_text(args.out / "lfre_floor.md", markdown(summary))
+    save_json(args.out / f"{name}.json", report)
+    write_text(args.out / f"{name}.md", markdown(summary))
     print(markdown(summary))
     return 0
 

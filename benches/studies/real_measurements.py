@@ -82,7 +82,7 @@ def main(argv=None) -> int:
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--resolution", type=int, default=256)
-    parser.add_argument("--fit-epochs", type=int, default=10, help="fit-nbrdf epochs (its default)")
+    parser.add_argument("--fit-epochs", type=int, default=2000, help="fit-nbrdf passes over the samples (2000: about 16k steps, as its default 10 passes make on a whole table)")
     parser.add_argument("--out", required=True, help="folder for real.md, real.json, real.png")
     args = parser.parse_args(argv)
     model, scene = load_model(args.model), Scene(resolution=args.resolution)

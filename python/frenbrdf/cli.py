@@ -1,4 +1,4 @@
-"""The ``frenbrdf`` command line."""
+"""frenbrdf: neural BRDFs (FreNBRDF) from measured materials: train, reconstruct, render, evaluate."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import platform
 import sys
 from pathlib import Path
 
+from ._native import __version__
 from .exceptions import TrainingDiverged
 from .presets import AUGMENTATION, SELECTION_RULES, TRAINING, method_names
 
@@ -225,6 +226,7 @@ def _sample_count(text: str) -> int | None:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="frenbrdf", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"frenbrdf {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     info = commands.add_parser("info", help="report the installation and run a self-check")
     info.add_argument("--json", action="store_true", help="print the report as JSON")

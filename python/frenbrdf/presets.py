@@ -56,6 +56,28 @@ method: ``paper`` trains on the tables only (the paper's protocol), ``augmented`
 adds mixes and colour gains, ``procedural`` also analytic materials drawn afresh (docs/data.md)."""
 
 
+FREQUENCY_VARIANTS: dict[str, dict] = {
+    "paper": {"fit": "sphere", "values": "mapped", "degree_power": 0.0, "slices": [0, 24, 48, 72]},
+    "no-floor": {"fit": "measured", "values": "mapped", "degree_power": 0.0, "slices": [0, 24, 48, 72]},
+    "tone": {"fit": "measured", "values": "log1p", "degree_power": 0.0, "slices": [0, 24, 48, 72]},
+    "highlights": {"fit": "measured", "values": "log1p", "degree_power": 0.0, "slices": [1, 4, 10, 21]},
+}
+"""L_fre variant → its :class:`~frenbrdf.models.losses.FrequencyLossConfig` values (docs/frequency.md,
+"Variants"). ``paper`` is the paper's reading (the default). Each next one removes one more measured
+reason why L_fre is inert: ``no-floor`` fits the coefficients to the measured nodes only (no floor
+below the horizon); ``tone`` also takes the spectrum of ln(1 + f) instead of the log-relative
+values; ``highlights`` also moves the slices to where the energy is: θ_h bins 1, 4, 10, 21 (0.01°, 0.2°,
+1.1°, 4.9°), the 12.5, 37.5, 62.5 and 87.5 % quantiles over θ_h of the mean energy of ln(1 + f) of 20
+MERL-derived materials (the paper's slices reach 57.6°, where 1 % of it lies)."""
+
+
+def frequency_overrides(name: str) -> dict:
+    """The ``loss.frequency`` values of an L_fre variant, its name recorded in them."""
+    if name not in FREQUENCY_VARIANTS:
+        raise ValueError(f"frequency variant must be one of {sorted(FREQUENCY_VARIANTS)}, got {name!r}")
+    return {**FREQUENCY_VARIANTS[name], "variant": name}
+
+
 SELECTION_RULES: tuple[str, ...] = ("loss", "psnr")
 """What can pick a run's best checkpoint (``TrainConfig.select``): the validation loss, or the validation
 render PSNR."""

@@ -104,10 +104,13 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
 
 def truth_metrics(model: Model, result: Reconstruction, measurements: Measurements, truth_image: np.ndarray,
                   image: np.ndarray, scene: Scene) -> dict[str, float]:
-    """RMSE, PSNR, SSIM and ΔE of the renders over the lit material pixels, and L_fre against the true table."""
-    from ..render.scoring import FrequencyMetric, image_metrics
+    """RMSE, PSNR, SSIM and ΔE of the renders over the lit material pixels, PSNR and ΔE over the truth's highlights
+    (:func:`frenbrdf.render.scoring.highlight_mask`), and L_fre against the true table."""
+    from ..render.renderer import render_linear
+    from ..render.scoring import FrequencyMetric, highlight_mask, image_metrics
 
-    metrics = image_metrics(truth_image, image, material_mask(scene))
+    mask = material_mask(scene)
+    metrics = image_metrics(truth_image, image, mask, highlight_mask(render_linear(measurements.truth, scene), mask))
     metrics["lfre"] = FrequencyMetric()(model, measurements.table, result.nbrdf)
     return metrics
 

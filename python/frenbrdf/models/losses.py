@@ -36,6 +36,8 @@ from ..io.merl import SHAPE, merl_bin_angles
 from ..numerics.knn import KnnInterpolator
 from ..numerics.sht import SHT
 from ..numerics.sht_torch import SHTAnalysis
+from ..presets import FREQUENCY_VARIANTS, frequency_overrides
+from .frequency_fit import FITS, VALUES, TorchMeasuredFit, ValueSpace, measured_fit
 from .nbrdf import nbrdf_forward
 
 
@@ -73,14 +75,22 @@ SPHERE_AREA = 4 * math.pi
 MAX_LMAX = 511
 
 
-def spectral_distance(predicted, true):
+def spectral_distance(predicted, true, weights=None):
     """L_fre's value between coefficients ``(..., ncoeff)`` (numpy or torch).
 
     The mean over the leading axes (materials, slices, channels) of Σ_lm (c − c')² / 4π:
     by Parseval, the mean squared difference of the two band-limited functions over the
     sphere, so its scale depends neither on lmax nor on the grid (docs/method.md §5).
+    ``weights`` ``(ncoeff,)``: each coefficient's weight (:func:`degree_weights`; None: 1).
     """
-    return ((predicted - true) ** 2).sum(-1).mean() / SPHERE_AREA
+    squared = (predicted - true) ** 2
+    return (squared if weights is None else squared * weights).sum(-1).mean() / SPHERE_AREA
+
+
+def degree_weights(lmax: int, power: float) -> np.ndarray:
+    """``((lmax + 1)²,)``: (l + 1)^power for each coefficient of degree l (SHT layout)."""
+    degrees = SHT(lmax + 1, 2 * lmax + 2, lmax).degrees_orders()[:, 0]
+    return (degrees + 1.0) ** power
 
 
 @dataclass
@@ -100,7 +110,24 @@ class FrequencyLossConfig:
     sigma: float = 0.05
     """Gaussian width (chordal distance) of the kNN weights."""
     extension: str = "mirror"
-    """Below the equator: ``"mirror"`` (θ_d → π − θ_d) or ``"zero"``."""
+    """Below the equator: ``"mirror"`` (θ_d → π − θ_d) or ``"zero"`` (``fit="sphere"`` only)."""
+    fit: str = "sphere"
+    """``"sphere"``: the SHT of the whole sphere, below the horizon filled by the extension (the paper);
+    ``"measured"``: a damped least-squares fit to the nodes where the data are, so nothing below the
+    horizon is compared (:class:`frenbrdf.models.frequency_fit.MeasuredFit`)."""
+    damping: float = 1e-2
+    """λ of the ``"measured"`` fit, relative to the concentration eigenvalues of the measured region (≤ 1). Smaller
+    values fit more of the region's edge and amplify the truth's interpolation error there: on MERL-derived
+    materials the floor is 0.3 % of L_fre at 1e-2 and 2 % at 1e-3 (docs/frequency.md, "Variants")."""
+    values: str = "mapped"
+    """What the spectrum is of: ``"mapped"`` (the model's log-relative values, the paper), ``"linear"``
+    (reflectance f) or ``"log1p"`` (ln(1 + f): linear for diffuse values, logarithmic in a specular peak)."""
+    degree_power: float = 0.0
+    """Each squared coefficient difference of degree l counts (l + 1)^degree_power times (0: all alike)."""
+    variant: str = "paper"
+    """The :data:`frenbrdf.presets.FREQUENCY_VARIANTS` entry these values came from (set by
+    :func:`frequency_variant` and ``config_for(frequency=…)``; "custom" for values set by hand). A label:
+    what is computed follows the fields above."""
 
     def __post_init__(self):
         self.slices = tuple(int(s) for s in self.slices)
@@ -119,6 +146,16 @@ class FrequencyLossConfig:
             problems.append(f"sigma must be a positive number, got {self.sigma}")
         if self.extension not in ("mirror", "zero"):
             problems.append(f"extension must be 'mirror' or 'zero', got {self.extension!r}")
+        if self.fit not in FITS:
+            problems.append(f"fit must be one of {FITS}, got {self.fit!r}")
+        if self.values not in VALUES:
+            problems.append(f"values must be one of {VALUES}, got {self.values!r}")
+        if not (0 < self.damping < 1 and np.isfinite(self.damping)):
+            problems.append(f"damping must lie in (0, 1), got {self.damping}")
+        if not (np.isfinite(self.degree_power) and -4 <= self.degree_power <= 4):
+            problems.append(f"degree_power must lie in [−4, 4], got {self.degree_power}")
+        if self.variant not in (*FREQUENCY_VARIANTS, "custom"):
+            problems.append(f"variant must be one of {(*FREQUENCY_VARIANTS, 'custom')}, got {self.variant!r}")
         if problems:
             raise ValueError("frequency loss: " + "; ".join(problems))
 
@@ -130,6 +167,22 @@ class FrequencyLossConfig:
     def nlon(self) -> int:
         return 2 * self.lmax + 2
 
+    def truth_settings(self) -> dict:
+        """The settings the true coefficients depend on (the cache key's): the paper's fields, and those of a
+        variant only where they differ from the paper's, so that the paper's cached truth keeps its key."""
+        settings = {key: value for key, value in asdict(self).items()
+                    if key not in ("fit", "damping", "values", "degree_power", "variant")}
+        if self.fit != "sphere":
+            settings.update(fit=self.fit, damping=self.damping)
+        if self.values != "mapped":
+            settings["values"] = self.values
+        return settings
+
+
+def frequency_variant(name: str, **overrides) -> FrequencyLossConfig:
+    """The settings of a named L_fre variant (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`), other fields
+    at their defaults or ``overrides``."""
+    return FrequencyLossConfig(**{**frequency_overrides(name), **overrides})
 
 
 def _unit(theta, phi) -> np.ndarray:
@@ -140,12 +193,19 @@ class FrequencyLoss(nn.Module):
     """L_fre between decoded NBRDFs and precomputed true coefficients.
 
     ``forward(params, true)``: NBRDF parameters of B materials and their true
-    coefficients ``(B, S, 3, ncoeff)`` → :func:`spectral_distance`.
+    coefficients ``(B, S, 3, ncoeff)`` → :func:`spectral_distance`. ``mapping``: the run's mapping,
+    needed by the variants whose spectrum is of reflectance (``config.values``).
     """
 
-    def __init__(self, config: FrequencyLossConfig):
+    def __init__(self, config: FrequencyLossConfig, mapping=None):
         super().__init__()
         self.config = config
+        self.values = ValueSpace(config.values, mapping)
+        self.fit = (TorchMeasuredFit(measured_fit(config.lmax, config.grid, config.slices, config.damping))
+                    if config.fit == "measured" else None)
+        weights = None if config.degree_power == 0 else torch.from_numpy(
+            degree_weights(config.lmax, config.degree_power).astype(np.float32))
+        self.register_buffer("degree_weights", weights, persistent=False)
         self.sht = SHTAnalysis(config.nlat, config.nlon, config.lmax, config.grid)
         theta = SHT(config.nlat, config.nlon, config.lmax, config.grid).theta
         # Both grids are symmetric about the equator, and nlon is even: the folded function
@@ -178,12 +238,22 @@ class FrequencyLoss(nn.Module):
             south = north.new_zeros(*north.shape[:-2], n_south, config.nlon)
         return torch.cat([north, south], dim=-2)
 
+    def coefficients_from_nodes(self, values: torch.Tensor) -> torch.Tensor:
+        """Mapped values at ``node_coords`` ``(B, S·nodes, 3)`` → coefficients ``(B, S, 3, ncoeff)``, as the
+        variant takes them (``config.values``, ``config.fit``); differentiable."""
+        values = self.values.from_mapped(values)
+        if self.fit is None:
+            return self.sht(self.maps_from_nodes(values))
+        return self.fit(values.reshape(values.shape[0], len(self.config.slices), -1, 3))
+
     def predicted_coefficients(self, params: list[torch.Tensor]) -> torch.Tensor:
         """``(B, S, 3, ncoeff)``, differentiable."""
-        return self.sht(self.predicted_maps(params))
+        return self.coefficients_from_nodes(
+            nbrdf_forward(params, self.node_coords.expand(params[0].shape[0], -1, -1)))
 
     def forward(self, params: list[torch.Tensor], true: torch.Tensor) -> torch.Tensor:
-        return spectral_distance(self.predicted_coefficients(params), true)
+        weights = None if self.degree_weights is None else self.degree_weights.to(true.dtype)
+        return spectral_distance(self.predicted_coefficients(params), true, weights)
 
 
 #: Version of how the cached truth is computed: a change of method bumps it, so old cache files miss.
@@ -202,14 +272,15 @@ class FrequencyTruth:
         file's content hash, every field of the mapping (f_ref, ε, the offset), every
         frequency setting and :data:`TRUTH_CACHE_FORMAT`."""
         state = mapping.state()
-        described = {"format": TRUTH_CACHE_FORMAT, "material": material_hash, "frequency": asdict(self.config),
+        described = {"format": TRUTH_CACHE_FORMAT, "material": material_hash, "frequency": self.config.truth_settings(),
                      "mapping": {key: value for key, value in state.items() if key != "reference"}}
         digest = hashlib.sha256(json.dumps(described, sort_keys=True).encode())
         digest.update(np.ascontiguousarray(state["reference"]).tobytes())
         return digest.hexdigest()[:32]
 
-    def __init__(self, config: FrequencyLossConfig, cache_dir: str | os.PathLike | None = None):
+    def __init__(self, config: FrequencyLossConfig, cache_dir: str | os.PathLike | None = None, mapping=None):
         self.config = config
+        self.values = ValueSpace(config.values, mapping)
         self.sht = SHT(config.nlat, config.nlon, config.lmax, config.grid, "float64")
         theta = self.sht.theta
         phi = 2 * np.pi * np.arange(config.nlon) / config.nlon
@@ -234,13 +305,14 @@ class FrequencyTruth:
         return self._interpolators[key]
 
     def maps(self, mapped: np.ndarray, valid: np.ndarray) -> np.ndarray:
-        """One material's slices on the grid: mapped ``(N_BINS, 3)``, valid ``(N_BINS,)`` → ``(S, 3, nlat, nlon)``."""
+        """One material's slices on the grid: mapped ``(N_BINS, 3)``, valid ``(N_BINS,)`` → ``(S, 3, nlat, nlon)``,
+        in the variant's values (``config.values``)."""
         per_slice = SHAPE[2] * SHAPE[3]
         out = np.empty((len(self.config.slices), 3, self.config.nlat, self.config.nlon))
         below = self.nodes[:, 2] < -1e-12
         for s, i in enumerate(self.config.slices):
             rows = slice(i * per_slice, (i + 1) * per_slice)
-            slice_valid, slice_values = valid[rows], mapped[rows].astype(np.float64)
+            slice_valid, slice_values = valid[rows], self.values.from_mapped(mapped[rows].astype(np.float64))
             if not slice_valid.any():
                 raise ValueError(f"θ_h slice {i} holds no valid bin; choose other frequency-loss slices")
             interpolator, source_bins = self._interpolator(slice_valid)
@@ -266,12 +338,20 @@ class FrequencyTruth:
                         return cached
                 except (OSError, ValueError, EOFError):
                     pass
-        coefficients = self.sht.analysis(self.maps(mapped, valid)).astype(np.float32)
+        coefficients = self.coefficients_from_maps(self.maps(mapped, valid)).astype(np.float32)
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
             with atomic_path(path) as temporary:
                 np.save(temporary, coefficients)
         return coefficients
+
+    def coefficients_from_maps(self, maps: np.ndarray) -> np.ndarray:
+        """Grid maps ``(..., S, 3, nlat, nlon)`` → coefficients ``(..., S, 3, ncoeff)`` (float64), by the
+        variant's fit: the SHT of the whole sphere, or the fit to the measured nodes."""
+        if self.config.fit == "sphere":
+            return self.sht.analysis(maps)
+        fit = measured_fit(self.config.lmax, self.config.grid, self.config.slices, self.config.damping)
+        return fit.coefficients(fit.grid_nodes(maps))
 
 
 # --------------------------------------------------------------------------- the weights of the terms

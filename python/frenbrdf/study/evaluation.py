@@ -3,8 +3,9 @@
 - Reconstruction: each test material is encoded from N random valid bins (default 4000,
   the same bins for every method), decoded, rendered and compared with the render of the
   true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the colour difference ΔE
-  (CIEDE2000) over the lit material pixels (:func:`frenbrdf.render.material_mask`), and the
-  frequency loss. With ``EvaluateConfig.refine`` the same samples are also refined at test time
+  (CIEDE2000) over the lit material pixels (:func:`frenbrdf.render.material_mask`), PSNR and ΔE over
+  the highlights (the 5 % brightest of those pixels in the truth's linear render,
+  :func:`frenbrdf.render.scoring.highlight_mask`), and the frequency loss. With ``EvaluateConfig.refine`` the same samples are also refined at test time
   (:func:`frenbrdf.models.reconstruct.reconstruct`, what a user reconstructing a material runs) and the
   refined NBRDF measured the same way: the "refined" rows.
 - Editing: each unordered pair (a, b) of test materials at most once and interior
@@ -43,7 +44,7 @@ from ..render.renderer import Scene, material_mask, render_linear, tonemap
 from ..render.scoring import (
     FrequencyMetric as FrequencyMetric,  # re-exported: frenbrdf.study.evaluation keeps its public names
 )
-from ..render.scoring import edit_metrics, reconstruct, refined_reconstruction, sample_bins
+from ..render.scoring import edit_metrics, highlight_mask, reconstruct, refined_reconstruction, sample_bins
 from ..render.scoring import image_metrics as image_metrics
 from ..render.scoring import reconstruction_rows as reconstruction_rows
 from ..training.run import Run
@@ -283,19 +284,20 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         table = as_table(truth)
         bins = sample_bins(table, rng, config.samples)
         edit_truth_linear[name] = render_linear(truth, edit_scene)
-        truth_image = tonemap(render_linear(truth, scene))
+        truth_linear = render_linear(truth, scene)
+        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
         renders[name] = {"truth": truth_image}
         for method, model in models.items():
             z, image = reconstruct(model, table, bins, scene)
             latents[""][method][name] = z
             renders[name][method] = image
-            metrics = image_metrics(truth_image, image, mask)
+            metrics = image_metrics(truth_image, image, mask, highlight)
             metrics["lfre"] = frequency_metric(model, table, z)
             if refinement:
                 result, image, seconds = refined_reconstruction(model, table, bins, scene, refinement)
                 latents["refined_"][method][name] = result.z
                 renders[name][f"{method} refined"] = image
-                refined = image_metrics(truth_image, image, mask)
+                refined = image_metrics(truth_image, image, mask, highlight)
                 metrics.update({f"refined_{key}": value for key, value in refined.items()})
                 metrics.update(refined_lfre=frequency_metric(model, table, result.nbrdf), refine_seconds=seconds)
             per_material[method].append({"material": name, **metrics})
@@ -379,7 +381,7 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
                                    overwrite=True) for seed, group in sorted(groups.items())}
     # A row without a finite value on every seed (editing of a single material) cannot be compared.
     keys = [key for key, _ in table_rows(config.refine)
-            if all(np.isfinite(v[key]) for r in reports.values() for v in r["summary"].values())]
+            if all(np.isfinite(v.get(key, np.nan)) for r in reports.values() for v in r["summary"].values())]
     comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, keys)
     methods = reports[min(reports)]["reconstruction"]
     all_rows = {m: [row for r in reports.values() for row in r["reconstruction"][m]] for m in methods}

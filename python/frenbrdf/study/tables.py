@@ -20,8 +20,13 @@ PAPER = {
     "frenbrdf": {"rmse_x100": 6.74, "psnr": 29.9, "ssim_x10": 9.88, "edit_psnr": 30.1, "edit_ssim_x10": 9.82},
 }
 RECONSTRUCTION_ROWS = [("rmse_x100", "Recon RMSE×10² ↓"), ("psnr", "Recon PSNR ↑"), ("ssim_x10", "Recon SSIM×10 ↑"),
-                       ("lfre", "Recon L_fre ↓"), ("delta_e", "Recon ΔE ↓")]
-EDITING_ROWS = [("edit_psnr", "Edit PSNR ↑"), ("edit_ssim_x10", "Edit SSIM×10 ↑"), ("edit_delta_e", "Edit ΔE ↓")]
+                       ("lfre", "Recon L_fre ↓"), ("delta_e", "Recon ΔE ↓"),
+                       ("highlight_psnr", "Recon highlight PSNR ↑"), ("highlight_delta_e", "Recon highlight ΔE ↓")]
+EDITING_ROWS = [("edit_psnr", "Edit PSNR ↑"), ("edit_ssim_x10", "Edit SSIM×10 ↑"), ("edit_delta_e", "Edit ΔE ↓"),
+                ("edit_highlight_psnr", "Edit highlight PSNR ↑")]
+#: The keys of the highlight rows (PSNR and ΔE over the truth's 5 % brightest lit pixels): a report written before
+#: they existed has none, and its tables leave them out.
+HIGHLIGHT_KEYS = ("highlight_psnr", "highlight_delta_e", "edit_highlight_psnr", "refined_highlight_psnr")
 #: The rows of every table (summary key, label): the paper's protocol, the encoder's latent.
 ROWS = RECONSTRUCTION_ROWS + EDITING_ROWS
 #: What a refinement budget (:data:`frenbrdf.models.reconstruct.BUDGETS`) refines, as its rows name it.
@@ -37,6 +42,7 @@ def table_rows(refine: str = "none") -> list[tuple[str, str]]:
     refined = REFINED.get(refine, f"refined ({refine})")
     return [*RECONSTRUCTION_ROWS, ("refined_psnr", f"Recon PSNR, {refined} ↑"),
             ("refined_lfre", f"Recon L_fre, {refined} ↓"), ("refined_delta_e", f"Recon ΔE, {refined} ↓"),
+            ("refined_highlight_psnr", f"Recon highlight PSNR, {refined} ↑"),
             *EDITING_ROWS, ("edit_refined_psnr", "Edit PSNR, refined z ↑"),
             ("edit_refined_delta_e", "Edit ΔE, refined z ↓")]
 
@@ -50,9 +56,14 @@ def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
     summary = {"rmse_x100": mean(rows, "rmse", 100), "psnr": mean(rows, "psnr"), "ssim_x10": mean(rows, "ssim", 10),
                "lfre": mean(rows, "lfre"), "delta_e": mean(rows, "delta_e"), "edit_psnr": mean(edit_rows, "psnr"),
                "edit_ssim_x10": mean(edit_rows, "ssim", 10), "edit_delta_e": mean(edit_rows, "delta_e")}
+    if rows and "highlight_psnr" in rows[0]:
+        summary.update(highlight_psnr=mean(rows, "highlight_psnr"), highlight_delta_e=mean(rows, "highlight_delta_e"),
+                       edit_highlight_psnr=mean(edit_rows, "highlight_psnr"))
     if rows and "refined_psnr" in rows[0]:
         summary.update(refined_psnr=mean(rows, "refined_psnr"), refined_lfre=mean(rows, "refined_lfre"),
                        refined_delta_e=mean(rows, "refined_delta_e"),
+                       **({"refined_highlight_psnr": mean(rows, "refined_highlight_psnr")}
+                          if "refined_highlight_psnr" in rows[0] else {}),
                        edit_refined_psnr=mean(edit_rows, "refined_psnr"),
                        edit_refined_delta_e=mean(edit_rows, "refined_delta_e"))
     return summary
@@ -181,6 +192,8 @@ def markdown_table(summary: dict, n_materials: int, n_edits: int, materials: str
              "(docs/method.md §5).", "",
              header, "|---" * (1 + len(methods) + len(PAPER)) + "|"]
     for key, label in table_rows(refine):
+        if key in HIGHLIGHT_KEYS and any(key not in summary[m] for m in methods):
+            continue  # a report from before the highlight metrics
         ours = " | ".join(f"{summary[m][key]:.3g}" for m in methods)
         paper = " | ".join(f"{PAPER[m].get(key, '–')}" for m in PAPER)
         lines.append(f"| {label} | {ours} | {paper} |")

@@ -2,12 +2,14 @@
 
 - :func:`time_training_step`: one optimisation step of a config (the training code's own
   :func:`~frenbrdf.training.optimisation_step`), with and without the frequency term;
+- :func:`time_frequency_variants`: the same step with each L_fre variant, timed side by side;
 - :func:`nbrdf_throughput`: queries per second of decoded NBRDFs, timed in turn;
 - :func:`timed_seconds`: the interleaved timer both use.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import statistics
 import time
 
@@ -16,7 +18,7 @@ import torch
 
 from ..data.folders import list_materials, split_materials
 from ..models.autoencoder import AutoEncoder
-from ..models.losses import FrequencyLoss
+from ..models.losses import FrequencyLoss, FrequencyLossConfig
 from ..models.nbrdf import N_INPUTS, NBRDF
 from ..training import TrainConfig, optimisation_step, prepare
 from ..training.loop import make_optimizer
@@ -57,7 +59,7 @@ def time_training_step(cfg: TrainConfig, steps: int = 30, device: torch.device |
     bank, truth = data.bank, data.truth
     torch.manual_seed(0)
     network = AutoEncoder(cfg.model).to(device)
-    frequency = FrequencyLoss(cfg.loss.frequency).to(device)
+    frequency = FrequencyLoss(cfg.loss.frequency, data.mapping).to(device)
     optimizer = make_optimizer(network, cfg)  # Adam, or AdamW with weight decay: as training builds it
     generator = torch.Generator().manual_seed(0)
     batch = list(range(min(cfg.batch_materials, len(split.train))))
@@ -82,6 +84,42 @@ def time_training_step(cfg: TrainConfig, steps: int = 30, device: torch.device |
                   fre_added_share=timed["step"] / timed["without"] - 1,
                   fre_nbrdf_eval_s=timed["nbrdf_eval"], fre_forward_backward_s=timed["fre"])
     return result
+
+
+def time_frequency_variants(cfg: TrainConfig, variants: dict[str, FrequencyLossConfig], steps: int = 30,
+                            device: torch.device | str = "cpu", *, statistic=min) -> dict[str, float]:
+    """Seconds of one optimisation step of ``cfg`` with each L_fre setting of ``variants`` (name → settings) and
+    without L_fre (``"without L_fre"``), timed interleaved (:func:`timed_seconds`; ``min`` by default, which
+    resists load from other processes), so that their ratios come from the same minutes.
+
+    Every variant starts from the same initialisation and steps on the same samples of the same training
+    materials; only the frequency term (its truth, its transform) differs.
+    """
+    device = torch.device(device)
+    files = {path.stem: path for path in list_materials(cfg.data)}
+    split = split_materials(files, cfg.seed, cfg.split)
+    data_cache: dict = {}
+    functions = {}
+    for name, frequency in variants.items():
+        config = dataclasses.replace(cfg, loss=dataclasses.replace(cfg.loss, frequency=frequency))
+        data = prepare(config, split, files, data_cache=data_cache)
+        torch.manual_seed(0)
+        network = AutoEncoder(cfg.model).to(device)
+        loss = FrequencyLoss(frequency, data.mapping).to(device)
+        optimizer = make_optimizer(network, config)
+        generator = torch.Generator().manual_seed(0)
+        batch = list(range(min(cfg.batch_materials, len(split.train))))
+        context = data.bank.sample(batch, cfg.context_samples, generator).to(device)
+        query = data.bank.sample(batch, cfg.query_samples, generator).to(device)
+        true = data.truth[batch].to(device)
+        functions[name] = (lambda network=network, loss=loss, optimizer=optimizer, config=config, context=context,
+                           query=query, true=true: optimisation_step(network, loss, optimizer, config.loss,
+                                                                     config.grad_clip, context, query, true))
+        if "without L_fre" not in functions:
+            functions["without L_fre"] = (lambda network=network, optimizer=optimizer, config=config, context=context,
+                                          query=query: optimisation_step(network, None, optimizer, config.loss,
+                                                                         config.grad_clip, context, query, None))
+    return timed_seconds(functions, steps, device, statistic=statistic)
 
 
 def nbrdf_throughput(nbrdfs: dict[str, NBRDF], queries: int = 1 << 18, repeats: int = 40,

@@ -13,7 +13,14 @@ from ..configs import from_dict, merge, to_dict
 from ..io.merl import N_BINS
 from ..models.autoencoder import ModelConfig
 from ..models.losses import LossConfig
-from ..presets import METHODS, SELECTION_RULES, augmentation_overrides, check_method, training_overrides
+from ..presets import (
+    METHODS,
+    SELECTION_RULES,
+    augmentation_overrides,
+    check_method,
+    frequency_overrides,
+    training_overrides,
+)
 
 
 def selection_score(entry: dict, rule: str) -> float | None:
@@ -111,6 +118,9 @@ class TrainConfig:
     context_samples]; 0: always ``context_samples``."""
     patience: int = 0
     """Stop when the selection measure (``select``) has not improved for this many epochs; 0: never."""
+    lr_plateau: int = 0
+    """Halve the learning rate each time the selection measure has gone this many epochs without improving
+    (so training settles instead of stopping on noise; pair it with a larger ``patience``); 0: never."""
     render_every: int = 0
     """Every this many epochs (and at the last), encode each validation material from 4000 samples of its
     table, decode and render it as ``frenbrdf evaluate`` does, and log the mean render PSNR and ΔE in the
@@ -149,8 +159,8 @@ class TrainConfig:
                 problems.append(f"{name} must be ≥ 0, got {getattr(self, name)}")
         if not 0.0 <= self.context_jitter <= 1.0:
             problems.append(f"context_jitter must lie in [0, 1], got {self.context_jitter}")
-        if int(self.patience) < 0:
-            problems.append(f"patience must be ≥ 0, got {self.patience}")
+        if int(self.patience) < 0 or int(self.lr_plateau) < 0:
+            problems.append(f"patience and lr_plateau must be ≥ 0, got {self.patience} and {self.lr_plateau}")
         if int(self.render_every) < 0 or not 8 <= int(self.render_resolution) <= 1024:
             problems.append(f"render_every must be ≥ 0 and render_resolution in 8 … 1024, got {self.render_every} and "
                             f"{self.render_resolution}")
@@ -174,16 +184,19 @@ class TrainConfig:
 
 
 def config_for(method: str, *, training: str | None = None, augmentation: str | None = None,
-               **overrides) -> TrainConfig:
+               frequency: str | None = None, **overrides) -> TrainConfig:
     """The preset of a method (:data:`frenbrdf.presets.METHODS`), optionally with a training length
-    (``"demo"``, ``"sweep"``) and an augmentation (:data:`frenbrdf.presets.AUGMENTATION`, ``"paper"``
-    by default), with top-level fields overridden."""
+    (``"demo"``, ``"sweep"``), an augmentation (:data:`frenbrdf.presets.AUGMENTATION`, ``"paper"``
+    by default) and an L_fre variant (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`, ``"paper"`` by default),
+    with top-level fields overridden."""
     check_method(method)
     layers = [METHODS[method]]
     if training is not None:
         layers.append(training_overrides(training))
     if augmentation is not None:
         layers.append({"augment": augmentation_overrides(augmentation)})
+    if frequency is not None:
+        layers.append({"loss": {"frequency": frequency_overrides(frequency)}})
     layers.append({key: to_dict(value) if dataclasses.is_dataclass(value) else value
                    for key, value in overrides.items()})
     settings = to_dict(TrainConfig(method=method))

@@ -104,7 +104,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
 
     torch.manual_seed(cfg.seed)
     network = AutoEncoder(cfg.model).to(device)
-    frequency = FrequencyLoss(cfg.loss.frequency).to(device) if data.truth is not None else None
+    frequency = FrequencyLoss(cfg.loss.frequency, data.mapping).to(device) if data.truth is not None else None
     optimizer = make_optimizer(network, cfg)
     drawer = BatchDrawer(cfg, data, with_truth=cfg.loss.eta > 0)
     generator = torch.Generator().manual_seed(cfg.seed)
@@ -171,6 +171,7 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
             entry.update(render_validation(network, data, cfg, validation_renders))
             render_seconds += time.perf_counter() - render_start
         entry["seconds"] = seconds_before + time.perf_counter() - clock_start - render_seconds
+        entry["lr"] = optimizer.param_groups[0]["lr"]
         history.append(entry)
         for rule, best in bests.items():
             score = selection_score(entry, rule)
@@ -181,7 +182,11 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
         if ranks.main:
             checkpoints.save(run_dir / "last.pt", state(epoch))
             save_json(run_dir / "history.json", history)
-        if cfg.patience and epoch - bests[cfg.select]["epoch"] >= cfg.patience:
+        since_best = epoch - bests[cfg.select]["epoch"]
+        if cfg.lr_plateau and since_best and since_best % cfg.lr_plateau == 0:
+            for group in optimizer.param_groups:  # a plateau: halve the rate (kept in last.pt for a resume)
+                group["lr"] *= 0.5
+        if cfg.patience and since_best >= cfg.patience:
             break  # early stopping: the selection measure has not improved for `patience` epochs
     bar.close()
     ranks.barrier()

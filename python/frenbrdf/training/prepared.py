@@ -122,7 +122,7 @@ def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distr
 
 
 def _true_coefficients(cfg: TrainConfig, names, files, mapping, bank, ranks: Distributed) -> torch.Tensor:
-    frequency_truth = FrequencyTruth(cfg.loss.frequency, cfg.cache_folder / "frequency")
+    frequency_truth = FrequencyTruth(cfg.loss.frequency, cfg.cache_folder / "frequency", mapping)
     coefficients = []
     # Every rank fills the cache for its share of the materials, then all read it.
     for phase in ("fill", "read"):

@@ -22,7 +22,8 @@ import torch
 from ..data.analytic import AnalyticMaterial, evaluate
 from ..data.synth import draw_material
 from ..io.merl import merl_above_horizon, merl_bin_angles, merl_bin_to_angles, merl_lookup_directions
-from ..models.losses import FrequencyLossConfig
+from ..models.frequency_fit import ValueSpace
+from ..models.losses import FrequencyLossConfig, FrequencyTruth
 from ..models.mapping import LogRelativeMapping
 from ..numerics.coords import rusinkiewicz_to_directions
 from ..numerics.knn import KnnInterpolator
@@ -83,6 +84,8 @@ class NodeTruth:
 
     def __init__(self, config: FrequencyLossConfig, mapping: LogRelativeMapping):
         self.config, self.mapping = config, mapping
+        self.values = ValueSpace(config.values, mapping)
+        self.fit = FrequencyTruth(config, mapping=mapping)  # for its coefficients_from_maps: the variant's fit
         self.sht = SHT(config.nlat, config.nlon, config.lmax, config.grid, "float64")
         theta, phi = np.meshgrid(self.sht.theta, 2 * np.pi * np.arange(config.nlon) / config.nlon, indexing="ij")
         theta, phi = theta.reshape(-1), phi.reshape(-1)
@@ -118,12 +121,12 @@ class NodeTruth:
         self.reference = _reference_at(mapping, self.wi, self.wo)
 
     def maps(self, material: AnalyticMaterial) -> np.ndarray:
-        """The material's mapped slices on the grid, ``(S, 3, nlat, nlon)``."""
-        mapped = self.mapping.forward(evaluate(material, self.wi, self.wo), self.reference)
+        """The material's slices on the grid in the variant's values (mapped by default), ``(S, 3, nlat, nlon)``."""
+        mapped = self.values.from_mapped(self.mapping.forward(evaluate(material, self.wi, self.wo), self.reference))
         mapped = np.concatenate([mapped, np.zeros((1, 3))])  # row −1: the zero extension
         grids = np.stack([mapped[source] for source in self.sources])  # (S, nlat·nlon, 3)
         return grids.transpose(0, 2, 1).reshape(len(self.sources), 3, self.config.nlat, self.config.nlon)
 
     def coefficients(self, material: AnalyticMaterial) -> torch.Tensor:
         """``(S, 3, ncoeff)`` float32."""
-        return torch.from_numpy(self.sht.analysis(self.maps(material)).astype(np.float32))
+        return torch.from_numpy(self.fit.coefficients_from_maps(self.maps(material)).astype(np.float32))
