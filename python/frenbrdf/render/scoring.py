@@ -27,7 +27,6 @@ from ..models.reconstruct import STAGES, Reconstruction, RefineConfig, refine_co
 from ..models.reconstruct import reconstruct as refine_samples
 from .renderer import Scene, material_mask, render_linear, tonemap
 
-
 #: The share of the lit material pixels the highlight metrics are taken over: the brightest in the truth.
 HIGHLIGHT_FRACTION = 0.05
 #: Rec. 709 luminance of linear RGB: what "brightest" means.
