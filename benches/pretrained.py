@@ -62,7 +62,7 @@ def by_source(rows: list[dict], folders: list[Path]) -> dict[str, dict]:
 
 
 def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
-          progress: bool = True, reuse: bool = False) -> dict:
+          progress: bool = True, reuse: bool = False, trained_on: str | None = None) -> dict:
     """Trains, evaluates, packs and documents the shipped model; returns the card.
 
     ``reuse``: a finished run in ``work`` (its ``best.pt``) is evaluated, packed and documented
@@ -79,7 +79,10 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
     card = {"version": pretrained.VERSION, "command": run_metadata()["command"],
             "training_config": json.loads(Path(config_path).read_text()), "data": sources,
             "materials": {"train": len(run.split.train), "validation": len(run.split.val), "test": len(test)},
-            "seed": seed, "best_epoch": run.best_epoch, "training_seconds": round(run.seconds or 0.0, 1),
+            "seed": seed, "best_epoch": run.best_epoch, "epochs": run.history[-1]["epoch"] + 1,
+            # Training time without the validation renders, as the run logged it (a reused run's own).
+            "training_seconds": round(run.history[-1].get("seconds", run.seconds or 0.0), 1),
+            "trained_on": trained_on or run_metadata()["cpu"],
             "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
             "held_out_refined_by_source": by_source(refined, folders)}
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)
@@ -106,10 +109,10 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
   {card['materials']['validation']} validation and {card['materials']['test']} held-out test materials
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
-  {card['best_epoch']}, {card['training_seconds']} s.
-- **Regenerate**: `frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/`,
-  `frenbrdf import-nbrdf` of the RGL fits but the four measured materials into `rgl-train/`
-  ([measurements.md](measurements.md) names them), `frenbrdf synth bank/`, then `{card['command']}`.
+  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.
+- **Regenerate**: `bash benches/pretrained.sh` (the MERL fits, the RGL fits but the four measured
+  materials of [measurements.md](measurements.md), the bank; then training and packing). These files
+  were packed by `{card['command']}`.
 - **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
   compressed (relative error of f_ref + ε below 1e-4).
 
@@ -121,8 +124,10 @@ material pixels, as trained (float32) and as shipped (packed):
 {table}
 
 By source (float32), encoder only: {by_source_text(card['held_out_by_source'])}.
-With the latent refined on the same samples (`--refine latent`, the default of `frenbrdf reconstruct`):
+With the latent refined on the same samples (`--refine latent`; `frenbrdf reconstruct` defaults to `full`):
 {by_source_text(card['held_out_refined_by_source'])}.
+
+Real gonio-photometer measurements that no training saw: [measurements.md](measurements.md).
 """
 
 
@@ -143,13 +148,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"), help="the model card (Markdown)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--reuse", action="store_true", help="evaluate, pack and document WORK/run again, untrained")
+    parser.add_argument("--trained-on", help="the machine the run was trained on, for the card (default: this CPU)")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
     folders = [Path(f) for f in (args.merl, args.bank, *args.data) if f]
     if not folders:
         parser.error("give --merl, --bank, --data or several")
     card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
-                 progress=not args.quiet, reuse=args.reuse)
+                 progress=not args.quiet, reuse=args.reuse, trained_on=args.trained_on)
     print(json.dumps(card["held_out"], indent=2))
     return 0
 

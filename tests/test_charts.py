@@ -133,3 +133,66 @@ def test_lfre_floor_evaluates_the_exact_brdf_where_the_loss_evaluates_a_predicti
     degrees = metric.loss.sht.plan(torch.float64).degrees_orders()[:, 0]
     shares = chart.shares(exact ** 2, degrees)
     assert sum(shares["bands"].values()) == pytest.approx(1) and sum(shares["slices"]) == pytest.approx(1)
+
+
+def _variant_run(variant, eta, seed, psnr, highlight, edit=25.0):
+    sets = {name: {"psnr": psnr + seed, "delta_e": 3.0, "highlight_psnr": highlight + seed, "highlight_delta_e": 6.0,
+                   "lfre": 0.5, "edit_psnr": edit + seed, "edit_delta_e": 4.0, "edit_highlight_psnr": 20.0}
+            for name in ("id", "ood")}
+    return {"variant": variant, "eta": eta, "seed": seed, "ratio_first": eta * 10, "ratio_last": eta, "sets": sets}
+
+
+def test_frequency_variants_chart_pairs_each_variant_with_eta_zero_and_names_the_goal(tmp_path):
+    chart = load_script("chart_frequency_variants")
+    assert [s["id"] for s in chart.plan(["paper", "tone"], [0.0, 0.05], [0, 1])] == [
+        "eta-0/seed-0", "eta-0/seed-1", "paper/eta-0.05/seed-0", "paper/eta-0.05/seed-1", "tone/eta-0.05/seed-0",
+        "tone/eta-0.05/seed-1"]
+    seeds = (0, 1, 2)
+    runs = [_variant_run("paper", 0.0, s, 30.0, 20.0) for s in seeds]
+    runs += [_variant_run("paper", 0.05, s, 30.0, 20.0 + 0.1 * s) for s in seeds]  # within noise
+    runs += [_variant_run("tone", 0.05, s, 30.0, 21.0) for s in seeds]  # +1 dB on the highlights on every seed
+    rows = chart.summarise(runs, ["paper", "tone"], [0.0, 0.05], seeds)
+    assert [r["variant"] for r in rows] == ["η = 0 (no L_fre)", "paper", "tone"]
+    assert rows[2]["id_highlight_psnr_vs_0"] == pytest.approx(1.0) and rows[2]["id_highlight_psnr_vs_0_significant"]
+    assert not rows[1]["id_highlight_psnr_vs_0_significant"]
+    assert chart.goal(rows) == ["tone η=0.05"]
+    table = chart.markdown(rows)
+    assert "**+1.00 [+1.00, +1.00]**" in table and "in distr.: highlight PSNR" in table
+    chart.draw(rows, tmp_path / "chart9.png", "test")
+    assert (tmp_path / "chart9.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_frequency_variants_sweep_trains_in_parallel_resumes_and_reports(toy_materials, tmp_path):
+    """The three phases at tiny scale: train (2 processes), then report (measures, then the table); a second
+    train finds every run finished."""
+    import shutil
+
+    import frenbrdf
+
+    chart = load_script("chart_frequency_variants")
+    ood = tmp_path / "ood"
+    ood.mkdir()
+    for i, path in enumerate(sorted(toy_materials.glob("*.binary"))[:3]):
+        shutil.copy(path, ood / f"other-{i}.binary")
+    overrides = {"epochs": 1, "batch_materials": 2, "context_samples": 256, "query_samples": 512,
+                 "augment": {"mix": 0.0, "gain": 0.0, "procedural": 0.0, "preset": "paper"},
+                 "model": {"nbrdf": {"hidden": [16, 16]}, "encoder": {"hidden": [32, 32], "latent": 8},
+                           "decoder": {"hidden": [32]}}, "loss": {"frequency": {"lmax": 11}}}
+    common = ["--data", str(toy_materials), "--work", str(tmp_path / "work"), "--variants", "paper", "tone",
+              "--etas", "0", "0.05", "--seeds", "0", "1", "--overrides", json.dumps(overrides), "--threads", "1",
+              "--ood", str(ood), "--resolution", "16", "--edits", "6"]
+    assert chart.main(["train", *common, "--jobs", "2"]) == 0
+    runs = sorted(p.relative_to(tmp_path / "work" / "runs").as_posix() for p in (tmp_path / "work").rglob("last.pt"))
+    assert len(runs) == 6 and "tone/eta-0.05/seed-1/last.pt" in runs
+    assert frenbrdf.training.Run(tmp_path / "work" / "runs" / "tone" / "eta-0.05" / "seed-0").config.loss.frequency \
+        .variant == "tone"
+    assert chart.main(["report", *common, "--out", str(tmp_path / "charts"), "--name", "variants"]) == 0
+    saved = json.loads((tmp_path / "charts" / "variants.json").read_text())
+    assert [r["variant"] for r in saved["rows"]] == ["η = 0 (no L_fre)", "paper", "tone"]
+    assert all(np.isfinite(r["sets"]["ood"]["highlight_psnr"]) and r["sets"]["ood"]["materials"] == 3
+               for r in saved["runs"])
+    assert {"id_highlight_psnr_vs_0", "ood_edit_psnr_vs_0"} <= set(saved["rows"][1])
+    before = (tmp_path / "work" / "measured").stat().st_mtime_ns
+    assert chart.main(["train", *common]) == 0  # every run finished: nothing to do
+    assert (tmp_path / "work" / "measured").stat().st_mtime_ns == before

@@ -66,6 +66,31 @@ def test_image_metrics_measure_the_material_not_the_background():
     assert image_metrics(truth, on_material, mask)["psnr"] == pytest.approx(20.0)
 
 
+def test_the_highlight_metric_sees_a_blurred_highlight_that_the_whole_material_psnr_hardly_sees():
+    """A prediction equal to the truth except in its highlight: the highlight PSNR falls far more than the PSNR."""
+    from frenbrdf.io.merl import SHAPE
+    from frenbrdf.render.renderer import render_linear, tonemap
+    from frenbrdf.render.scoring import HIGHLIGHT_FRACTION, highlight_mask
+
+    scene = Scene(resolution=64, environment_samples=8)
+    mask = material_mask(scene)
+    rng = np.random.default_rng(0)
+    linear = render_linear(np.broadcast_to(rng.uniform(0.05, 0.2, (3, 1, 1, 1)), SHAPE).copy(), scene)
+    highlight = highlight_mask(linear, mask)
+    assert highlight.sum() == pytest.approx(HIGHLIGHT_FRACTION * mask.sum(), abs=3) and not (highlight & ~mask).any()
+    luminance = linear @ [0.2126, 0.7152, 0.0722]
+    assert luminance[highlight].min() >= luminance[mask & ~highlight].max()  # the brightest pixels, by the linear truth
+    truth = tonemap(linear)
+    dimmed = truth.copy()
+    dimmed[highlight] *= 0.8  # the highlight comes back dimmer, nothing else changes
+    metrics = image_metrics(truth, dimmed, mask, highlight)
+    assert metrics["psnr"] - metrics["highlight_psnr"] > 10  # 1/20 of the pixels: 13 dB apart
+    assert metrics["highlight_delta_e"] > 5 * metrics["delta_e"]
+    assert "highlight_psnr" not in image_metrics(truth, dimmed, mask)
+    with pytest.raises(ValueError, match="highlight mask"):
+        image_metrics(truth, dimmed, mask, np.zeros_like(mask))
+
+
 def test_edits_use_each_unordered_pair_once_at_interior_weights():
     rng = np.random.default_rng(0)
     pairs = edit_pairs(16, 1000, rng)
@@ -100,6 +125,8 @@ def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
         assert (tmp_path / "eval" / name).exists(), name
     table = (tmp_path / "eval" / "evaluation.md").read_text()
     assert "Recon PSNR" in table and "paper: frenbrdf" in table
+    assert "Recon highlight PSNR" in table and "Edit highlight PSNR" in table
+    assert all(np.isfinite(summary["highlight_psnr"]) for summary in report["summary"].values())
     assert json.loads((tmp_path / "eval" / "evaluation.json").read_text())["summary"] == report["summary"]
     assert "Evaluation set: the test split of the training data" in table
 

@@ -30,6 +30,7 @@ from frenbrdf.material.measurements import read_measurements
 from frenbrdf.models.autoencoder import MAX_PARAMETERS
 from frenbrdf.training import config_for, load_config
 
+from .io.test_bsdf_native import flat_material, tensor_file
 from .test_measurements import VECTORS, samples
 
 NAMED = (ValueError, OSError)
@@ -60,7 +61,8 @@ def _valid_nbrdf() -> bytes:
     return buffer.getvalue()
 
 
-VALID = {".csv": _valid_csv(), ".npz": _valid_npz(), ".pt": _valid_nbrdf()}
+VALID = {".csv": _valid_csv(), ".npz": _valid_npz(), ".pt": _valid_nbrdf(),
+         ".bsdf": tensor_file(flat_material())}  # a small RGL measurement (tests/io/test_bsdf_native.py)
 
 
 def _mutated(original: bytes, data) -> bytes:
@@ -91,7 +93,8 @@ def _reads_or_names(reader, path: Path) -> None:
 READERS = {".csv": [read_measurements], ".npz": [read_measurements],
            ".pt": [load_nbrdf, load_material_file, checkpoints.load],
            ".binary": [read_measurements, load_material_file, frenbrdf.read_merl],
-           ".h5": [load_material_file], ".json": [load_config]}
+           ".h5": [load_material_file], ".json": [load_config],
+           ".bsdf": [frenbrdf.read_bsdf, read_measurements, load_material_file]}
 
 
 @FAST
@@ -258,7 +261,7 @@ def test_many_mutated_files(folder, suffix, data):
 
 
 def test_the_cli_reports_fuzzed_inputs_with_exit_2(folder, capsys):
-    for suffix in (".csv", ".npz", ".pt"):
+    for suffix in (".csv", ".npz", ".pt", ".bsdf"):
         path = folder / f"cli{suffix}"
         path.write_bytes(os.urandom(512))
         with pytest.raises(SystemExit) as exit_info:

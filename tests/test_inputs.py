@@ -363,7 +363,7 @@ def test_what_is_not_a_regular_file_is_refused_by_every_reader(tmp_path):
     os.mkfifo(fifo)
     loop = tmp_path / "loop.csv"
     loop.symlink_to(loop)
-    for reader in (read_measurements, load_material_file, frenbrdf.read_merl, load_nbrdf):
+    for reader in (read_measurements, load_material_file, frenbrdf.read_merl, load_nbrdf, frenbrdf.read_bsdf):
         with pytest.raises(ValueError, match="pipe.binary: a FIFO"):
             reader(fifo)
         with pytest.raises(IsADirectoryError, match="got a folder"):

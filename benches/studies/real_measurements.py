@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
+from frenbrdf import Model
 from frenbrdf.data.fitting import FitConfig, fit_nbrdf
 from frenbrdf.data.materials import load_material_file
 from frenbrdf.io.atomic import save_json, write_text
@@ -49,14 +50,14 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
     published = fits / f"{path.stem}.h5" if fits else None
     if published is not None and published.exists():
         images["published fit"] = tonemap(render_linear(load_material_file(published), scene))
-    # fit-nbrdf on the very samples the model sees: a table holding only them (others missing).
-    sparse = np.full_like(table, -1.0)
-    flat, dense = sparse.reshape(3, -1), table.reshape(3, -1)
-    flat[:, bins] = dense[:, bins]
-    start = time.perf_counter()
-    fitted = fit_nbrdf(sparse, FitConfig(epochs=fit_epochs, seed=seed), progress=False)
-    rows["fit-nbrdf"] = {"seconds": time.perf_counter() - start}
-    images["fit-nbrdf"] = tonemap(render_linear(fitted, scene))
+    if fit_epochs:  # fit-nbrdf on the very samples the model sees: a table holding only them (others missing)
+        sparse = np.full_like(table, -1.0)
+        flat, dense = sparse.reshape(3, -1), table.reshape(3, -1)
+        flat[:, bins] = dense[:, bins]
+        start = time.perf_counter()
+        fitted = fit_nbrdf(sparse, FitConfig(epochs=fit_epochs, seed=seed), progress=False)
+        rows["fit-nbrdf"] = {"seconds": time.perf_counter() - start}
+        images["fit-nbrdf"] = tonemap(render_linear(fitted, scene))
     for budget in ("none", "latent", "full"):
         config = dataclasses.replace(refine_config(budget), seed=seed, progress=False)
         start = time.perf_counter()
@@ -77,15 +78,20 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("measurements", nargs="+", help=".bsdf files")
-    parser.add_argument("--model", default="pretrained", help="'pretrained', a run folder or a checkpoint")
+    parser.add_argument("--model", default="pretrained", help="'pretrained', a run folder, a checkpoint or a packed "
+                        "model's folder (card.json, model.pt, mapping.npz)")
     parser.add_argument("--fits", help="folder of the published per-material NBRDF fits (<name>.h5)")
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--resolution", type=int, default=256)
-    parser.add_argument("--fit-epochs", type=int, default=2000, help="fit-nbrdf passes over the samples (2000: about 16k steps, as its default 10 passes make on a whole table)")
+    parser.add_argument("--fit-epochs", type=int, default=2000,
+                        help="fit-nbrdf passes over the samples (2000: about 16k steps, as its default 10 passes "
+                        "make on a whole table); 0: no fit-nbrdf column")
     parser.add_argument("--out", required=True, help="folder for real.md, real.json, real.png")
     args = parser.parse_args(argv)
-    model, scene = load_model(args.model), Scene(resolution=args.resolution)
+    packed = Path(args.model) / "card.json"  # a packed model's folder, e.g. an earlier shipped version
+    model = Model.pretrained(packed.parent) if packed.exists() else load_model(args.model)
+    scene = Scene(resolution=args.resolution)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results, grid = {}, []
@@ -109,7 +115,7 @@ def main(argv=None) -> int:
             axis.imshow(images.get(column, np.zeros_like(images["truth"])))
             axis.set_xticks([]), axis.set_yticks([])
             metrics = results[name].get(column)
-            label = column if column == "truth" else f"{column}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}"
+            label = column if not metrics else f"{column}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}"
             axis.set_title(label, fontsize=7)
         row[0].set_ylabel(name, fontsize=7)
     save_figure(figure, out / "real.png")

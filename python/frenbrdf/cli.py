@@ -155,6 +155,16 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _spectrum(args: argparse.Namespace) -> int:
+    from .study.spectrum import spectrum_report, summary_text
+
+    report = spectrum_report(args.materials, args.out, truth=args.truth, variant=args.variant, lmax=args.lmax,
+                             overwrite=args.overwrite)
+    print(json.dumps(report["errors"] or report["materials"], indent=2) if args.json else summary_text(report))
+    print(f"wrote {args.out}/spectrum.{{png,csv,json}}")
+    return 0
+
+
 def _select(args: argparse.Namespace) -> int:
     from .study.select import select_config
     from .study.variants import base_config
@@ -366,6 +376,23 @@ def build_parser() -> argparse.ArgumentParser:
     convert.add_argument("--seed", type=int, default=0, help="seeds the sampling (default 0)")
     convert.add_argument("--overwrite", action="store_true", help="replace the output file if it exists")
     convert.set_defaults(run=_convert)
+
+    from .presets import FREQUENCY_VARIANTS
+
+    spectrum = commands.add_parser("spectrum", help="per-degree power spectra of materials (MERL .binary, RGL "
+                                   ".bsdf, NBRDF .pt/.h5) and of reconstructions against their truth, per θ_h slice "
+                                   "and channel: plot, CSV and JSON")
+    spectrum.add_argument("materials", nargs="+", help="material files")
+    spectrum.add_argument("--out", required=True, help="folder of spectrum.{png,csv,json}: a new or empty one, or "
+                          "an earlier spectrum folder")
+    spectrum.add_argument("--truth", help="a material file every material is compared with (its error spectrum)")
+    spectrum.add_argument("--variant", choices=sorted(FREQUENCY_VARIANTS), default="tone",
+                          help="the L_fre settings the spectra are taken at (default tone: ln(1 + f), fitted to the "
+                          "measured nodes only; docs/frequency.md)")
+    spectrum.add_argument("--lmax", type=int, help="band limit (default: the variant's, 49)")
+    spectrum.add_argument("--overwrite", action="store_true", help="replace --out even if it holds other files")
+    spectrum.add_argument("--json", action="store_true", help="print the band summaries as JSON")
+    spectrum.set_defaults(run=_spectrum)
 
     demo = commands.add_parser("demo", help="the main job: synthesise data, train all methods, evaluate, report")
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")

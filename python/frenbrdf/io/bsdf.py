@@ -25,6 +25,7 @@ import numpy as np
 
 from .._native import BsdfMeasurement
 from ..numerics._arrays import rows
+from .paths import input_file
 
 #: The suffix of the files :func:`read_bsdf` reads.
 SUFFIX = ".bsdf"
@@ -84,14 +85,14 @@ def read_bsdf(path: str | os.PathLike) -> MeasuredBSDF:
     ------
     FileNotFoundError, IsADirectoryError, PermissionError
         The file cannot be opened.
+    ValueError
+        A FIFO, device or link loop rather than a file.
     frenbrdf.BsdfFormatError
         The file is not a ``tensor_file`` v1.0 RGB BSDF (wrong magic or version, truncated, a
         field of the wrong type or shape, a spectral file); the message names the file and what
         was wrong.
     """
-    path = Path(path)
-    if path.exists() and not path.is_file():
-        raise IsADirectoryError(f"{path} is not a regular file (a .bsdf measurement is expected)")
+    path = input_file(path, ".bsdf measurement")  # a folder or FIFO is named as such, never read
     return MeasuredBSDF(BsdfMeasurement.read(path))
 
 

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Regenerates the shipped model (docs/pretrained.md): the training folders from ../shared/data, one
+# training run (on a GPU where torch sees one: benches/pretrained.json says device "auto"), packing
+# and the model card. The four RGL materials whose real measurements docs/measurements.md reports
+# are never trained on: their fits are left out here.
+#
+#   bash benches/pretrained.sh [SHARED_DATA] [WORK]        # then: git diff python/frenbrdf/models/pretrained
+#
+# The shipped version 2 was trained by the same config on one NVIDIA H100 (`frenbrdf train --data
+# WORK/pack/data --config benches/pretrained.json --out WORK/pack/run`, 540 epochs, 323 s), then
+# packed here with --reuse --trained-on "one NVIDIA H100".
+set -euo pipefail
+SHARED=${1:-../shared/data}
+WORK=${2:-pretrained-work}
+HELD_OUT=" paper_white_rgb acrylic_felt_green_rgb vch_golden_yellow_rgb cg_sunflower_rgb "
+
+frenbrdf import-nbrdf "$SHARED"/merl-nbrdf/*.h5 "$WORK/merl" --quiet
+rgl=()
+for fit in "$SHARED"/rgl-nbrdf/*.h5; do
+    [[ "$HELD_OUT" == *" $(basename "$fit" .h5) "* ]] || rgl+=("$fit")
+done
+frenbrdf import-nbrdf "${rgl[@]}" "$WORK/rgl-train" --quiet
+frenbrdf synth "$WORK/bank" --quiet
+python benches/pretrained.py --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-train" \
+    --config benches/pretrained.json --work "$WORK/pack" "${@:3}"
