@@ -196,3 +196,9 @@ def test_frequency_variants_sweep_trains_in_parallel_resumes_and_reports(toy_mat
     before = (tmp_path / "work" / "measured").stat().st_mtime_ns
     assert chart.main(["train", *common]) == 0  # every run finished: nothing to do
     assert (tmp_path / "work" / "measured").stat().st_mtime_ns == before
+    # The report from the measurements alone (brought back from the machine that trained), elsewhere.
+    shutil.copytree(tmp_path / "work" / "measured", tmp_path / "elsewhere" / "measured")
+    elsewhere = [a if a != str(tmp_path / "work") else str(tmp_path / "elsewhere") for a in common[2:]]
+    assert chart.main(["report", *elsewhere, "--out", str(tmp_path / "charts2"), "--name", "variants"]) == 0
+    again = json.loads((tmp_path / "charts2" / "variants.json").read_text())
+    assert again["rows"] == saved["rows"]

@@ -121,7 +121,8 @@ def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
     for rows in report["reconstruction"].values():
         assert all(np.isfinite(r["rmse"]) and 0 <= r["ssim"] <= 1 and r["lfre"] >= 0 for r in rows)
     # t = 0 and t = 1 reproduce the endpoints' reconstructions: their metrics repeat.
-    for name in ("evaluation.md", "evaluation.json", "histograms.png", "renders.png", "interpolation.png"):
+    for name in ("evaluation.md", "evaluation.json", "histograms.png", "renders.png", "interpolation.png",
+                 "spectrum.png"):
         assert (tmp_path / "eval" / name).exists(), name
     table = (tmp_path / "eval" / "evaluation.md").read_text()
     assert "Recon PSNR" in table and "paper: frenbrdf" in table

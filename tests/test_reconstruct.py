@@ -107,7 +107,9 @@ def test_the_command_end_to_end(run_dir, toy_materials, tmp_path, capsys):
     report = json.loads((out / "reconstruction.json").read_text())
     assert printed == report
     assert sorted(p.name for p in out.iterdir()) == report["files"] == sorted(
-        ["comparison.png", "material.binary", "material.pt", "reconstruction.json", "render.png", "truth.png"])
+        ["comparison.png", "material.binary", "material.pt", "reconstruction.json", "render.png", "spectrum.png",
+         "truth.png"])
+    assert set(report["spectrum"]["relative_error_by_band"]["reconstruction"]) == {"l 0", "l 1–4", "l 5–16", "l 17–49"}
     assert {"rmse", "psnr", "ssim", "delta_e", "lfre"} <= set(report["metrics"])
     assert report["input"] == {"path": str(source), "kind": "merl", "samples": 500}
     assert set(report["timings_s"]) == {"encode", "latent", "weights"} and len(report["z"]) == 8

@@ -1,7 +1,8 @@
 """Chart 9: does any L_fre variant beat η = 0? Variants × η × seeds, in and out of distribution (issue 29).
 
-Three phases, each resumable (finished work is skipped), so that training can run on another machine in
-time-limited chunks and the report here:
+Three phases, each resumable (finished work is skipped), so that training and measuring can run on another
+machine in time-limited chunks and the report anywhere: ``report`` needs only ``WORK/measured/*.json`` (bring
+that folder back; without ``--data`` it measures nothing itself):
 
     # 1. train every run (variants × η > 0 × seeds, and η = 0 once per seed); --jobs parallel processes
     python benches/charts/chart_frequency_variants.py train --data DIR --work WORK --jobs 8 --threads 2 \\
@@ -119,7 +120,8 @@ def materials(settings: dict, run) -> dict[str, list[Path]]:
 
 def measure_key(settings: dict) -> str:
     """A hash of what a measurement depends on beyond the run: a changed setting measures again."""
-    described = {k: settings.get(k) for k in ("ood", "resolution", "edits", "samples")} | {"version": 1}
+    described = {k: settings.get(k) for k in ("resolution", "edits", "samples")} | {"version": 1}
+    described["ood"] = Path(settings["ood"]).name if settings.get("ood") else None  # the same folder elsewhere
     return hashlib.sha256(json.dumps(described, sort_keys=True).encode()).hexdigest()[:16]
 
 
@@ -131,12 +133,11 @@ def measure_one(spec: dict, settings: dict) -> dict:
     from frenbrdf.render.scoring import edit_metrics, reconstruction_rows
     from frenbrdf.training import Run
 
+    cached = measured(spec, settings)
+    if cached is not None:
+        return cached
     path = Path(settings["work"]) / "measured" / f"{spec['id'].replace('/', '__')}.json"
     key = measure_key(settings)
-    if path.exists():
-        cached = json.loads(path.read_text())
-        if cached.get("key") == key:
-            return cached
     run = Run(run_config(spec, settings).out)
     model, scene = run.model(), Scene(resolution=settings["resolution"])
     mask = material_mask(scene)
@@ -317,7 +318,7 @@ def draw(rows: list[dict], path: Path, caption: str) -> None:
 
 
 def settings_of(args) -> dict:
-    return {"data": str(args.data), "work": str(args.work), "training": args.training, "epochs": args.epochs,
+    return {"data": str(args.data) if args.data else None, "work": str(args.work), "training": args.training, "epochs": args.epochs,
             "device": args.device, "ood": str(args.ood) if args.ood else None, "resolution": args.resolution,
             "edits": args.edits, "samples": 4000, "overrides": json.loads(args.overrides) if args.overrides else {}}
 
@@ -327,7 +328,7 @@ def main(argv=None) -> int:
         return worker(*(argv or sys.argv[1:])[1:])
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("phase", choices=("train", "evaluate", "report", "all"))
-    parser.add_argument("--data", required=True, type=Path, help="folder of the training materials")
+    parser.add_argument("--data", type=Path, help="folder of the training materials (train, evaluate)")
     parser.add_argument("--work", type=Path, default=Path("bench-results/frequency-variants"))
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
     parser.add_argument("--etas", type=float, nargs="+", default=list(ETAS))
@@ -347,6 +348,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if 0.0 not in args.etas:
         raise SystemExit("--etas must include 0, the baseline every run is compared with")
+    if args.data is None and args.phase != "report":
+        raise SystemExit(f"{args.phase} needs --data, the folder of the training materials")
     from frenbrdf.presets import FREQUENCY_VARIANTS
 
     unknown = sorted(set(args.variants) - set(FREQUENCY_VARIANTS))
@@ -362,22 +365,24 @@ def main(argv=None) -> int:
         if any(v != "done" for v in outcome.values()):
             print(json.dumps(outcome, indent=1))
             return 0 if all(v in ("done", "stopped", "not started") for v in outcome.values()) else 1
-    if args.phase in ("evaluate", "report", "all"):
-        ready = [s for s in specs if trained(s, settings)]
-        key = measure_key(settings)
-        todo = [s for s in ready if not _measured(s, settings, key)]
-        print(f"evaluate: {len(ready)} of {len(specs)} runs trained, {len(todo)} to measure", flush=True)
+    if args.phase in ("evaluate", "all") or (args.phase == "report" and args.data):
+        todo = [s for s in specs if measured(s, settings) is None and trained(s, settings)]
+        print(f"evaluate: {sum(measured(s, settings) is not None for s in specs)} of {len(specs)} runs measured, "
+              f"{len(todo)} trained runs to measure", flush=True)
         remaining = None if args.time_limit is None else max(1.0, args.time_limit - (time.perf_counter() - start))
         outcome = run_parallel("evaluate", todo, settings, args.jobs, args.threads, remaining)
     if args.phase in ("report", "all"):
-        measured = [measure_one(s, settings) for s in specs if trained(s, settings)]
-        rows = summarise(measured, args.variants, args.etas, args.seeds)
-        caption = (f"{args.data.name}, {args.training} training, seeds {', '.join(map(str, args.seeds))}; in "
+        results = [m for m in (measured(s, settings) for s in specs) if m is not None]
+        missing = len(specs) - len(results)
+        if missing:
+            print(f"report: {missing} of {len(specs)} runs not measured; their (variant, η) rows are left out")
+        rows = summarise(results, args.variants, args.etas, args.seeds)
+        caption = (f"{args.data.name if args.data else Path(settings['work']).name}, {args.training} training, seeds {', '.join(map(str, args.seeds))}; in "
                    f"distribution: each seed's test split" + (f"; out of distribution: {args.ood.name}" if args.ood
                                                               else "") + ".")
         report = {"chart": "frequency_variants", "settings": settings, "variants": args.variants, "etas": args.etas,
                   "seeds": args.seeds, "run": run_metadata(), "goal_met_by": goal(rows), "rows": rows,
-                  "runs": measured}
+                  "runs": results}
         save_chart(args.out, args.name, rows, report, lambda path: draw(rows, path, caption))
         print(markdown(rows))
         print(f"goal met by: {', '.join(report['goal_met_by']) or 'none'}")
@@ -385,9 +390,15 @@ def main(argv=None) -> int:
     return 0
 
 
-def _measured(spec: dict, settings: dict, key: str) -> bool:
+def measured(spec: dict, settings: dict) -> dict | None:
+    """The run's measurement in ``WORK/measured`` when it was made with these settings, else None: the report
+    needs only these files, not the run folders (bring ``WORK/measured`` back from the machine that trained)."""
     path = Path(settings["work"]) / "measured" / f"{spec['id'].replace('/', '__')}.json"
-    return path.exists() and json.loads(path.read_text()).get("key") == key
+    if path.exists():
+        cached = json.loads(path.read_text())
+        if cached.get("key") == measure_key(settings):
+            return cached
+    return None
 
 
 if __name__ == "__main__":

@@ -132,8 +132,8 @@ def markdown(report: dict) -> str:
     for name, rows in report["materials"].items():
         lines.append(f"| {name} | " + " | ".join(cell(rows.get(c)) for c in COLUMNS) + " |")
     lines.append("| **mean** | " + " | ".join(cell(report["mean"].get(c)) for c in COLUMNS) + " |")
-    lines.append("| seconds | " + " | ".join(f"{report['mean'][c].get('seconds', float('nan')):.1f}"
-                                            if report["mean"].get(c) else "–" for c in COLUMNS) + " |")
+    lines.append("| seconds | " + " | ".join(f"{report['mean'][c]['seconds']:.1f}" if "seconds" in report["mean"].get(c, {})
+                                            else "–" for c in COLUMNS) + " |")
     return "\n".join(lines) + "\n"
 
 

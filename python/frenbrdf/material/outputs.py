@@ -13,10 +13,14 @@ folder, all of it or nothing:
 ``render.png``
     The reconstruction on the metric renderer's sphere; with a MERL input also
     ``truth.png`` and ``comparison.png`` (truth | reconstruction); a ``.bsdf`` truth renders as measured.
+``spectrum.png``
+    With a MERL or ``.bsdf`` input: the per-degree power spectra of the truth and of the reconstruction and the
+    error's, per θ_h slice (:mod:`frenbrdf.study.spectrum`): where the reconstruction loses its frequencies.
 ``reconstruction.json``
     The input, the model, the refinement, the latent, seconds and loss per stage, and with a MERL or
     ``.bsdf`` input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
-    material pixels, :func:`frenbrdf.render.scoring.image_metrics`) and L_fre.
+    material pixels and PSNR, ΔE over its highlights, :func:`frenbrdf.render.scoring.image_metrics`), L_fre, and
+    the spectrum's error by degree band (``spectrum``).
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ from .measurements import Measurements, read_measurements
 
 #: The file names of the result folder.
 FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.png", "truth": "truth.png",
-         "comparison": "comparison.png", "report": "reconstruction.json"}
+         "comparison": "comparison.png", "spectrum": "spectrum.png", "report": "reconstruction.json"}
 
 
 def load_model(model: str | os.PathLike) -> Model:
@@ -96,9 +100,15 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         images["truth"] = render(measurements.truth, scene)
         images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
         report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
-    report["files"] = sorted(FILES[name] for name in ["nbrdf", "merl", "report", *images])
+        from ..study.spectrum import SpectrumSummary
+
+        spectrum = SpectrumSummary()
+        spectrum.add(measurements.table, {"reconstruction": result.nbrdf})
+        report["spectrum"] = spectrum.summary()
+    report["files"] = sorted(FILES[name] for name in ["nbrdf", "merl", "report", *images,
+                                                      *(["spectrum"] if "spectrum" in report else [])])
     table = result.nbrdf.merl_table()
-    _write_folder(out, result, table, images, report)
+    _write_folder(out, result, table, images, report, spectrum if "spectrum" in report else None)
     return report
 
 
@@ -125,7 +135,8 @@ def check_out(source: str | os.PathLike, out_dir: str | os.PathLike, model: str 
                                overwrite=overwrite)
 
 
-def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: dict, report: dict) -> None:
+def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: dict, report: dict,
+                  spectrum=None) -> None:
     """Writes the result into a hidden folder beside ``out``, then puts it in place whole, in one rename
     (:func:`frenbrdf.io.paths.replace_folder`): an earlier folder is replaced whole, never mixed with this one."""
     staging = staging_folder(out)
@@ -134,6 +145,8 @@ def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: 
         write_merl(staging / FILES["merl"], table)
         for name, image in images.items():
             save_png(staging / FILES[name], image)
+        if spectrum is not None:
+            spectrum.write(staging / FILES["spectrum"])
         save_json(staging / FILES["report"], report)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)

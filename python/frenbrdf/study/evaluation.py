@@ -15,7 +15,9 @@
   latents (the paper's editing) and, with refinement, of the refined latents too.
 
 ``evaluate_runs`` does both for several runs side by side and writes Markdown, JSON and
-PNG figures (:mod:`frenbrdf.render.figures`); ``frenbrdf evaluate`` is its command line. The
+PNG figures (:mod:`frenbrdf.render.figures`, and ``spectrum.png``: the evaluated materials' mean per-degree power
+spectra and each method's error spectrum, :class:`frenbrdf.study.spectrum.SpectrumSummary`); ``frenbrdf evaluate``
+is its command line. The
 materials are the runs' test split, or (``EvaluateConfig.all_materials``, ``--all``) every
 material of a folder that no run trained or validated on: an out-of-distribution test.
 """
@@ -48,6 +50,7 @@ from ..render.scoring import edit_metrics, highlight_mask, reconstruct, refined_
 from ..render.scoring import image_metrics as image_metrics
 from ..render.scoring import reconstruction_rows as reconstruction_rows
 from ..training.run import Run
+from .spectrum import SpectrumSummary
 from .statistics import REFERENCE, compare_seeds
 from .tables import PAPER as PAPER  # re-exported: frenbrdf.study.evaluation keeps its public names
 from .tables import ROWS as ROWS
@@ -279,6 +282,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     edit_truth_linear = {}
     per_material = {m: [] for m in models}
     renders = {}
+    spectrum = SpectrumSummary()  # each method's decoded latents against the true tables: spectrum.png
     for name in tqdm(names, desc="reconstruction", disable=not show):
         truth = read_truth(files[name])  # a .bsdf renders as measured, not through its table
         table = as_table(truth)
@@ -287,12 +291,14 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         truth_linear = render_linear(truth, scene)
         truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
         renders[name] = {"truth": truth_image}
+        decoded = {}
         for method, model in models.items():
             z, image = reconstruct(model, table, bins, scene)
             latents[""][method][name] = z
             renders[name][method] = image
             metrics = image_metrics(truth_image, image, mask, highlight)
             metrics["lfre"] = frequency_metric(model, table, z)
+            decoded[method] = model.decode(z)
             if refinement:
                 result, image, seconds = refined_reconstruction(model, table, bins, scene, refinement)
                 latents["refined_"][method][name] = result.z
@@ -301,6 +307,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
                 metrics.update({f"refined_{key}": value for key, value in refined.items()})
                 metrics.update(refined_lfre=frequency_metric(model, table, result.nbrdf), refine_seconds=seconds)
             per_material[method].append({"material": name, **metrics})
+        spectrum.add(table, decoded)
 
     # Editing.
     pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)), rng)
@@ -325,6 +332,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
               "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(config).items()},
               "summary": {method: summarise(per_material[method], edits[method]) for method in models},
               "colour": colour_losses(per_material), "rendered": {"first": first, "highest_delta_e": hardest},
+              "spectrum": spectrum.summary(),
               "reconstruction": per_material, "editing": edits, "seconds": time.perf_counter() - start}
     if refinement:
         report["refinement"] = {"budget": config.refine, "config": dataclasses.asdict(refinement),
@@ -335,6 +343,8 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     edit_pair = (names[pairs[0][0]], names[pairs[0][1]]) if pairs else None
     write_figures(out, first + hardest, renders, per_material, models, latents[""], edit_pair, edit_truth_linear,
                   config.weights, config.edit_resolution)
+    spectrum.write(out / "spectrum.png", f"Per-degree power spectra of the {len(names)} evaluated materials (mean) and "
+                   "each method's encoder-only reconstructions; dashed: their error (L_fre variant 'tone')")
     return report
 
 

@@ -246,3 +246,41 @@ def summary_text(report: dict) -> str:
         lines.append(f"{name} vs truth: error / truth power "
                      + ", ".join(f"{band} {value:.2g}" for band, value in entry["relative_error_by_band"].items()))
     return "\n".join(lines)
+
+
+class SpectrumSummary:
+    """Mean spectra of several materials and of their reconstructions: what ``frenbrdf reconstruct`` and
+    ``frenbrdf evaluate`` plot for what they measured. :meth:`add` one truth table and its reconstructions (by
+    label: an NBRDF each), then :meth:`write` the plot and take :meth:`summary`."""
+
+    def __init__(self, config: FrequencyLossConfig | None = None, variant: str = "tone"):
+        self.variant = variant
+        self.analyser = SpectrumAnalyser(config or frequency_variant(variant))
+        self.truth: list[np.ndarray] = []
+        self.powers: dict[str, list[np.ndarray]] = {}
+        self.errors: dict[str, list[np.ndarray]] = {}
+
+    def add(self, table: np.ndarray, reconstructions: dict) -> None:
+        truth = self.analyser.coefficients(table)
+        self.truth.append(self.analyser.power(truth))
+        for label, nbrdf in reconstructions.items():
+            coefficients = self.analyser.coefficients(nbrdf)
+            self.powers.setdefault(label, []).append(self.analyser.power(coefficients))
+            self.errors.setdefault(label, []).append(self.analyser.power(coefficients - truth))
+
+    def summary(self) -> dict:
+        """Per reconstruction label: the error's power over the truth's, by degree band and by slice (means)."""
+        truth = np.mean(self.truth, axis=0)
+        return {"variant": self.variant, "materials": len(self.truth), "theta_h_deg": self.analyser.theta_h_degrees,
+                "relative_error_by_band": {label: relative_error_by_band(np.mean(e, axis=0), truth)
+                                           for label, e in self.errors.items()},
+                "relative_error_by_slice": {label: [float(np.mean(e, axis=0)[s].sum() / max(truth[s].sum(), 1e-30))
+                                                    for s in range(len(truth))] for label, e in self.errors.items()}}
+
+    def write(self, path: str | os.PathLike, title: str = "") -> None:
+        label = "truth" if len(self.truth) == 1 else f"truth (mean of {len(self.truth)})"
+        powers = {label: np.mean(self.truth, axis=0), **{k: np.mean(v, axis=0) for k, v in self.powers.items()}}
+        plot_spectra(powers, path, errors={k: np.mean(v, axis=0) for k, v in self.errors.items()},
+                     theta_h=self.analyser.theta_h_degrees,
+                     title=title or f"Per-degree power spectra (L_fre variant '{self.variant}'); dashed: error against "
+                                    "the truth")
