@@ -202,3 +202,6 @@ def test_frequency_variants_sweep_trains_in_parallel_resumes_and_reports(toy_mat
     assert chart.main(["report", *elsewhere, "--out", str(tmp_path / "charts2"), "--name", "variants"]) == 0
     again = json.loads((tmp_path / "charts2" / "variants.json").read_text())
     assert again["rows"] == saved["rows"]
+    # `all` on a work folder whose runs are all measured trains nothing and reports.
+    assert chart.main(["all", *common, "--out", str(tmp_path / "charts3"), "--name", "variants"]) == 0
+    assert json.loads((tmp_path / "charts3" / "variants.json").read_text())["rows"] == saved["rows"]

@@ -35,7 +35,7 @@ def test_split_needs_three_materials(n):
 def test_list_materials_errors(tmp_path):
     with pytest.raises(FileNotFoundError, match="does not exist"):
         list_materials(tmp_path / "absent")
-    with pytest.raises(ValueError, match="no MERL files"):
+    with pytest.raises(ValueError, match="no material files"):
         list_materials(tmp_path)
 
 

@@ -149,7 +149,7 @@ def test_bad_configs_fail_before_any_work(toy_materials, tmp_path):
         config_for("frenbrdf", epochs=0)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         train(tiny("nbrdf", tmp_path / "absent", tmp_path / "run"))
-    with pytest.raises(ValueError, match="no MERL files"):
+    with pytest.raises(ValueError, match="no material files"):
         train(tiny("nbrdf", tmp_path, tmp_path / "run"))
     two = tmp_path / "two"
     two.mkdir()

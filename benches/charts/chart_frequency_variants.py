@@ -2,7 +2,8 @@
 
 Three phases, each resumable (finished work is skipped), so that training and measuring can run on another
 machine in time-limited chunks and the report anywhere: ``report`` needs only ``WORK/measured/*.json`` (bring
-that folder back; without ``--data`` it measures nothing itself):
+that folder back; without ``--data`` it measures nothing itself). ``all`` trains and measures each run in one
+process (a run measured already is skipped, so a fresh machine given ``WORK/measured`` carries on), then reports:
 
     # 1. train every run (variants × η > 0 × seeds, and η = 0 once per seed); --jobs parallel processes
     python benches/charts/chart_frequency_variants.py train --data DIR --work WORK --jobs 8 --threads 2 \\
@@ -211,7 +212,10 @@ def worker(phase: str, spec: str, settings: str, threads: str) -> int:
 
     torch.set_num_threads(int(threads))
     spec, settings = json.loads(spec), json.loads(settings)
-    (train_one if phase == "train" else measure_one)(spec, settings)
+    if phase in ("train", "all"):
+        train_one(spec, settings)
+    if phase in ("evaluate", "all"):
+        measure_one(spec, settings)
     return 0
 
 
@@ -359,20 +363,26 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     outcome = {}
     if args.phase in ("train", "all"):
-        todo = [s for s in specs if not trained(s, settings)]
-        print(f"train: {len(specs) - len(todo)} of {len(specs)} runs finished, {len(todo)} to train", flush=True)
-        outcome = run_parallel("train", todo, settings, args.jobs, args.threads, args.time_limit)
+        # A run measured already (WORK/measured, e.g. brought from an earlier machine) is not trained again.
+        todo = [s for s in specs if measured(s, settings) is None and not (args.phase == "train" and trained(s, settings))]
+        print(f"{args.phase}: {len(specs) - len(todo)} of {len(specs)} runs done, {len(todo)} to "
+              + ("train" if args.phase == "train" else "train (or resume) and measure"), flush=True)
+        outcome = run_parallel(args.phase, todo, settings, args.jobs, args.threads, args.time_limit)
         if any(v != "done" for v in outcome.values()):
             print(json.dumps(outcome, indent=1))
             return 0 if all(v in ("done", "stopped", "not started") for v in outcome.values()) else 1
-    if args.phase in ("evaluate", "all") or (args.phase == "report" and args.data):
+    if args.phase == "evaluate" or (args.phase == "report" and args.data):
         todo = [s for s in specs if measured(s, settings) is None and trained(s, settings)]
         print(f"evaluate: {sum(measured(s, settings) is not None for s in specs)} of {len(specs)} runs measured, "
               f"{len(todo)} trained runs to measure", flush=True)
         remaining = None if args.time_limit is None else max(1.0, args.time_limit - (time.perf_counter() - start))
         outcome = run_parallel("evaluate", todo, settings, args.jobs, args.threads, remaining)
     if args.phase in ("report", "all"):
-        results = [m for m in (measured(s, settings) for s in specs) if m is not None]
+        # Without --data nothing is measured here: the report takes the measurements as they were made.
+        results = [m for m in (measured(s, settings, any_settings=args.data is None) for s in specs) if m is not None]
+        if len({m["key"] for m in results}) > 1:
+            raise SystemExit("the runs were measured with different settings (--ood, --resolution, --edits); measure "
+                             "them again with one set (evaluate --data …)")
         missing = len(specs) - len(results)
         if missing:
             print(f"report: {missing} of {len(specs)} runs not measured; their (variant, η) rows are left out")
@@ -390,13 +400,14 @@ def main(argv=None) -> int:
     return 0
 
 
-def measured(spec: dict, settings: dict) -> dict | None:
-    """The run's measurement in ``WORK/measured`` when it was made with these settings, else None: the report
-    needs only these files, not the run folders (bring ``WORK/measured`` back from the machine that trained)."""
+def measured(spec: dict, settings: dict, any_settings: bool = False) -> dict | None:
+    """The run's measurement in ``WORK/measured`` when it was made with these settings (``any_settings``: with
+    whatever settings), else None: the report needs only these files, not the run folders (bring
+    ``WORK/measured`` back from the machine that trained)."""
     path = Path(settings["work"]) / "measured" / f"{spec['id'].replace('/', '__')}.json"
     if path.exists():
         cached = json.loads(path.read_text())
-        if cached.get("key") == measure_key(settings):
+        if any_settings or cached.get("key") == measure_key(settings):
             return cached
     return None
 
