@@ -20,25 +20,15 @@ from frenbrdf.models.losses import (
     spectral_distance,
 )
 from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.models.nbrdf import bin_geometry
 from frenbrdf.presets import FREQUENCY_VARIANTS
 from frenbrdf.training import config_for, train
 
 from .conftest import tiny
+from .test_losses import smooth_params, table_of
 
 NBRDF = NBRDFConfig((8, 8))
 MAPPING = LogRelativeMapping(np.array([0.05, 0.04, 0.03]), epsilon=0.002)
 
-
-def smooth_params(seed: int, dtype=torch.float64) -> list[torch.Tensor]:
-    generator = torch.Generator().manual_seed(seed)
-    return [torch.randn(1, *s, generator=generator, dtype=dtype) * 0.4 for s in NBRDF.shapes()]
-
-
-def table_of(params) -> np.ndarray:
-    """The NBRDF at every MERL bin: ``(N_BINS, 3)`` mapped values."""
-    coords = bin_geometry().half_diff.to(params[0].dtype)[None]
-    return nbrdf_forward(params, coords)[0].numpy()
 
 
 def small(**fields) -> FrequencyLossConfig:

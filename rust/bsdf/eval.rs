@@ -103,27 +103,9 @@ mod tests {
     use std::path::{Path, PathBuf};
 
     use super::*;
-    use crate::bsdf::synthetic::{tabulate, MaterialArrays};
+    use crate::bsdf::synthetic::{tabulate, MaterialArrays, TestRng as Rng};
     use crate::bsdf::tensor_file::{encode, f32_bytes, Dtype, FieldData, TensorFile};
     use crate::error::Error;
-
-    /// xorshift64*, uniform in [0, 1).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-        }
-        /// A direction in the upper hemisphere, z ≥ `z_min`.
-        fn upper(&mut self, z_min: f64) -> Vec3 {
-            let z = z_min + (1.0 - z_min) * self.next();
-            let phi = TAU * self.next();
-            let rho = (1.0 - z * z).sqrt();
-            [rho * phi.cos(), rho * phi.sin(), z]
-        }
-    }
 
     fn build(arrays: &MaterialArrays) -> Result<MeasuredBsdf> {
         MeasuredBsdf::from_tensor_file(&TensorFile::parse(Path::new("synthetic.bsdf"), arrays.encode())?)

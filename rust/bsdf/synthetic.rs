@@ -122,3 +122,25 @@ impl MaterialArrays {
         encode(&fields)
     }
 }
+
+/// The tests' random numbers: xorshift64*, uniform in [0, 1), seeded by the tuple's value.
+#[cfg(test)]
+pub(crate) struct TestRng(pub u64);
+
+#[cfg(test)]
+impl TestRng {
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A direction in the upper hemisphere, z ≥ `z_min`.
+    pub fn upper(&mut self, z_min: f64) -> [f64; 3] {
+        let z = z_min + (1.0 - z_min) * self.next();
+        let phi = std::f64::consts::TAU * self.next();
+        let rho = (1.0 - z * z).sqrt();
+        [rho * phi.cos(), rho * phi.sin(), z]
+    }
+}

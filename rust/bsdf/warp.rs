@@ -412,16 +412,7 @@ impl Marginal2D {
 mod tests {
     use super::*;
 
-    /// xorshift64*, uniform in [0, 1).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::bsdf::synthetic::TestRng as Rng;
 
     /// A positive, bumpy table over two parameter axes (3 and 4 values) of 9 × 7 nodes,
     /// with a zero row and a zero column to exercise empty regions.
