@@ -31,7 +31,7 @@ from frenbrdf.io.measured import read_truth
 from frenbrdf.material.outputs import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import bin_samples, image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, reconstruct, refined_reconstruction, sample_bins
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from common import pyplot, run_metadata, save_figure  # noqa: E402
@@ -62,8 +62,7 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
         config = dataclasses.replace(refine_config(budget), seed=seed, progress=False)
         start = time.perf_counter()
         if budget == "none":
-            values, directions = bin_samples(table, bins)
-            image = tonemap(render_linear(model.decode(model.encode(values, directions))[0], scene))
+            _, image = reconstruct(model, table, bins, scene)
         else:
             _, image, _ = refined_reconstruction(model, table, bins, scene, config)
         name = "encoder" if budget == "none" else budget

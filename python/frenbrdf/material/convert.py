@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.atomic import atomic_path, write_text
+from ..io.atomic import atomic_path, save_csv
 from ..io.measured import SUFFIXES, read_table
 from ..io.merl import write_merl
 from ..io.paths import check_output_file, input_file
@@ -60,8 +60,6 @@ def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int 
     if dest.suffix.lower() == ".npz":
         with atomic_path(dest) as temporary, open(temporary, "wb") as file:
             np.savez(file, **columns)
-    else:
-        rows = np.stack(list(columns.values()), axis=1)
-        lines = [",".join(columns)] + [",".join(f"{value:.17g}" for value in row) for row in rows]
-        write_text(dest, "\n".join(lines) + "\n")
+    else:  # Python floats print exactly (shortest round-trip repr)
+        save_csv(dest, [dict(zip(columns, row)) for row in np.stack(list(columns.values()), axis=1).tolist()])
     return dest
