@@ -9,6 +9,7 @@ import pytest
 
 import frenbrdf
 from frenbrdf import cli
+from frenbrdf.data import synth
 from frenbrdf.data.fitting import FitConfig, fit_nbrdf, load_nbrdf
 
 from .conftest import SHARED_DATA, toy_table
@@ -22,6 +23,15 @@ def test_synth_command_writes_a_bank(tmp_path, capsys):
     assert manifest["n"] == 3 and manifest["seed"] == 1
     table = frenbrdf.read_merl(files[0])
     assert np.array_equal(frenbrdf.valid_mask(table), frenbrdf.merl_above_horizon())
+
+
+def test_synth_command_writes_the_features_mix(tmp_path):
+    assert cli.main(["synth", str(tmp_path / "bank"), "--n", "5", "--mix", "features", "--quiet"]) == 0
+    manifest = json.loads((tmp_path / "bank" / "bank.json").read_text())
+    assert manifest["mix"] == "features"
+    assert {m["kind"] for m in manifest["materials"]} == set(synth.FEATURE_SHARES)
+    assert cli.build_parser().parse_args(["synth", "x"]).mix == "default"
+    assert all(cli.build_parser().parse_args(["synth", "x", "--mix", mix]).mix == mix for mix in synth.MIXES)
 
 
 def test_synth_command_rejects_bad_n(tmp_path, capsys):

@@ -12,7 +12,9 @@ import pytest
 
 import frenbrdf
 from frenbrdf.data import synth
-from frenbrdf.data.synth import KIND_SHARES, KINDS, METALS, AnalyticMaterial
+from frenbrdf.data.analytic import FILM_THICKNESS_RANGE, thin_film_fresnel
+from frenbrdf.data.microfacet import fresnel
+from frenbrdf.data.synth import FEATURE_SHARES, KIND_SHARES, KINDS, METALS, AnalyticMaterial
 from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 
 from .conftest import unit_vectors
@@ -33,9 +35,15 @@ EXTREMES = {
     "coated-white": AnalyticMaterial("coated-white", diffuse=WHITE, coat=1.0, coat_roughness=0.01, coat_ior=1.6),
     "coated-silver": AnalyticMaterial("coated-silver", metal_n=SILVER[0], metal_k=SILVER[1], roughness=0.2,
                                       coat=1.0, coat_roughness=0.1),
+    "white-retro": AnalyticMaterial("white-retro", diffuse=WHITE, retro=(0.4, 0.4, 0.4), retro_roughness=0.05,
+                                    specular=1.0, roughness=0.3),
+    "white-flakes": AnalyticMaterial("white-flakes", diffuse=WHITE, flakes=1.0, flake_roughness=0.05, coat=1.0,
+                                     coat_roughness=0.01),
+    "thick-film": AnalyticMaterial("thick-film", diffuse=(0.02, 0.02, 0.02), coat=1.0, coat_roughness=0.01,
+                                   film_thickness=FILM_THICKNESS_RANGE[1], film_ior=2.5),
 }
 #: White dielectric bases are energy-preserving: they reflect all the light they receive.
-PRESERVING = ("white-lambert", "white-mirror-plastic", "white-rough-plastic", "white-fabric")
+PRESERVING = ("white-lambert", "white-mirror-plastic", "white-rough-plastic", "white-fabric", "white-retro")
 
 
 @pytest.fixture(scope="module")
@@ -44,8 +52,14 @@ def bank() -> list[AnalyticMaterial]:
 
 
 @pytest.fixture(scope="module")
-def one_of_each_kind(bank) -> dict[str, AnalyticMaterial]:
-    return {kind: next(m for m in bank if m.kind == kind) for kind in KINDS}
+def features() -> list[AnalyticMaterial]:
+    return synth.material_bank(60, seed=1, mix="features")
+
+
+@pytest.fixture(scope="module")
+def one_of_each_kind(bank, features) -> dict[str, AnalyticMaterial]:
+    """A material of every kind either mix draws."""
+    return {kind: next(m for m in bank + features if m.kind == kind) for kind in {*KINDS, *FEATURE_SHARES}}
 
 
 def directional_albedo(material: AnalyticMaterial, theta_i: float, n: int = 128) -> np.ndarray:
@@ -53,12 +67,15 @@ def directional_albedo(material: AnalyticMaterial, theta_i: float, n: int = 128)
 
     Strategies: cosine-weighted and uniform directions (the latter for lobes that peak at
     grazing, such as sheen), and one GGX half-vector density per roughness
-    the material has (so mirror-like lobes are resolved), each on an n × n grid of
-    stratum midpoints, combined with the balance heuristic.
+    the material has (so mirror-like lobes are resolved; the retro lobe's about ω_i),
+    each on an n × n grid of stratum midpoints, combined with the balance heuristic.
     """
     wi = np.array([np.sin(theta_i), 0.0, np.cos(theta_i)])
     alphas = [material.roughness] if material.metal_n is not None or material.specular > 0 else []
     alphas += [material.coat_roughness] if material.coat > 0 else []
+    alphas += [material.flake_roughness] if material.flakes > 0 else []
+    retro_alphas = [material.retro_roughness] if any(material.retro) else []
+    turn = np.array([-1.0, -1.0, 1.0])  # by π about the normal
     u1, u2 = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n, indexing="ij")
     u1, phi = u1.reshape(-1), 2 * np.pi * u2.reshape(-1)
 
@@ -67,17 +84,21 @@ def directional_albedo(material: AnalyticMaterial, theta_i: float, n: int = 128)
 
     samples = [np.stack([np.sqrt(u1) * np.cos(phi), np.sqrt(u1) * np.sin(phi), np.sqrt(1 - u1)], axis=-1),
                np.stack([np.sqrt(1 - u1**2) * np.cos(phi), np.sqrt(1 - u1**2) * np.sin(phi), u1], axis=-1)]
-    for alpha in alphas:
+    for alpha, turned in [(a, False) for a in alphas] + [(a, True) for a in retro_alphas]:
         cos_h = 1 / np.sqrt(1 + alpha**2 * u1 / (1 - u1))
         sin_h = np.sqrt(1 - cos_h**2)
         h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], axis=-1)
-        samples.append(2 * (h @ wi)[:, None] * h - wi)
+        mirrored = 2 * (h @ wi)[:, None] * h - wi
+        samples.append(mirrored * turn if turned else mirrored)
     wo = np.concatenate(samples)
     wo = wo[wo[:, 2] > 0]
 
-    h = wi + wo
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    ggx_pdfs = [ggx_d(h[:, 2], a) * h[:, 2] / (4 * np.sum(wo * h, axis=-1)) for a in alphas]
+    def ggx_pdf(wo, alpha):
+        h = wi + wo
+        h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+        return np.where(h @ wi > 0, ggx_d(h[:, 2], alpha) * h[:, 2] / (4 * np.abs(h @ wi)), 0.0)
+
+    ggx_pdfs = [ggx_pdf(wo, a) for a in alphas] + [ggx_pdf(wo * turn, a) for a in retro_alphas]
     pdfs = wo[:, 2] / np.pi + 1 / (2 * np.pi) + sum(ggx_pdfs)
     f = synth.evaluate(material, wi, wo)
     return np.sum(f * (wo[:, 2] / pdfs)[:, None], axis=0) / n**2
@@ -139,6 +160,14 @@ def test_bank_parameters_lie_in_physical_ranges(bank):
     assert len({m.metal_n for m in bank if m.kind == "metal"}) >= 5
 
 
+def test_the_features_mix_holds_its_kinds_in_their_shares(features):
+    assert Counter(m.kind for m in features) == {kind: round(60 * share) for kind, share in FEATURE_SHARES.items()}
+    assert all(m.name.startswith("features-") for m in features)
+    assert not {m.name for m in features} & {m.name for m in synth.material_bank(100)}  # can share a folder
+    with pytest.raises(ValueError, match="mix must be one of"):
+        synth.material_bank(5, mix="measured")
+
+
 @pytest.mark.parametrize("n", [5, 6, 7, 11])
 def test_small_banks_still_hold_every_kind(n):
     bank = synth.material_bank(n, seed=1)
@@ -178,6 +207,24 @@ def test_top_lobes_that_reflect_more_than_all_light_are_refused():
     too_bright = AnalyticMaterial("x", specular=1.0, roughness=0.3, sheen=WHITE, sheen_roughness=0.3)
     with pytest.raises(ValueError, match="more light"):
         synth.evaluate(too_bright, [0, 0, 1], [0, 0, 1])
+    too_retro = AnalyticMaterial("y", specular=1.0, roughness=0.3, retro=WHITE, retro_roughness=0.3)
+    with pytest.raises(ValueError, match="more light"):
+        synth.evaluate(too_retro, [0, 0, 1], [0, 0, 1])
+
+
+@pytest.mark.parametrize(
+    "fields",
+    [
+        {"retro": (0.1, 0.1, 0.1), "retro_roughness": 0.01},  # finer than the MERL bins resolve
+        {"flakes": 1.5},
+        {"film_thickness": 300.0},  # a film lies on a coat
+        {"film_thickness": 10.0, "coat": 1.0},
+        {"metal_n": SILVER[0], "metal_k": SILVER[1], "flakes": 0.5},
+    ],
+)
+def test_unphysical_feature_lobes_are_refused(fields):
+    with pytest.raises(ValueError):
+        AnalyticMaterial("x", **fields)
 
 
 # --- Physics of the BRDFs ------------------------------------------------------------
@@ -242,6 +289,41 @@ def test_a_coat_brightens_the_highlight_and_dims_the_rest():
     assert np.all(synth.evaluate(coated, wi, mirror) > 10 * synth.evaluate(base, wi, mirror))
     ratio = synth.evaluate(coated, wi, off_mirror) / synth.evaluate(base, wi, off_mirror)
     assert np.all((0.85 < ratio) & (ratio < 0.97))  # about (1 − 0.05)² transmitted, in and out
+
+
+def test_the_retro_lobe_peaks_back_towards_the_light():
+    material = AnalyticMaterial("retro", diffuse=(0.2, 0.2, 0.2), retro=(0.3, 0.3, 0.3), retro_roughness=0.1)
+    for theta in np.radians([20.0, 45.0, 70.0]):
+        wi = np.array([np.sin(theta), 0.0, np.cos(theta)])
+        back, mirror = synth.evaluate(material, wi, wi), synth.evaluate(material, wi, wi * [-1, -1, 1])
+        assert np.all(back > 5 * mirror), np.degrees(theta)
+
+
+def test_a_thin_film_tends_to_the_bare_coat_and_shifts_colour_with_angle():
+    cos = np.linspace(0.01, 1.0, 50)[:, None]
+    np.testing.assert_allclose(thin_film_fresnel(cos, 1.8, 1e-6, 1.5), np.broadcast_to(fresnel(cos, 1.5, 0.0), (50, 3)),
+                               rtol=1e-9)
+    for thickness in (50.0, 300.0, 900.0, 2000.0):
+        for film_ior in (1.2, 1.8, 2.5):
+            r = thin_film_fresnel(cos, film_ior, thickness, 1.5)
+            assert np.all((r >= 0) & (r <= 1)), (thickness, film_ior)
+    # A quarter-wave film of index √1.5 on glass is an anti-reflection coat for its wavelength (green).
+    r = thin_film_fresnel(np.array([[1.0]]), np.sqrt(1.5), 550.0 / (4 * np.sqrt(1.5)), 1.5)[0]
+    assert r[1] < 1e-12 and r[0] > 1e-4 and r[2] > 1e-4
+    normal, oblique = thin_film_fresnel(np.array([[1.0], [0.5]]), 1.8, 400.0, 1.5)
+    assert np.abs(normal / normal.sum() - oblique / oblique.sum()).max() > 0.05  # iridescence
+
+
+def test_car_paint_flakes_tint_the_highlight_around_a_white_coat_glint():
+    paint = AnalyticMaterial("paint", diffuse=(0.3, 0.1, 0.01), flakes=0.4, flake_colour=(1.0, 0.8, 0.1),
+                             flake_roughness=0.2, coat=1.0, coat_roughness=0.01)
+    theta = np.radians(30.0)
+    wi = np.array([np.sin(theta), 0.0, np.cos(theta)])
+    glint = synth.evaluate(paint, wi, wi * [-1, -1, 1])
+    turned = np.radians(-30.0 - 12.0)  # 12° off the mirror: outside the coat's lobe, inside the flakes'
+    sparkle = synth.evaluate(paint, wi, np.array([np.sin(turned), 0.0, np.cos(turned)]))
+    assert glint.min() / glint.max() > 0.9  # the coat reflects white
+    assert sparkle[1] / sparkle[0] > 0.6 and sparkle[2] / sparkle[0] < 0.2  # the flakes yellow
 
 
 def test_metal_reflectance_follows_the_exact_conductor_fresnel():

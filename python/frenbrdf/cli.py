@@ -52,7 +52,7 @@ def _torch_version() -> str:
 def _synth(args: argparse.Namespace) -> int:
     from .data.synth import write_bank
 
-    paths = write_bank(args.out_dir, n=args.n, seed=args.seed, progress=not args.quiet)
+    paths = write_bank(args.out_dir, n=args.n, seed=args.seed, mix=args.mix, progress=not args.quiet)
     print(f"wrote {len(paths)} MERL files to {args.out_dir}")
     return 0
 
@@ -246,6 +246,10 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("out_dir", help="folder to write to (created)")
     synth.add_argument("--n", type=int, default=100, help="number of materials (default 100)")
     synth.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    synth.add_argument("--mix", choices=("default", "features"), default="default",
+                       help="default: paints, plastics, metals, fabrics, clear coats; features: what real "
+                            "measurements show beyond those (car-paint flakes, retro-reflection, thin films, "
+                            "sheen, coats over saturated bases)")
     synth.add_argument("--quiet", action="store_true", help="no progress bar")
     synth.set_defaults(run=_synth)
 

@@ -44,12 +44,21 @@ from .analytic import (
 )
 from .microfacet import ggx_d, ggx_visibility
 
-__all__ = ["KINDS", "KIND_SHARES", "MANIFEST_NAME", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
+__all__ = ["FEATURE_SHARES", "KINDS", "KIND_SHARES", "MANIFEST_NAME", "MIXES", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
            "AnalyticMaterial", "draw_material", "evaluate", "ggx_d", "ggx_visibility", "material_bank", "merl_table", "write_bank"]
 
-#: The kinds of material in a bank, and the share of each.
+#: The kinds of material in the default bank, and the share of each.
 KIND_SHARES = {"plastic": 0.35, "metal": 0.25, "coated": 0.20, "fabric": 0.10, "diffuse": 0.10}
 KINDS = tuple(KIND_SHARES)
+
+#: The ``features`` mix: what real measurements show and the default bank lacks or holds
+#: little of. Car paints (tinted flakes under a clear coat, as in RGL's vch_golden_yellow),
+#: retro-reflection (beaded and rough surfaces), thin-film colour shift, grazing sheen
+#: (felts) and clear coats over saturated bases.
+FEATURE_SHARES = {"carpaint": 0.30, "retroreflective": 0.20, "iridescent": 0.15, "fabric": 0.20, "coated": 0.15}
+
+#: The banks :func:`material_bank` can draw, by name.
+MIXES = {"default": KIND_SHARES, "features": FEATURE_SHARES}
 
 #: The manifest written next to the tables by :func:`write_bank`.
 MANIFEST_NAME = "bank.json"
@@ -58,21 +67,21 @@ MANIFEST_NAME = "bank.json"
 # --- The bank ------------------------------------------------------------------------
 
 
-def _kind_counts(n: int) -> dict[str, int]:
+def _kind_counts(n: int, shares: dict[str, float]) -> dict[str, int]:
     """How many materials of each kind a bank of ``n`` holds.
 
-    Shares of :data:`KIND_SHARES`, rounded by largest remainder; every kind at least
-    once when ``n`` allows it.
+    ``shares`` rounded by largest remainder; every kind at least once when ``n`` allows it.
     """
-    target = np.array(list(KIND_SHARES.values())) * n
+    kinds = tuple(shares)
+    target = np.array(list(shares.values())) * n
     counts = np.floor(target).astype(int)
-    if n >= len(KINDS):
+    if n >= len(kinds):
         counts = np.maximum(counts, 1)
     while counts.sum() < n:
         counts[np.argmax(target - counts)] += 1
     while counts.sum() > n:  # only after raising small kinds to 1: take from the most over-served
         counts[np.argmax(np.where(counts > 1, counts - target, -np.inf))] -= 1
-    return dict(zip(KINDS, counts.tolist()))
+    return dict(zip(kinds, counts.tolist()))
 
 
 def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
@@ -145,8 +154,49 @@ def _sample_coated(rng: np.random.Generator) -> tuple[str, dict]:
     return label, {**base, **coat}
 
 
+def _saturated_colour(rng: np.random.Generator, hue: float, saturation=(0.5, 0.95), value=(0.15, 0.75)) -> RGB:
+    return _linear(colorsys.hsv_to_rgb(hue % 1.0, rng.uniform(*saturation), rng.uniform(*value)))
+
+
+def _clear_coat(rng: np.random.Generator) -> dict:
+    return {"coat": rng.uniform(0.8, 1.0), "coat_roughness": _log_uniform(rng, 0.005, 0.05),
+            "coat_ior": rng.uniform(1.45, 1.6)}
+
+
+def _sample_carpaint(rng: np.random.Generator) -> tuple[str, dict]:
+    # A saturated paint with metallic flakes of a nearby, paler hue under a glossy clear coat.
+    hue = rng.uniform()
+    colour = _saturated_colour(rng, hue)
+    flakes = _linear(colorsys.hsv_to_rgb((hue + rng.normal(0.0, 0.04)) % 1.0, rng.uniform(0.2, 0.8), 1.0))
+    return _colour_name(colour), {"diffuse": colour, "flakes": rng.uniform(0.15, 0.6), "flake_colour": flakes,
+                                  "flake_roughness": _log_uniform(rng, 0.08, 0.4), **_clear_coat(rng)}
+
+
+def _sample_retroreflective(rng: np.random.Generator) -> tuple[str, dict]:
+    colour = _paint_colour(rng)
+    # The retro lobe's colour: the surface's own hue, paler (light that never entered deeply).
+    hue, saturation, _ = colorsys.rgb_to_hsv(*(c ** (1 / 2.2) for c in colour))
+    retro = tuple(rng.uniform(0.05, 0.35) * c for c in _linear(colorsys.hsv_to_rgb(hue, 0.5 * saturation, 1.0)))
+    params = {"diffuse": colour, "retro": retro, "retro_roughness": _log_uniform(rng, 0.1, 0.6)}
+    if rng.uniform() < 0.5:
+        params |= {"specular": 1.0, "roughness": _log_uniform(rng, 0.05, 0.6), "ior": rng.uniform(1.4, 1.6)}
+    return _colour_name(colour), params
+
+
+def _sample_iridescent(rng: np.random.Generator) -> tuple[str, dict]:
+    # A thin film (soap, oxide, pearlescent lacquer) on the coat over a dark base or a metal.
+    if rng.uniform() < 0.35:
+        label, base = _sample_metal(rng, roughness_range=(0.15, 0.6))
+    else:
+        base = {"diffuse": _saturated_colour(rng, rng.uniform(), saturation=(0.0, 0.9), value=(0.02, 0.4))}
+        label = _colour_name(base["diffuse"])
+    film = {"film_thickness": rng.uniform(150.0, 900.0), "film_ior": rng.uniform(1.3, 2.2)}
+    return label, {**base, **_clear_coat(rng), "coat_roughness": _log_uniform(rng, 0.01, 0.15), **film}
+
+
 _SAMPLERS = {"diffuse": _sample_diffuse, "plastic": _sample_plastic, "metal": _sample_metal,
-             "fabric": _sample_fabric, "coated": _sample_coated}
+             "fabric": _sample_fabric, "coated": _sample_coated, "carpaint": _sample_carpaint,
+             "retroreflective": _sample_retroreflective, "iridescent": _sample_iridescent}
 
 
 def draw_material(rng: np.random.Generator, kind: str | None = None, name: str = "{label}-{kind}") -> AnalyticMaterial:
@@ -157,7 +207,8 @@ def draw_material(rng: np.random.Generator, kind: str | None = None, name: str =
     rng
         The source of every random choice (colours, roughness, Fresnel, layers).
     kind
-        One of :data:`KINDS`; None draws it with the probabilities of :data:`KIND_SHARES`.
+        A kind of :data:`MIXES` (e.g. ``"carpaint"``); None draws it with the probabilities of
+        :data:`KIND_SHARES`.
     name
         The material's name, a template in which ``{label}`` (e.g. ``copper``) and ``{kind}``
         are filled in.
@@ -165,36 +216,42 @@ def draw_material(rng: np.random.Generator, kind: str | None = None, name: str =
     if kind is None:
         kind = KINDS[rng.choice(len(KINDS), p=np.array(list(KIND_SHARES.values())))]
     if kind not in _SAMPLERS:
-        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+        raise ValueError(f"kind must be one of {tuple(_SAMPLERS)}, got {kind!r}")
     label, params = _SAMPLERS[kind](rng)
     return AnalyticMaterial(name=name.format(label=label, kind=kind), **params)
 
 
-def material_bank(n: int = 100, seed: int = 0) -> list[AnalyticMaterial]:
+def material_bank(n: int = 100, seed: int = 0, mix: str = "default") -> list[AnalyticMaterial]:
     """A deterministic bank of ``n`` analytic materials.
 
-    Kinds follow :data:`KIND_SHARES` (every kind appears once ``n ≥ 5``) in a shuffled
-    order; colours, roughness and the other parameters are drawn from
-    ``numpy.random.default_rng(seed)``. Names look like ``synth-007-copper-metal``.
+    Kinds follow the shares of ``MIXES[mix]`` (:data:`KIND_SHARES` by default; every kind
+    appears once ``n`` is at least the number of kinds) in a shuffled order; colours,
+    roughness and the other parameters are drawn from ``numpy.random.default_rng(seed)``.
+    Names look like ``synth-007-copper-metal``, or ``features-006-dark-green-carpaint`` in
+    the ``features`` mix.
 
     Raises
     ------
     ValueError
-        ``n < 1``.
+        ``n < 1``, or a ``mix`` not in :data:`MIXES`.
     """
     if n < 1:
         raise ValueError(f"a material bank needs n >= 1 materials, got {n}")
+    if mix not in MIXES:
+        raise ValueError(f"mix must be one of {tuple(MIXES)}, got {mix!r}")
     rng = np.random.default_rng(seed)
-    kinds = [kind for kind, count in _kind_counts(n).items() for _ in range(count)]
+    kinds = [kind for kind, count in _kind_counts(n, MIXES[mix]).items() for _ in range(count)]
+    prefix = "synth" if mix == "default" else mix  # two mixes can share a training folder
     width = max(3, len(str(n - 1)))
     bank = []
     for index, kind in enumerate(rng.permutation(kinds)):
-        bank.append(draw_material(rng, str(kind), name=f"synth-{index:0{width}d}-{{label}}-{{kind}}"))
+        bank.append(draw_material(rng, str(kind), name=f"{prefix}-{index:0{width}d}-{{label}}-{{kind}}"))
     return bank
 
 
-def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, progress: bool = True) -> list[Path]:
-    """Writes :func:`material_bank` ``(n, seed)`` as MERL files and a manifest.
+def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: str = "default",
+               progress: bool = True) -> list[Path]:
+    """Writes :func:`material_bank` ``(n, seed, mix)`` as MERL files and a manifest.
 
     Each material becomes ``out_dir / f"{name}.binary"``; ``out_dir / "bank.json"`` then
     records ``n``, ``seed`` and every material's parameters. The manifest is written
@@ -204,7 +261,7 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, progr
     ----------
     out_dir
         Destination folder, created if needed.
-    n, seed
+    n, seed, mix
         Passed to :func:`material_bank`.
     progress
         Show a progress bar.
@@ -217,11 +274,11 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, progr
     Raises
     ------
     ValueError
-        ``n < 1``.
+        ``n < 1``, or an unknown ``mix``.
     """
     from tqdm import tqdm
 
-    bank = material_bank(n, seed)
+    bank = material_bank(n, seed, mix)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -229,6 +286,6 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, progr
         path = out_dir / f"{material.name}.binary"
         write_merl(path, merl_table(material))
         paths.append(path)
-    manifest = {"n": n, "seed": seed, "materials": [{"file": p.name, **m.to_dict()} for p, m in zip(paths, bank)]}
+    manifest = {"n": n, "seed": seed, "mix": mix, "materials": [{"file": p.name, **m.to_dict()} for p, m in zip(paths, bank)]}
     write_text(out_dir / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
     return paths
