@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Regenerates the shipped model (docs/pretrained.md): the training folders from ../shared/data, one
-# training run (on a GPU where torch sees one: benches/pretrained.json says device "auto"), packing
-# and the model card. The four RGL materials whose real measurements docs/measurements.md reports
-# are never trained on: their fits are left out here.
+# Regenerates the shipped model (docs/pretrained.md): the training folders from ../shared/data (the
+# MERL fits, the RGL fits, the default bank and the `features` bank of car paints, retro-reflection,
+# thin films, sheen and coats), one training run (on a GPU where torch sees one: benches/pretrained.json
+# says device "auto"), packing and the model card. The four RGL materials whose real measurements
+# docs/measurements.md reports are never trained on: their fits are left out here.
 #
 #   bash benches/pretrained.sh [SHARED_DATA] [WORK]        # then: git diff python/frenbrdf/models/pretrained
 #
@@ -21,5 +22,6 @@ for fit in "$SHARED"/rgl-nbrdf/*.h5; do
 done
 frenbrdf import-nbrdf "${rgl[@]}" "$WORK/rgl-train" --quiet
 frenbrdf synth "$WORK/bank" --quiet
-python benches/pretrained.py --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-train" \
+frenbrdf synth "$WORK/features" --mix features --n 60 --seed 1 --quiet
+python benches/pretrained.py --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-train" --data "$WORK/features" \
     --config benches/pretrained.json --work "$WORK/pack" "${@:3}"

@@ -64,6 +64,13 @@ def test_rendering_chart_writes_png_csv_and_json(tmp_path):
     assert (tmp_path / "rendering.png").stat().st_size > 0
 
 
+def test_features_sheet_draws_one_column_per_kind(tmp_path, capsys):
+    chart = load_script("chart_features")
+    out = tmp_path / "features.png"
+    assert chart.main(["--n", "10", "--per-kind", "1", "--resolution", "16", "--out", str(out)]) == 0
+    assert out.stat().st_size > 0 and "wrote" in capsys.readouterr().out
+
+
 def test_eta_chart_pairs_each_eta_with_eta_zero_of_the_same_seed(tmp_path):
     chart = load_script("chart_eta")
     runs = [{"eta": eta, "seed": seed, "psnr": 25.0 + seed + (0.5 if eta else 0.0), "ssim": 0.9, "rmse": 0.05,

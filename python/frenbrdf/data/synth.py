@@ -165,10 +165,12 @@ def _clear_coat(rng: np.random.Generator) -> dict:
 
 def _sample_carpaint(rng: np.random.Generator) -> tuple[str, dict]:
     # A saturated paint with metallic flakes of a nearby, paler hue under a glossy clear coat.
+    # Bases run darker and flakes more saturated than in paints: RGL's vch_golden_yellow is a dark
+    # golden base under broad, strongly yellow flake highlights.
     hue = rng.uniform()
-    colour = _saturated_colour(rng, hue)
-    flakes = _linear(colorsys.hsv_to_rgb((hue + rng.normal(0.0, 0.04)) % 1.0, rng.uniform(0.2, 0.8), 1.0))
-    return _colour_name(colour), {"diffuse": colour, "flakes": rng.uniform(0.15, 0.6), "flake_colour": flakes,
+    colour = _saturated_colour(rng, hue, value=(0.05, 0.6))
+    flakes = _linear(colorsys.hsv_to_rgb((hue + rng.normal(0.0, 0.04)) % 1.0, rng.uniform(0.3, 1.0), 1.0))
+    return _colour_name(colour), {"diffuse": colour, "flakes": rng.uniform(0.2, 0.8), "flake_colour": flakes,
                                   "flake_roughness": _log_uniform(rng, 0.08, 0.4), **_clear_coat(rng)}
 
 
