@@ -85,14 +85,15 @@ class RefineConfig:
             raise ValueError("invalid refinement: " + "; ".join(problems))
 
 
-#: The named budgets of ``refine=``, at the knees of chart 8 (docs/charts/chart8_refine.png; CPU seconds of one
-#: thread per material, a MERL-trained model, 4000 samples). Latent: 100 steps take 0.4 s and give +6.9 dB in
-#: distribution (400 steps add 2.5 dB for 1.3 s more); full: 300 weight steps after them take 1.2–1.4 s and reach
-#: 46–49 dB, within 1 dB of fit-nbrdf's 3 epochs or above it in a tenth of its time (1000 steps: +3–4 dB for 2 s more).
+#: The named budgets of ``refine=`` (docs/charts/README.md, charts 8 and 8b; CPU seconds of one thread per
+#: material, 4000 samples). Latent: 100 steps take 0.2–0.4 s and give +6–9 dB (400 steps add 0.6–2.5 dB for
+#: 0.7–1.3 s more). Full: after them, 1000 steps on the NBRDF's weights, 2.0 s: on 7 RGL materials the shipped
+#: model (version 2) never saw, +5.3 dB over 300 steps (45.4 against 40.1 dB) for 1.3 s more; 300 steps were
+#: the default before, set at chart 8's knee on MERL-trained models before a 2 s budget was the goal.
 BUDGETS = {
     "none": RefineConfig(),
     "latent": RefineConfig(latent_steps=100),
-    "full": RefineConfig(latent_steps=100, weight_steps=300),
+    "full": RefineConfig(latent_steps=100, weight_steps=1000),
 }
 
 
