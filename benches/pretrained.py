@@ -111,7 +111,7 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
   {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.
 - **Regenerate**: `bash benches/pretrained.sh` (the MERL fits, the RGL fits but the four measured
-  materials of [measurements.md](measurements.md), the default and features banks; then training and packing). These files
+  materials of [measurements.md](measurements.md), the bank; then training and packing). These files
   were packed by `{card['command']}`.
 - **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
   compressed (relative error of f_ref + ε below 1e-4).
