@@ -12,8 +12,8 @@ import pytest
 
 import frenbrdf
 from frenbrdf.data import synth
-from frenbrdf.data.analytic import FILM_THICKNESS_RANGE, thin_film_fresnel
-from frenbrdf.data.microfacet import fresnel
+from frenbrdf.data.analytic import FILM_THICKNESS_RANGE
+from frenbrdf.data.microfacet import fresnel, thin_film_fresnel
 from frenbrdf.data.synth import FEATURE_SHARES, KIND_SHARES, KINDS, METALS, AnalyticMaterial
 from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 

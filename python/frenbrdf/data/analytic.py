@@ -30,7 +30,7 @@ channel (approximate values of published optical constants at about 650, 550 and
 ``ω_o = ω_i``. Turning ``ω_o`` keeps ``μ_o`` and ``dω_o``: the lobe reflects exactly what the
 mirror-side lobe of the same α does, and is reciprocal like it.
 
-*Thin film* (:func:`thin_film_fresnel`): a dielectric film on the coat replaces the coat's
+*Thin film* (:func:`frenbrdf.data.microfacet.thin_film_fresnel`): a dielectric film on the coat replaces the coat's
 Fresnel reflectance by Airy's, evaluated per channel at :data:`WAVELENGTHS`: the coat's
 colour then shifts with θ_d (iridescence), and stays ≤ 1.
 
@@ -55,7 +55,7 @@ A material is a *base* under an optional clear *coat*:
 
 The directional albedos are tabulated per material on a grid of ``μ`` by a deterministic
 quadrature whose half vectors follow the lobe's GGX distribution (so near-mirror lobes are
-resolved), and interpolated linearly.
+resolved), and interpolated linearly (:mod:`frenbrdf.data.hemisphere`).
 
 Reciprocity and energy conservation
 -----------------------------------
@@ -93,13 +93,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import re
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..io.merl import CHANNEL_SCALES, merl_bin_directions, merl_bin_grid
-from .microfacet import fresnel, ggx_d, ggx_visibility
+from ..io.merl import CHANNEL_SCALES
+from .hemisphere import RETRO_QUADRATURE_NODES, Albedo, Geometry, directional_albedo, geometry, merl_geometry
+from .microfacet import fresnel, ggx_d, ggx_visibility, thin_film_fresnel
 
 #: Complex refractive index (n, k) per RGB channel of some metals (the metals of a synthetic bank).
 METALS = {
@@ -120,8 +120,6 @@ SHEEN_ROUGHNESS_RANGE = (0.3, 1.0)
 RETRO_MIN_ROUGHNESS = 0.05
 #: Thin-film thicknesses accepted, in nm: from the first interference colours to where they wash out.
 FILM_THICKNESS_RANGE = (50.0, 2000.0)
-#: Wavelengths (nm) at which the RGB channels evaluate a thin film, as :data:`METALS` are given.
-WAVELENGTHS = (650.0, 550.0, 450.0)
 
 RGB = tuple[float, float, float]
 
@@ -243,90 +241,25 @@ def _check_range(name: str, field: str, value: float, low: float, high: float) -
         raise ValueError(f"{name}: {field} must lie in [{low}, {high}], got {value!r}")
 
 
-# --- Geometry --------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class _Geometry:
-    """The cosines a BRDF depends on, each broadcastable to ``(..., 1)``.
-
-    Cosines are clamped to (0, 1] so that lobes stay finite where a direction is below
-    the horizon; ``above`` marks the pairs where the BRDF is not zero. ``wi`` and ``wo``
-    are the unit directions, kept for the retro-reflective half vector (:attr:`cos_back`).
-    """
-
-    cos_i: np.ndarray
-    cos_o: np.ndarray
-    cos_h: np.ndarray
-    cos_d: np.ndarray
-    above: np.ndarray
-    wi: np.ndarray
-    wo: np.ndarray
-
-    @functools.cached_property
-    def cos_back(self) -> np.ndarray:
-        """cos θ of the *back* half vector ``normalize(ω_i + ω̄_o)``, ``ω̄_o`` being ``ω_o``
-        turned by π about the normal: 1 where ``ω_o = ω_i`` (retro-reflection). Swapping
-        ``ω_i`` and ``ω_o`` turns this half vector by π, so its cosine is reciprocal."""
-        back = self.wi + self.wo * np.array([-1.0, -1.0, 1.0])
-        return _clamped(back[..., 2:] / np.maximum(np.linalg.norm(back, axis=-1, keepdims=True), _TINY))
-
-
-_TINY = 1e-12
-
-
-def _clamped(cos: np.ndarray) -> np.ndarray:
-    return np.clip(cos, _TINY, 1.0)
-
-
-def _geometry(wi: np.ndarray, wo: np.ndarray) -> _Geometry:
-    """Geometry of direction pairs ``(..., 3)`` (normalised here)."""
-    wi = wi / np.linalg.norm(wi, axis=-1, keepdims=True)
-    wo = wo / np.linalg.norm(wo, axis=-1, keepdims=True)
-    h = wi + wo
-    h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), _TINY)  # ω_i = −ω_o: below the horizon
-    cos_i, cos_o = wi[..., 2:], wo[..., 2:]
-    return _Geometry(cos_i=_clamped(cos_i), cos_o=_clamped(cos_o), cos_h=_clamped(h[..., 2:]),
-                     cos_d=_clamped(np.sum(wi * h, axis=-1, keepdims=True)), above=(cos_i > 0) & (cos_o > 0),
-                     wi=wi, wo=wo)
-
-
-@functools.lru_cache(maxsize=1)
-def _merl_geometry() -> _Geometry:
-    """Geometry of every MERL bin (φ_h = 0), computed once.
-
-    θ_h and θ_d are the bin angles themselves, so they stay on their own axes
-    (``(90, 1, 1, 1)`` and ``(1, 90, 1, 1)``): Fresnel and D are then evaluated at 90
-    values rather than 1.458M. Only μ_i and μ_o are full ``(90, 90, 180, 1)`` arrays.
-    """
-    grid = merl_bin_grid()
-    wi, wo = merl_bin_directions()
-    cos_i, cos_o = wi[..., 2:].copy(), wo[..., 2:].copy()
-    theta_h, theta_d = grid[:, 0, 0, 0], grid[0, :, 0, 1]
-    return _Geometry(cos_i=_clamped(cos_i), cos_o=_clamped(cos_o),
-                     cos_h=np.cos(theta_h).reshape(90, 1, 1, 1), cos_d=np.cos(theta_d).reshape(1, 90, 1, 1),
-                     above=(cos_i > 0) & (cos_o > 0), wi=wi, wo=wo)
-
-
 # --- Lobes ---------------------------------------------------------------------------
 
 
-def _ggx_lobe(g: _Geometry, alpha: float, n, k) -> np.ndarray:
+def _ggx_lobe(g: Geometry, alpha: float, n, k) -> np.ndarray:
     """F · D · G₂ / (4 μ_i μ_o) for a GGX interface of index ``n + i k``."""
     return fresnel(g.cos_d, n, k) * ggx_d(g.cos_h, alpha) * ggx_visibility(g.cos_i, g.cos_o, alpha)
 
 
-def _sheen_lobe(g: _Geometry, r: float) -> np.ndarray:
+def _sheen_lobe(g: Geometry, r: float) -> np.ndarray:
     """Charlie sheen distribution with Neubelt & Pettineo's visibility (white)."""
     sin_h = np.sqrt(np.maximum(1.0 - g.cos_h * g.cos_h, 0.0))
     d = (2.0 + 1.0 / r) * sin_h ** (1.0 / r) / (2.0 * np.pi)
     return d / (4.0 * (g.cos_i + g.cos_o - g.cos_i * g.cos_o))
 
 
-def _retro_lobe(g: _Geometry, alpha: float, cos_h: np.ndarray | None = None) -> np.ndarray:
+def _retro_lobe(g: Geometry, alpha: float, cos_h: np.ndarray | None = None) -> np.ndarray:
     """D(θ_back) · G₂ / (4 μ_i μ_o): a GGX lobe around ``ω_o = ω_i`` (white, F = 1).
 
-    ``cos_h`` defaults to :attr:`_Geometry.cos_back`; the albedo tables pass the ordinary
+    ``cos_h`` defaults to :attr:`Geometry.cos_back`; the albedo tables pass the ordinary
     half vector instead: turning ``ω_o`` by π about the normal keeps ``μ_o`` and ``dω_o``,
     so the retro lobe reflects exactly what this mirror-side lobe does.
     """
@@ -334,16 +267,16 @@ def _retro_lobe(g: _Geometry, alpha: float, cos_h: np.ndarray | None = None) -> 
     return ggx_d(cos_h, alpha) * ggx_visibility(g.cos_i, g.cos_o, alpha)
 
 
-def _metal_lobe(m: AnalyticMaterial, g: _Geometry) -> np.ndarray:
+def _metal_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     return np.asarray(m.tint) * _ggx_lobe(g, m.roughness, m.metal_n, m.metal_k)
 
 
-def _flake_lobe(m: AnalyticMaterial, g: _Geometry) -> np.ndarray:
+def _flake_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     """Tinted aluminium flakes whose orientations spread as a GGX distribution."""
     return np.asarray(m.flake_colour) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
 
 
-def _top_lobes(m: AnalyticMaterial, g: _Geometry) -> np.ndarray:
+def _top_lobes(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     """The lobes above a dielectric base's matte term whose albedo is tabulated together:
     specular (white) and sheen (RGB). The retro lobe is tabulated on its own."""
     f = 0.0
@@ -354,121 +287,17 @@ def _top_lobes(m: AnalyticMaterial, g: _Geometry) -> np.ndarray:
     return f
 
 
-def thin_film_fresnel(cos: np.ndarray, film_ior: float, thickness: float, substrate_ior: float) -> np.ndarray:
-    """Unpolarised reflectance of a thin dielectric film on a dielectric substrate, from air.
-
-    Airy's sum of the film's multiple reflections (Born & Wolf, "Principles of Optics",
-    §1.6) at the :data:`WAVELENGTHS`, per polarisation, with real amplitudes ``r₁₂, r₂₃``
-    and the phase ``δ = 4π n₂ d cos θ₂ / λ``::
-
-        R = (r₁₂² + r₂₃² + 2 r₁₂ r₂₃ cos δ) / (1 + r₁₂² r₂₃² + 2 r₁₂ r₂₃ cos δ)
-
-    which is at most 1 for lossless layers, and equals the bare substrate's Fresnel
-    reflectance as ``thickness → 0``. ``cos`` is ``(..., 1)``, the result ``(..., 3)``.
-    """
-    sin2 = 1.0 - cos * cos
-    cos_film = np.sqrt(1.0 - sin2 / film_ior**2)
-    cos_sub = np.sqrt(1.0 - sin2 / substrate_ior**2)
-    delta = 4.0 * np.pi * film_ior * thickness * cos_film / np.asarray(WAVELENGTHS)
-    n1, n2, n3 = 1.0, film_ior, substrate_ior
-    amplitudes = (((n1 * cos - n2 * cos_film) / (n1 * cos + n2 * cos_film),  # s
-                   (n2 * cos_film - n3 * cos_sub) / (n2 * cos_film + n3 * cos_sub)),
-                  ((n2 * cos - n1 * cos_film) / (n2 * cos + n1 * cos_film),  # p
-                   (n3 * cos_film - n2 * cos_sub) / (n3 * cos_film + n2 * cos_sub)))
-    reflectance = 0.0
-    for r12, r23 in amplitudes:
-        cross = 2.0 * r12 * r23 * np.cos(delta)
-        reflectance = reflectance + (r12**2 + r23**2 + cross) / (1.0 + (r12 * r23) ** 2 + cross)
-    return 0.5 * reflectance
-
-
-def _coat_lobe(m: AnalyticMaterial, g: _Geometry) -> np.ndarray:
+def _coat_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     if not m.film_thickness:
         return _ggx_lobe(g, m.coat_roughness, m.coat_ior, 0.0)
     f = thin_film_fresnel(g.cos_d, m.film_ior, m.film_thickness, m.coat_ior)
     return f * ggx_d(g.cos_h, m.coat_roughness) * ggx_visibility(g.cos_i, g.cos_o, m.coat_roughness)
 
 
-# --- Directional albedo tables --------------------------------------------------------
-
-#: μ = cos θ nodes of the albedo tables, denser towards grazing where albedos change fastest.
-_MU_NODES = np.maximum(np.linspace(0.0, 1.0, 96) ** 2, 1e-4)
-_QUADRATURE_NODES = 48  # per axis, per μ node
-# The white (F = 1) retro lobe needs a finer rule: at 48 its albedo at grazing incidence is ~0.2 % low
-# (so a white retro-reflective base reflected ~0.2 % more than it receives); at 96, 0.1 %.
-_RETRO_QUADRATURE_NODES = 96
-
-
-@dataclass(frozen=True)
-class _Albedo:
-    """A tabulated directional albedo E(μ) per channel and its average Ē = 2 ∫ E μ dμ."""
-
-    values: np.ndarray  # (len(_MU_NODES), channels)
-    average: np.ndarray  # (channels,)
-
-    def __call__(self, cos: np.ndarray) -> np.ndarray:
-        """E at cosines ``(..., 1)`` → ``(..., channels)``, linear between nodes."""
-        flat = cos.reshape(-1)
-        columns = [np.interp(flat, _MU_NODES, column) for column in self.values.T]
-        return np.stack(columns, axis=-1).reshape(*cos.shape[:-1], len(columns))
-
-    def __add__(self, other: _Albedo) -> _Albedo:
-        """The albedo of the sum of two lobes (channels broadcast)."""
-        return _Albedo(values=self.values + other.values, average=self.average + other.average)
-
-
-def _hemisphere_rule(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Product rule on [0, 1] × [0, 2π): Gauss–Legendre in u, midpoints in φ; weights sum to 1."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    u, phi = np.meshgrid((x + 1.0) / 2.0, (np.arange(n) + 0.5) * (2.0 * np.pi / n), indexing="ij")
-    weights = np.broadcast_to((w / 2.0)[:, None] / n, u.shape)
-    return u.reshape(-1), phi.reshape(-1), weights.reshape(-1)
-
-
-def _directional_albedo(lobe: Callable[[_Geometry], np.ndarray], alpha: float | None,
-                        nodes: int = _QUADRATURE_NODES) -> _Albedo:
-    """Tabulates E(μ) = ∫ f μ_o dω_o of ``lobe`` at :data:`_MU_NODES`.
-
-    ``alpha`` given: the half vector follows the GGX distribution of that roughness
-    (tan² θ_h = α² u / (1 − u), so D μ_h dω_h = du dφ / 2π), which resolves narrow
-    lobes at any α. ``alpha=None``: uniform in μ_o and φ_o (smooth lobes; not
-    cosine-weighted, as the sheen lobe holds much of its energy near grazing).
-    """
-    u, phi, weights = _hemisphere_rule(nodes)
-    mu = _MU_NODES[:, None]
-    wi = np.stack(np.broadcast_arrays(np.sqrt(1.0 - mu * mu), 0.0, mu), axis=-1)  # (μ, 1, 3)
-    if alpha is None:
-        s = np.sqrt(1.0 - u * u)
-        wo = np.stack([s * np.cos(phi), s * np.sin(phi), u], axis=-1)
-        wo = np.broadcast_to(wo, (len(_MU_NODES), *wo.shape))
-        integrand_weight = 2.0 * np.pi * wo[..., 2:]  # dω_o = dμ_o dφ
-    else:
-        tan_h = alpha * np.sqrt(u / (1.0 - u))
-        cos_h = 1.0 / np.sqrt(1.0 + tan_h * tan_h)
-        sin_h = tan_h * cos_h
-        h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], axis=-1)
-        i_dot_h = np.sum(wi * h, axis=-1, keepdims=True)  # (μ, samples, 1)
-        wo = 2.0 * i_dot_h * h - wi
-        # f μ_o dω_o = f μ_o · 4 (ω_i·h) dω_h and dω_h = du dφ / (2π D μ_h); the half
-        # vector must face ω_i, or the sample belongs to another half vector.
-        pdf_h = ggx_d(h[..., 2:], alpha) * h[..., 2:]
-        integrand_weight = np.where(i_dot_h > 0, 4.0 * i_dot_h * wo[..., 2:] / pdf_h, 0.0)
-    g = _geometry(np.broadcast_to(wi, wo.shape), wo)
-    f = np.where(g.above, lobe(g), 0.0) * integrand_weight
-    values = np.einsum("msc,s->mc", f, weights)
-    return _Albedo(values=values, average=_cosine_average(values))
-
-
-def _cosine_average(values: np.ndarray) -> np.ndarray:
-    """Ē = 2 ∫₀¹ E(μ) μ dμ of the linear interpolant of ``values`` at :data:`_MU_NODES`."""
-    mu = np.linspace(0.0, 1.0, 4097)
-    return np.array([2.0 * np.trapezoid(np.interp(mu, _MU_NODES, column) * mu, mu) for column in values.T])
-
-
 @dataclass(frozen=True)
 class _Albedos:
-    top: _Albedo | None  # the dielectric base's specular + sheen lobes
-    coat: _Albedo | None
+    top: Albedo | None  # the dielectric base's specular + sheen lobes
+    coat: Albedo | None
 
 
 @functools.lru_cache(maxsize=256)
@@ -477,22 +306,22 @@ def _albedos(m: AnalyticMaterial) -> _Albedos:
     top = None
     if m.metal_n is None and (m.specular > 0 or any(m.sheen)):
         alpha = m.roughness if m.specular > 0 else None  # follow the narrower lobe
-        top = _directional_albedo(lambda g: _top_lobes(m, g), alpha)
+        top = directional_albedo(lambda g: _top_lobes(m, g), alpha)
     if any(m.retro):
-        retro = _directional_albedo(lambda g: np.asarray(m.retro) * _retro_lobe(g, m.retro_roughness, g.cos_h),
-                                    m.retro_roughness, _RETRO_QUADRATURE_NODES)
+        retro = directional_albedo(lambda g: np.asarray(m.retro) * _retro_lobe(g, m.retro_roughness, g.cos_h),
+                                    m.retro_roughness, RETRO_QUADRATURE_NODES)
         top = retro if top is None else top + retro
     if top is not None and top.values.max() > 1.0:
         raise ValueError(f"{m.name}: the specular, sheen and retro lobes together reflect more light than "
                          f"arrives (albedo {top.values.max():.3f}); lower specular, sheen or retro")
-    coat = _directional_albedo(lambda g: _coat_lobe(m, g), m.coat_roughness) if m.coat > 0 else None
+    coat = directional_albedo(lambda g: _coat_lobe(m, g), m.coat_roughness) if m.coat > 0 else None
     return _Albedos(top=top, coat=coat)
 
 
 # --- Evaluation ----------------------------------------------------------------------
 
 
-def _dielectric_base(m: AnalyticMaterial, g: _Geometry, albedos: _Albedos) -> np.ndarray:
+def _dielectric_base(m: AnalyticMaterial, g: Geometry, albedos: _Albedos) -> np.ndarray:
     matte = np.asarray(m.diffuse) / np.pi
     if albedos.top is None:
         return matte
@@ -505,7 +334,7 @@ def _dielectric_base(m: AnalyticMaterial, g: _Geometry, albedos: _Albedos) -> np
     return top + coupling * (matte / (1.0 - e.average))
 
 
-def _base(m: AnalyticMaterial, g: _Geometry, albedos: _Albedos) -> np.ndarray:
+def _base(m: AnalyticMaterial, g: Geometry, albedos: _Albedos) -> np.ndarray:
     if m.metal_n is not None:
         return _metal_lobe(m, g)
     f = _dielectric_base(m, g, albedos)
@@ -514,7 +343,7 @@ def _base(m: AnalyticMaterial, g: _Geometry, albedos: _Albedos) -> np.ndarray:
     return f
 
 
-def _evaluate(m: AnalyticMaterial, g: _Geometry) -> np.ndarray:
+def _evaluate(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     albedos = _albedos(m)
     f = _base(m, g, albedos)
     if m.coat > 0:
@@ -544,7 +373,7 @@ def evaluate(material: AnalyticMaterial, wi, wo) -> np.ndarray:
     wi, wo = np.broadcast_arrays(np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64))
     if wi.ndim == 0 or wi.shape[-1] != 3:
         raise ValueError(f"wi and wo must have shape (..., 3), got {np.shape(wi)}")
-    return _evaluate(material, _geometry(wi, wo))
+    return _evaluate(material, geometry(wi, wo))
 
 
 def merl_table(material: AnalyticMaterial) -> np.ndarray:
@@ -559,7 +388,7 @@ def merl_table(material: AnalyticMaterial) -> np.ndarray:
     numpy.ndarray
         float64 ``(3, 90, 90, 180)``.
     """
-    g = _merl_geometry()
+    g = merl_geometry()
     table = np.moveaxis(_evaluate(material, g), -1, 0).copy()
     table[:, ~g.above[..., 0]] = -np.asarray(CHANNEL_SCALES)[:, None]
     return table

@@ -29,6 +29,10 @@ from __future__ import annotations
 
 import numpy as np
 
+#: Wavelengths (nm) at which the RGB channels evaluate a thin film (as the metals' ``n, k`` of
+#: :data:`frenbrdf.data.analytic.METALS` are given).
+WAVELENGTHS = (650.0, 550.0, 450.0)
+
 
 def fresnel(cos: np.ndarray, n, k) -> np.ndarray:
     """Exact unpolarised Fresnel reflectance from air into index ``n + i k`` (broadcast)."""
@@ -56,3 +60,31 @@ def ggx_visibility(cos_i: np.ndarray, cos_o: np.ndarray, alpha: float) -> np.nda
     masking_i = cos_o * np.sqrt(a2 + cos_i * cos_i * (1.0 - a2))  # μ_i μ_o (1 + 2 Λ(μ_i))
     masking_o = cos_i * np.sqrt(a2 + cos_o * cos_o * (1.0 - a2))
     return 0.5 / (masking_i + masking_o)
+
+
+def thin_film_fresnel(cos: np.ndarray, film_ior: float, thickness: float, substrate_ior: float) -> np.ndarray:
+    """Unpolarised reflectance of a thin dielectric film on a dielectric substrate, from air.
+
+    Airy's sum of the film's multiple reflections (Born & Wolf, "Principles of Optics",
+    §1.6) at the :data:`WAVELENGTHS`, per polarisation, with real amplitudes ``r₁₂, r₂₃``
+    and the phase ``δ = 4π n₂ d cos θ₂ / λ``::
+
+        R = (r₁₂² + r₂₃² + 2 r₁₂ r₂₃ cos δ) / (1 + r₁₂² r₂₃² + 2 r₁₂ r₂₃ cos δ)
+
+    which is at most 1 for lossless layers, and equals the bare substrate's Fresnel
+    reflectance as ``thickness → 0``. ``cos`` is ``(..., 1)``, the result ``(..., 3)``.
+    """
+    sin2 = 1.0 - cos * cos
+    cos_film = np.sqrt(1.0 - sin2 / film_ior**2)
+    cos_sub = np.sqrt(1.0 - sin2 / substrate_ior**2)
+    delta = 4.0 * np.pi * film_ior * thickness * cos_film / np.asarray(WAVELENGTHS)
+    n1, n2, n3 = 1.0, film_ior, substrate_ior
+    amplitudes = (((n1 * cos - n2 * cos_film) / (n1 * cos + n2 * cos_film),  # s
+                   (n2 * cos_film - n3 * cos_sub) / (n2 * cos_film + n3 * cos_sub)),
+                  ((n2 * cos - n1 * cos_film) / (n2 * cos + n1 * cos_film),  # p
+                   (n3 * cos_film - n2 * cos_sub) / (n3 * cos_film + n2 * cos_sub)))
+    reflectance = 0.0
+    for r12, r23 in amplitudes:
+        cross = 2.0 * r12 * r23 * np.cos(delta)
+        reflectance = reflectance + (r12**2 + r23**2 + cross) / (1.0 + (r12 * r23) ** 2 + cross)
+    return 0.5 * reflectance
