@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import frenbrdf
@@ -155,6 +155,7 @@ def configs(draw):
 
 @FAST
 @given(config=configs())
+@example(config={"model": {"encoder": {"hidden": []}}})  # once a TypeError: max() of no hidden widths
 def test_generated_train_configs(folder, config):
     path = folder / "config.json"
     path.write_text(json.dumps(config))

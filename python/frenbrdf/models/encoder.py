@@ -35,7 +35,7 @@ class EncoderConfig:
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
-        if min(self.hidden, default=1) < 1 or self.latent < 1 or max(*self.hidden, self.latent) > MAX_WIDTH \
+        if min(self.hidden, default=1) < 1 or self.latent < 1 or max((*self.hidden, self.latent)) > MAX_WIDTH \
                 or len(self.hidden) > MAX_LAYERS:
             raise ValueError(f"encoder sizes must lie in 1 … {MAX_WIDTH} (at most {MAX_LAYERS} hidden layers), got "
                              f"hidden={self.hidden}, latent={self.latent}")
