@@ -309,7 +309,7 @@ def _albedos(m: AnalyticMaterial) -> _Albedos:
         top = directional_albedo(lambda g: _top_lobes(m, g), alpha)
     if any(m.retro):
         retro = directional_albedo(lambda g: np.asarray(m.retro) * _retro_lobe(g, m.retro_roughness, g.cos_h),
-                                    m.retro_roughness, RETRO_QUADRATURE_NODES)
+                                   m.retro_roughness, RETRO_QUADRATURE_NODES)
         top = retro if top is None else top + retro
     if top is not None and top.values.max() > 1.0:
         raise ValueError(f"{m.name}: the specular, sheen and retro lobes together reflect more light than "

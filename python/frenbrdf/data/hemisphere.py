@@ -62,8 +62,8 @@ def geometry(wi: np.ndarray, wo: np.ndarray) -> Geometry:
     h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), _TINY)  # ω_i = −ω_o: below the horizon
     cos_i, cos_o = wi[..., 2:], wo[..., 2:]
     return Geometry(cos_i=_clamped(cos_i), cos_o=_clamped(cos_o), cos_h=_clamped(h[..., 2:]),
-                     cos_d=_clamped(np.sum(wi * h, axis=-1, keepdims=True)), above=(cos_i > 0) & (cos_o > 0),
-                     wi=wi, wo=wo)
+                    cos_d=_clamped(np.sum(wi * h, axis=-1, keepdims=True)), above=(cos_i > 0) & (cos_o > 0),
+                    wi=wi, wo=wo)
 
 
 @functools.lru_cache(maxsize=1)
@@ -79,8 +79,8 @@ def merl_geometry() -> Geometry:
     cos_i, cos_o = wi[..., 2:].copy(), wo[..., 2:].copy()
     theta_h, theta_d = grid[:, 0, 0, 0], grid[0, :, 0, 1]
     return Geometry(cos_i=_clamped(cos_i), cos_o=_clamped(cos_o),
-                     cos_h=np.cos(theta_h).reshape(90, 1, 1, 1), cos_d=np.cos(theta_d).reshape(1, 90, 1, 1),
-                     above=(cos_i > 0) & (cos_o > 0), wi=wi, wo=wo)
+                    cos_h=np.cos(theta_h).reshape(90, 1, 1, 1), cos_d=np.cos(theta_d).reshape(1, 90, 1, 1),
+                    above=(cos_i > 0) & (cos_o > 0), wi=wi, wo=wo)
 
 
 #: μ = cos θ nodes of the albedo tables, denser towards grazing where albedos change fastest.
@@ -118,7 +118,7 @@ def _hemisphere_rule(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def directional_albedo(lobe: Callable[[Geometry], np.ndarray], alpha: float | None,
-                        nodes: int = _QUADRATURE_NODES) -> Albedo:
+                       nodes: int = _QUADRATURE_NODES) -> Albedo:
     """Tabulates E(μ) = ∫ f μ_o dω_o of ``lobe`` at :data:`_MU_NODES`.
 
     ``alpha`` given: the half vector follows the GGX distribution of that roughness
