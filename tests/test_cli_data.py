@@ -34,6 +34,32 @@ def test_synth_command_writes_the_features_mix(tmp_path):
     assert all(cli.build_parser().parse_args(["synth", "x", "--mix", mix]).mix == mix for mix in synth.MIXES)
 
 
+def test_synth_never_replaces_files_it_did_not_write(tmp_path, capsys):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("the user's")
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["synth", str(folder), "--n", "2", "--quiet"])
+    assert exit_info.value.code == 2 and "--overwrite" in capsys.readouterr().err
+    assert [p.name for p in folder.iterdir()] == ["notes.txt"] and (folder / "notes.txt").read_text() == "the user's"
+
+    # An earlier bank is replaced whole, not mixed with the new one (its manifest would have been lost).
+    bank = tmp_path / "bank"
+    assert cli.main(["synth", str(bank), "--n", "2", "--quiet"]) == 0
+    assert cli.main(["synth", str(bank), "--n", "2", "--mix", "features", "--quiet"]) == 0
+    manifest = json.loads((bank / "bank.json").read_text())
+    assert manifest["mix"] == "features"
+    assert sorted(p.name for p in bank.iterdir()) == sorted(["bank.json", *(m["file"] for m in manifest["materials"])])
+    assert not any(p.name.startswith(".") for p in tmp_path.iterdir())  # no staging folder left behind
+
+    (bank / "notes.txt").write_text("added by the user")  # no longer only the bank's files
+    with pytest.raises(SystemExit):
+        cli.main(["synth", str(bank), "--n", "2", "--quiet"])
+    assert (bank / "notes.txt").exists() and json.loads((bank / "bank.json").read_text())["mix"] == "features"
+    assert cli.main(["synth", str(bank), "--n", "2", "--quiet", "--overwrite"]) == 0
+    assert not (bank / "notes.txt").exists()
+
+
 def test_synth_command_rejects_bad_n(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         cli.main(["synth", str(tmp_path / "bank"), "--n", "0", "--quiet"])

@@ -52,7 +52,8 @@ def _torch_version() -> str:
 def _synth(args: argparse.Namespace) -> int:
     from .data.synth import write_bank
 
-    paths = write_bank(args.out_dir, n=args.n, seed=args.seed, mix=args.mix, progress=not args.quiet)
+    paths = write_bank(args.out_dir, n=args.n, seed=args.seed, mix=args.mix, overwrite=args.overwrite,
+                       progress=not args.quiet)
     print(f"wrote {len(paths)} MERL files to {args.out_dir}")
     return 0
 
@@ -242,14 +243,19 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print the report as JSON")
     info.set_defaults(run=_info)
 
+    from .data.synth import MIXES
+
     synth = commands.add_parser("synth", help="write the default bank of analytic materials as MERL files")
-    synth.add_argument("out_dir", help="folder to write to (created)")
+    synth.add_argument("out_dir", help="folder to write: a new or empty one, or an earlier bank, which is replaced "
+                       "whole")
     synth.add_argument("--n", type=int, default=100, help="number of materials (default 100)")
     synth.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    synth.add_argument("--mix", choices=("default", "features"), default="default",
+    synth.add_argument("--mix", choices=tuple(MIXES), default="default",
                        help="default: paints, plastics, metals, fabrics, clear coats; features: what real "
                             "measurements show beyond those (car-paint flakes, retro-reflection, thin films, "
                             "sheen, coats over saturated bases)")
+    synth.add_argument("--overwrite", action="store_true",
+                       help="replace out_dir even if it holds other files (they are deleted)")
     synth.add_argument("--quiet", action="store_true", help="no progress bar")
     synth.set_defaults(run=_synth)
 

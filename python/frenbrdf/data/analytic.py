@@ -244,9 +244,15 @@ def _check_range(name: str, field: str, value: float, low: float, high: float) -
 # --- Lobes ---------------------------------------------------------------------------
 
 
+def _facets(g: Geometry, alpha: float, cos_h: np.ndarray | None = None) -> np.ndarray:
+    """D · G₂ / (4 μ_i μ_o): a GGX lobe without its Fresnel factor, about the half vector whose
+    cosine is ``cos_h`` (default: the ordinary one, ``g.cos_h``)."""
+    return ggx_d(g.cos_h if cos_h is None else cos_h, alpha) * ggx_visibility(g.cos_i, g.cos_o, alpha)
+
+
 def _ggx_lobe(g: Geometry, alpha: float, n, k) -> np.ndarray:
     """F · D · G₂ / (4 μ_i μ_o) for a GGX interface of index ``n + i k``."""
-    return fresnel(g.cos_d, n, k) * ggx_d(g.cos_h, alpha) * ggx_visibility(g.cos_i, g.cos_o, alpha)
+    return fresnel(g.cos_d, n, k) * _facets(g, alpha)
 
 
 def _sheen_lobe(g: Geometry, r: float) -> np.ndarray:
@@ -256,15 +262,13 @@ def _sheen_lobe(g: Geometry, r: float) -> np.ndarray:
     return d / (4.0 * (g.cos_i + g.cos_o - g.cos_i * g.cos_o))
 
 
-def _retro_lobe(g: Geometry, alpha: float, cos_h: np.ndarray | None = None) -> np.ndarray:
-    """D(θ_back) · G₂ / (4 μ_i μ_o): a GGX lobe around ``ω_o = ω_i`` (white, F = 1).
+def _retro_lobe(g: Geometry, alpha: float) -> np.ndarray:
+    """A white (F = 1) GGX lobe about the back half vector: it peaks at ``ω_o = ω_i``.
 
-    ``cos_h`` defaults to :attr:`Geometry.cos_back`; the albedo tables pass the ordinary
-    half vector instead: turning ``ω_o`` by π about the normal keeps ``μ_o`` and ``dω_o``,
-    so the retro lobe reflects exactly what this mirror-side lobe does.
+    Turning ``ω_o`` by π about the normal keeps ``μ_o`` and ``dω_o``, so it reflects exactly what
+    ``_facets(g, alpha)``, its mirror-side twin, does: the albedo tables integrate that one.
     """
-    cos_h = g.cos_back if cos_h is None else cos_h
-    return ggx_d(cos_h, alpha) * ggx_visibility(g.cos_i, g.cos_o, alpha)
+    return _facets(g, alpha, g.cos_back)
 
 
 def _metal_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
@@ -290,13 +294,12 @@ def _top_lobes(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
 def _coat_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     if not m.film_thickness:
         return _ggx_lobe(g, m.coat_roughness, m.coat_ior, 0.0)
-    f = thin_film_fresnel(g.cos_d, m.film_ior, m.film_thickness, m.coat_ior)
-    return f * ggx_d(g.cos_h, m.coat_roughness) * ggx_visibility(g.cos_i, g.cos_o, m.coat_roughness)
+    return thin_film_fresnel(g.cos_d, m.film_ior, m.film_thickness, m.coat_ior) * _facets(g, m.coat_roughness)
 
 
 @dataclass(frozen=True)
 class _Albedos:
-    top: Albedo | None  # the dielectric base's specular + sheen lobes
+    top: Albedo | None  # the dielectric base's specular, sheen and retro lobes
     coat: Albedo | None
 
 
@@ -308,8 +311,8 @@ def _albedos(m: AnalyticMaterial) -> _Albedos:
         alpha = m.roughness if m.specular > 0 else None  # follow the narrower lobe
         top = directional_albedo(lambda g: _top_lobes(m, g), alpha)
     if any(m.retro):
-        retro = directional_albedo(lambda g: np.asarray(m.retro) * _retro_lobe(g, m.retro_roughness, g.cos_h),
-                                   m.retro_roughness, RETRO_QUADRATURE_NODES)
+        retro = directional_albedo(lambda g: np.asarray(m.retro) * _facets(g, m.retro_roughness), m.retro_roughness,
+                                   RETRO_QUADRATURE_NODES)  # the retro lobe's mirror-side twin (_retro_lobe)
         top = retro if top is None else top + retro
     if top is not None and top.values.max() > 1.0:
         raise ValueError(f"{m.name}: the specular, sheen and retro lobes together reflect more light than "

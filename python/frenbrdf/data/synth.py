@@ -27,12 +27,14 @@ from __future__ import annotations
 import colorsys
 import json
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
 
 from ..io.atomic import write_text
 from ..io.merl import write_merl
+from ..io.paths import check_output_folder, replace_folder, staging_folder
 from .analytic import (
     METALS,
     MIN_ROUGHNESS,
@@ -252,19 +254,23 @@ def material_bank(n: int = 100, seed: int = 0, mix: str = "default") -> list[Ana
 
 
 def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: str = "default",
-               progress: bool = True) -> list[Path]:
+               overwrite: bool = False, progress: bool = True) -> list[Path]:
     """Writes :func:`material_bank` ``(n, seed, mix)`` as MERL files and a manifest.
 
-    Each material becomes ``out_dir / f"{name}.binary"``; ``out_dir / "bank.json"`` then
-    records ``n``, ``seed`` and every material's parameters. The manifest is written
-    last, so its presence means the bank is complete. All files are written atomically.
+    Each material becomes ``out_dir / f"{name}.binary"``; ``out_dir / "bank.json"`` records
+    ``n``, ``seed``, ``mix`` and every material's parameters. The bank is written into a hidden
+    folder beside ``out_dir`` and put in place whole (:func:`frenbrdf.io.paths.replace_folder`):
+    an earlier bank there (its manifest and only its files) is replaced, never mixed with this
+    one; any other non-empty folder is refused unless ``overwrite``.
 
     Parameters
     ----------
     out_dir
-        Destination folder, created if needed.
+        Destination folder: new, empty, or an earlier bank.
     n, seed, mix
         Passed to :func:`material_bank`.
+    overwrite
+        Replace ``out_dir`` even if it holds files that are not an earlier bank's (they are deleted).
     progress
         Show a progress bar.
 
@@ -276,18 +282,30 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: 
     Raises
     ------
     ValueError
-        ``n < 1``, or an unknown ``mix``.
+        ``n < 1``, an unknown ``mix``, or an ``out_dir`` that holds other files (without ``overwrite``).
     """
     from tqdm import tqdm
 
     bank = material_bank(n, seed, mix)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for material in tqdm(bank, desc="synthesising BRDFs", unit="material", disable=not progress):
-        path = out_dir / f"{material.name}.binary"
-        write_merl(path, merl_table(material))
-        paths.append(path)
-    manifest = {"n": n, "seed": seed, "mix": mix, "materials": [{"file": p.name, **m.to_dict()} for p, m in zip(paths, bank)]}
-    write_text(out_dir / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
-    return paths
+    out_dir = check_output_folder(out_dir, written_by=MANIFEST_NAME, owned=_bank_files(Path(out_dir)),
+                                  overwrite=overwrite, option="out_dir")
+    staging = staging_folder(out_dir)
+    try:
+        for material in tqdm(bank, desc="synthesising BRDFs", unit="material", disable=not progress):
+            write_merl(staging / f"{material.name}.binary", merl_table(material))
+        manifest = {"n": n, "seed": seed, "mix": mix,
+                    "materials": [{"file": f"{m.name}.binary", **m.to_dict()} for m in bank]}
+        write_text(staging / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    replace_folder(staging, out_dir)
+    return [out_dir / f"{m.name}.binary" for m in bank]
+
+
+def _bank_files(folder: Path) -> tuple[str, ...]:
+    """The files an earlier bank's manifest in ``folder`` lists (none if there is no readable one)."""
+    try:
+        return tuple(entry["file"] for entry in json.loads((folder / MANIFEST_NAME).read_text())["materials"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return ()
