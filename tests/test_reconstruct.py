@@ -48,6 +48,19 @@ def test_refinement_lowers_the_sample_loss(model, material):
     assert np.all(np.isfinite(result.nbrdf(material.wi, material.wo)))
 
 
+def test_cosine_schedule_starts_at_the_rate_then_decays(model, material):
+    def z_after(steps, schedule):
+        config = RefineConfig(latent_steps=steps, latent_lr=0.05, schedule=schedule)
+        return reconstruct(model, material.values, (material.wi, material.wo), refine=config)
+
+    np.testing.assert_array_equal(z_after(1, "cosine").z, z_after(1, "constant").z)  # the first step: the same rate
+    cosine, constant = z_after(20, "cosine"), z_after(20, "constant")
+    assert not np.allclose(cosine.z, constant.z)
+    assert cosine.losses["latent"] < cosine.losses["encode"]
+    with pytest.raises(ValueError, match="schedule must be one of"):
+        RefineConfig(schedule="linear")
+
+
 def test_no_refinement_is_the_encoder(model, material):
     result = model.reconstruct(material.values, (material.wi, material.wo), refine="none")
     z = model.encode(material.values, (material.wi, material.wo))

@@ -77,16 +77,20 @@ def measure(model, path: Path, points, samples: int, seed: int, scene: Scene) ->
 def refine_chart(run_dir, out_dir, *, ood: str | None = None, samples: int = 4000, latent_steps=(25, 100, 400),
                  full_latent_steps: int = 100, weight_steps=(100, 300, 1000, 3000), fit_epochs=(1, 3, 10),
                  max_materials: int = 0, resolution: int = 128, seed: int = 0, name: str = "chart8_refine",
-                 progress: bool = True) -> dict:
-    """Measures chart 8 and writes it; returns what ``<name>.json`` holds."""
+                 progress: bool = True, points=None, data: str | None = None, draw_chart=None) -> dict:
+    """Measures chart 8 and writes it; returns what ``<name>.json`` holds.
+
+    ``points`` ((family, label, config) per point) replaces the ones the step counts make; ``data``
+    is the run's data folder where it has moved since training; ``draw_chart(rows, path)`` replaces
+    :func:`draw`."""
     run = Run(run_dir)
     model = run.model()
-    files = {path.stem: path for path in list_materials(run.data)}
+    files = {path.stem: path for path in list_materials(data or run.data)}
     sets = {"test split": [files[n] for n in sorted(run.split.test)]}
     if ood:
         sets["other folder"] = list_materials(ood)
     sets = {label: paths[: max_materials or None] for label, paths in sets.items()}
-    points = settings(latent_steps, full_latent_steps, weight_steps, fit_epochs)
+    points = points or settings(latent_steps, full_latent_steps, weight_steps, fit_epochs)
     scene = Scene(resolution=resolution)
     # One untimed pass first: the first call pays for caches and thread pools, not for refinement.
     measure(model, next(iter(sets.values()))[0], [("full", "warm-up", RefineConfig(latent_steps=2, weight_steps=2))],
@@ -104,7 +108,7 @@ def refine_chart(run_dir, out_dir, *, ood: str | None = None, samples: int = 400
     report = {"run": run_metadata(), "model": str(run.path), "method": run.method, "samples": samples,
               "sets": {label: [p.stem for p in paths] for label, paths in sets.items()},
               "resolution": resolution, "seed": seed, "points": rows, "materials": details}
-    save_chart(out_dir, name, rows, report, lambda path: draw(rows, path))
+    save_chart(out_dir, name, rows, report, lambda path: (draw_chart or draw)(rows, path))
     return report
 
 
@@ -141,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-materials", type=int, default=0)
     parser.add_argument("--resolution", type=int, default=128)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "charts"))
+    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[2] / "docs" / "charts"))
     parser.add_argument("--name", default="chart8_refine")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)

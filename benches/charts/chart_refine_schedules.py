@@ -1,0 +1,85 @@
+"""Chart 8c: the refinement stages' learning rates, schedules and latent steps, at a fixed cost.
+
+    OMP_NUM_THREADS=1 python benches/charts/chart_refine_schedules.py --run RUN --ood RGL_FITS \\
+        --max-materials 8 --name chart8c_refine_schedules
+
+Each point of :data:`POINTS` is one :class:`~frenbrdf.models.reconstruct.RefineConfig`, measured as
+chart 8 measures (:func:`chart_refine.refine_chart`: 4000 samples, renders against the true table,
+CPU seconds of one thread). The named budgets of ``frenbrdf.models.reconstruct.BUDGETS`` are chosen
+from them by a rule written before measuring (docs/charts/README.md, chart 8c), on the ``--ood``
+materials: never on the four real measurements that judge the result.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from frenbrdf.models.reconstruct import RefineConfig
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
+from chart_refine import refine_chart  # noqa: E402
+from common import pyplot, save_figure  # noqa: E402
+
+#: (family, label, config): the budgets until chart 8c first, then the candidates.
+POINTS = [
+    ("latent", "L100 const 1e-2", RefineConfig(latent_steps=100)),
+    ("latent", "L100 cos 3e-2", RefineConfig(latent_steps=100, latent_lr=3e-2, schedule="cosine")),
+    ("latent", "L100 cos 1e-1", RefineConfig(latent_steps=100, latent_lr=1e-1, schedule="cosine")),
+    ("latent", "L200 cos 3e-2", RefineConfig(latent_steps=200, latent_lr=3e-2, schedule="cosine")),
+    ("latent", "L400 const 1e-2", RefineConfig(latent_steps=400)),
+    ("full", "L100+W1000 const 1e-3", RefineConfig(latent_steps=100, weight_steps=1000)),
+    ("full", "L100+W1000 const 3e-3", RefineConfig(latent_steps=100, weight_steps=1000, weight_lr=3e-3)),
+    ("full", "L100+W1000 cos 3e-3", RefineConfig(latent_steps=100, weight_steps=1000, weight_lr=3e-3,
+                                                 schedule="cosine")),
+    ("full", "L100+W1000 cos 1e-2", RefineConfig(latent_steps=100, weight_steps=1000, weight_lr=1e-2,
+                                                 schedule="cosine")),
+    ("full", "L100+W1000 cos 3e-2/3e-3", RefineConfig(latent_steps=100, latent_lr=3e-2, weight_steps=1000,
+                                                      weight_lr=3e-3, schedule="cosine")),
+]
+
+
+def draw(rows: list[dict], path: Path) -> None:
+    """PSNR and ΔE of every point, one panel per family, a bar per set."""
+    plt = pyplot()
+    sets = list(dict.fromkeys(r["set"] for r in rows))
+    figure, axes = plt.subplots(2, 2, figsize=(12, 6.5))
+    for column, family in enumerate(("latent", "full")):
+        labels = list(dict.fromkeys(r["budget"] for r in rows if r["family"] == family))
+        for row, (metric, name) in enumerate((("psnr", "render PSNR (dB) ↑"), ("delta_e", "ΔE ↓"))):
+            axis = axes[row, column]
+            width = 0.8 / len(sets)
+            for k, set_label in enumerate(sets):
+                chosen = {r["budget"]: r for r in rows if r["set"] == set_label and r["family"] == family}
+                axis.bar([i + k * width for i in range(len(labels))], [chosen[b][metric] for b in labels], width,
+                         label=set_label)
+            axis.set_xticks([i + 0.4 - width / 2 for i in range(len(labels))], labels, rotation=20, fontsize=7)
+            axis.set_ylabel(name)
+            axis.set_ylim(bottom=min(r[metric] for r in rows if r["family"] == family) * 0.9)
+            axis.set_title(family, fontsize=9)
+            axis.grid(alpha=0.3, axis="y")
+    axes[0, 0].legend(fontsize=7)
+    figure.suptitle("Chart 8c: refinement schedules at a fixed cost", fontsize=10)
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--run", required=True, help="training run folder")
+    parser.add_argument("--data", help="the run's data folder, where it has moved since training")
+    parser.add_argument("--ood", required=True, help="folder of MERL files the run never trained on")
+    parser.add_argument("--max-materials", type=int, default=8)
+    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[2] / "docs" / "charts"))
+    parser.add_argument("--name", default="chart8c_refine_schedules")
+    parser.add_argument("--quiet", action="store_true")
+    args = parser.parse_args(argv)
+    refine_chart(args.run, args.out, ood=args.ood, max_materials=args.max_materials, name=args.name,
+                 progress=not args.quiet, points=POINTS, data=args.data, draw_chart=draw)
+    print(f"wrote {Path(args.out) / args.name}.png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
