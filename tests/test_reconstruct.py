@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -15,6 +16,7 @@ from frenbrdf.models import pretrained
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
 
 from .conftest import bench_module, tiny
+from .io.test_bsdf_native import flat_material, tensor_file
 
 
 @pytest.fixture(scope="module")
@@ -235,6 +237,31 @@ def test_chart_8_runs_on_a_tiny_run(run_dir, tmp_path):
                                                        resolution=32, progress=False)
     assert {row["family"] for row in report["points"]} == {"encoder", "latent", "full"}
     assert all((tmp_path / f"chart8_refine.{suffix}").exists() for suffix in ("png", "csv", "json"))
+
+
+@pytest.mark.slow
+def test_chart_8c_measures_every_schedule(run_dir, tmp_path):
+    schedules = bench_module("chart_refine_schedules")
+    points = [(family, label, dataclasses.replace(config, latent_steps=min(config.latent_steps, 2),
+                                                  weight_steps=min(config.weight_steps, 2)))
+              for family, label, config in schedules.POINTS]
+    report = bench_module("chart_refine").refine_chart(run_dir, tmp_path, max_materials=1, resolution=32,
+                                                       progress=False, points=points, draw_chart=schedules.draw,
+                                                       name="chart8c")
+    assert [row["budget"] for row in report["points"]] == [label for _, label, _ in schedules.POINTS]
+    assert all((tmp_path / f"chart8c.{suffix}").exists() for suffix in ("png", "csv", "json"))
+
+
+def test_real_measurement_study_runs_on_a_bsdf(run_dir, tmp_path):
+    measurement = tmp_path / "flat_rgb.bsdf"
+    measurement.write_bytes(tensor_file(flat_material()))
+    study = bench_module("real_measurements")
+    assert study.main([str(measurement), "--model", str(run_dir), "--samples", "300", "--resolution", "16",
+                       "--fit-epochs", "0", "--out", str(tmp_path / "out")]) == 0
+    report = json.loads((tmp_path / "out" / "real.json").read_text())
+    rows = report["materials"]["flat_rgb"]
+    assert set(rows) == {"encoder", "latent", "full"}
+    assert all(np.isfinite(row["psnr"]) and 0 < row["seconds"] < 60 for row in rows.values())
 
 
 @pytest.mark.slow  # trains, evaluates and packs: about 40 s on a shared 2-core machine

@@ -20,6 +20,7 @@ from frenbrdf.models.reconstruct import RefineConfig
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from chart_refine import refine_chart  # noqa: E402
+
 from common import pyplot, save_figure  # noqa: E402
 
 #: (family, label, config): the budgets until chart 8c first, then the candidates.
