@@ -16,7 +16,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from frenbrdf.models.reconstruct import RefineConfig
+from frenbrdf.models.reconstruct import BUDGETS, RefineConfig
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from chart_refine import refine_chart  # noqa: E402
@@ -40,13 +40,17 @@ POINTS = [
                                                       weight_lr=3e-3, schedule="cosine")),
 ]
 
+#: ``--points budgets``: the encoder and the named budgets as they are now (to compare trained runs).
+NAMED_BUDGETS = [("encoder", "none", BUDGETS["none"]), ("latent", "latent", BUDGETS["latent"]),
+                 ("full", "full", BUDGETS["full"])]
+
 
 def draw(rows: list[dict], path: Path) -> None:
     """PSNR and ΔE of every point, one panel per family, a bar per set."""
     plt = pyplot()
     sets = list(dict.fromkeys(r["set"] for r in rows))
     figure, axes = plt.subplots(2, 2, figsize=(12, 6.5))
-    for column, family in enumerate(("latent", "full")):
+    for column, family in enumerate(("latent", "full")):  # the encoder's row, where measured, is in the CSV
         labels = list(dict.fromkeys(r["budget"] for r in rows if r["family"] == family))
         for row, (metric, name) in enumerate((("psnr", "render PSNR (dB) ↑"), ("delta_e", "ΔE ↓"))):
             axis = axes[row, column]
@@ -70,14 +74,18 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--run", required=True, help="training run folder")
     parser.add_argument("--data", help="the run's data folder, where it has moved since training")
-    parser.add_argument("--ood", required=True, help="folder of MERL files the run never trained on")
+    parser.add_argument("--ood", help="folder of MERL files the run never trained on (besides its test split)")
+    parser.add_argument("--points", choices=("schedules", "budgets"), default="schedules",
+                        help="schedules: chart 8c's candidates (POINTS); budgets: the encoder and today's named "
+                        "budgets, to compare trained runs")
     parser.add_argument("--max-materials", type=int, default=8)
     parser.add_argument("--out", default=str(Path(__file__).resolve().parents[2] / "docs" / "charts"))
     parser.add_argument("--name", default="chart8c_refine_schedules")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
     refine_chart(args.run, args.out, ood=args.ood, max_materials=args.max_materials, name=args.name,
-                 progress=not args.quiet, points=POINTS, data=args.data, draw_chart=draw)
+                 progress=not args.quiet, points=POINTS if args.points == "schedules" else NAMED_BUDGETS,
+                 data=args.data, draw_chart=draw)
     print(f"wrote {Path(args.out) / args.name}.png")
     return 0
 

@@ -371,7 +371,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
-                     "space, for editing), full (then the NBRDF's weights; the default: chart 8)")
+                     "space, for editing), full (then the NBRDF's weights; the default: charts 8–8c)")
     rec.add_argument("--seed", type=int, default=0, help="seeds the sampling and the refinement (default 0)")
     rec.add_argument("--json", action="store_true", help="print the report as JSON")
     rec.add_argument("--quiet", action="store_true", help="no progress bars")
