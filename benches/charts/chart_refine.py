@@ -133,26 +133,32 @@ def draw(rows: list[dict], path: Path) -> None:
     save_figure(figure, path)
 
 
+def add_run_arguments(parser: argparse.ArgumentParser, *, name: str, max_materials: int) -> None:
+    """The arguments every refinement chart takes: the run, where its data is, the materials, the output."""
+    parser.add_argument("--run", required=True, help="training run folder")
+    parser.add_argument("--data", help="the run's data folder, where it has moved since training")
+    parser.add_argument("--ood", help="folder of MERL files unlike the training set (all of them are used)")
+    parser.add_argument("--max-materials", type=int, default=max_materials, help="the first N of each set (0: all)")
+    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[2] / "docs" / "charts"))
+    parser.add_argument("--name", default=name)
+    parser.add_argument("--quiet", action="store_true")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--run", required=True, help="training run folder")
-    parser.add_argument("--ood", help="folder of MERL files unlike the training set (all of them are used)")
+    add_run_arguments(parser, name="chart8_refine", max_materials=0)
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--latent-steps", type=int, nargs="+", default=[25, 100, 400])
     parser.add_argument("--full-latent-steps", type=int, default=100)
     parser.add_argument("--weight-steps", type=int, nargs="+", default=[100, 300, 1000, 3000])
     parser.add_argument("--fit-epochs", type=int, nargs="*", default=[1, 3, 10])
-    parser.add_argument("--max-materials", type=int, default=0)
     parser.add_argument("--resolution", type=int, default=128)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[2] / "docs" / "charts"))
-    parser.add_argument("--name", default="chart8_refine")
-    parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
     refine_chart(args.run, args.out, ood=args.ood, samples=args.samples, latent_steps=args.latent_steps,
                  full_latent_steps=args.full_latent_steps, weight_steps=args.weight_steps,
                  fit_epochs=args.fit_epochs, max_materials=args.max_materials, resolution=args.resolution,
-                 seed=args.seed, name=args.name, progress=not args.quiet)
+                 seed=args.seed, name=args.name, progress=not args.quiet, data=args.data)
     print(f"wrote {Path(args.out) / args.name}.png")
     return 0
 

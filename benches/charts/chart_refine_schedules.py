@@ -19,7 +19,7 @@ from pathlib import Path
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from chart_refine import refine_chart  # noqa: E402
+from chart_refine import add_run_arguments, refine_chart  # noqa: E402
 
 from common import pyplot, save_figure  # noqa: E402
 
@@ -72,16 +72,10 @@ def draw(rows: list[dict], path: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--run", required=True, help="training run folder")
-    parser.add_argument("--data", help="the run's data folder, where it has moved since training")
-    parser.add_argument("--ood", help="folder of MERL files the run never trained on (besides its test split)")
+    add_run_arguments(parser, name="chart8c_refine_schedules", max_materials=8)
     parser.add_argument("--points", choices=("schedules", "budgets"), default="schedules",
                         help="schedules: chart 8c's candidates (POINTS); budgets: the encoder and today's named "
                         "budgets, to compare trained runs")
-    parser.add_argument("--max-materials", type=int, default=8)
-    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[2] / "docs" / "charts"))
-    parser.add_argument("--name", default="chart8c_refine_schedules")
-    parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
     refine_chart(args.run, args.out, ood=args.ood, max_materials=args.max_materials, name=args.name,
                  progress=not args.quiet, points=POINTS if args.points == "schedules" else NAMED_BUDGETS,

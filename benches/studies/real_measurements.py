@@ -40,13 +40,17 @@ from common import pyplot, run_metadata, save_figure  # noqa: E402
 COLUMNS = ("published fit", "fit-nbrdf", "encoder", "latent", "full")
 
 
-def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, scene: Scene, fit_epochs: int):
-    """The rows and images of one measurement."""
+def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, scene: Scene, fit_epochs: int,
+            warm_up: bool = False):
+    """The rows and images of one measurement (``warm_up``: one untimed refinement first: the first calls
+    pay for thread pools and caches, not for refinement)."""
     truth = read_truth(path)
     table = truth.table()
     truth_image = tonemap(render_linear(truth, scene))
     mask = material_mask(scene)
     bins = sample_bins(table, np.random.default_rng(seed), samples)
+    if warm_up:
+        refined_reconstruction(model, table, bins[:100], Scene(resolution=8), RefineConfig(latent_steps=2, weight_steps=2))
     images, rows = {"truth": truth_image}, {}
     published = fits / f"{path.stem}.h5" if fits else None
     if published is not None and published.exists():
@@ -91,13 +95,9 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results, grid = {}, []
-    # One untimed pass first: the first calls pay for thread pools and caches, not for refinement.
-    warm = read_truth(Path(args.measurements[0])).table()
-    refined_reconstruction(model, warm, sample_bins(warm, np.random.default_rng(0), 100), Scene(resolution=8),
-                           RefineConfig(latent_steps=2, weight_steps=2))
-    for path in tqdm([Path(p) for p in args.measurements], desc="measurements"):
+    for index, path in enumerate(tqdm([Path(p) for p in args.measurements], desc="measurements")):
         rows, images = measure(path, model, Path(args.fits) if args.fits else None, samples=args.samples,
-                               seed=args.seed, scene=scene, fit_epochs=args.fit_epochs)
+                               seed=args.seed, scene=scene, fit_epochs=args.fit_epochs, warm_up=index == 0)
         results[path.stem] = rows
         grid.append((path.stem, images))
     means = {column: {key: float(np.mean(values)) for key in ("psnr", "delta_e", "seconds")
