@@ -29,7 +29,7 @@ from frenbrdf.data.fitting import FitConfig, fit_nbrdf
 from frenbrdf.data.materials import load_material_file
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.io.measured import read_truth
-from frenbrdf.material.outputs import load_model
+from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import RefineConfig, refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins

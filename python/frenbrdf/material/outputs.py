@@ -36,7 +36,7 @@ from ..data.fitting import save_nbrdf
 from ..io.atomic import save_json
 from ..io.merl import write_merl
 from ..io.paths import check_output_folder, replace_folder, staging_folder
-from ..models.autoencoder import Model
+from ..models.autoencoder import Model, load_model
 from ..models.reconstruct import Reconstruction, refine_config
 from ..render.renderer import Scene, material_mask, render, save_png
 from .measurements import Measurements, read_measurements
@@ -44,17 +44,6 @@ from .measurements import Measurements, read_measurements
 #: The file names of the result folder.
 FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.png", "truth": "truth.png",
          "comparison": "comparison.png", "spectrum": "spectrum.png", "report": "reconstruction.json"}
-
-
-def load_model(model: str | os.PathLike) -> Model:
-    """``"pretrained"`` (the packaged model, :meth:`Model.pretrained`), a run folder or a checkpoint file."""
-    if str(model) == "pretrained":
-        return Model.pretrained()
-    path = Path(model)
-    if not path.exists():
-        raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file "
-                                "or 'pretrained')")
-    return Model.load(path)
 
 
 def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",

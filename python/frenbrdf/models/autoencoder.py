@@ -49,8 +49,10 @@ class ModelConfig:
 
         from .encoder import SAMPLE_SIZE
 
-        latent = self.encoder.latent
-        return mlp([SAMPLE_SIZE, *self.encoder.hidden, latent]) + sum(
+        latent, encoder = self.encoder.latent, self.encoder
+        encoder_size = (mlp([SAMPLE_SIZE, *encoder.hidden]) + mlp([encoder.hidden[-1], *encoder.pooled, latent])
+                        if encoder.pooled else mlp([SAMPLE_SIZE, *encoder.hidden, latent]))
+        return encoder_size + sum(
             mlp([latent, *self.decoder.hidden, math.prod(shape)]) for shape in self.nbrdf.shapes())
 
     @classmethod
@@ -176,12 +178,14 @@ class Model:
         """
         mapped, coords, _ = mapped_samples(self.mapping, values, directions)
         samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
+        encoder = self.network.encoder
         if len(samples) <= ENCODE_CHUNK:
-            return self.network.encoder(samples[None])[0].numpy().astype(np.float64)
-        # The encoder is a per-sample MLP and a mean: a large set (all 1.1 million bins of a
+            return encoder(samples[None])[0].numpy().astype(np.float64)
+        # The encoder is a per-sample MLP, a mean and ρ: a large set (all 1.1 million bins of a
         # table) goes through in chunks, which bounds memory and runs several times faster.
-        total = sum(len(chunk) * self.network.encoder(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK))
-        return (total / len(samples)).numpy()
+        total = sum(len(chunk) * encoder.pooled_features(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK))
+        mean = total / len(samples)  # float64: a mean of up to a million codes; ρ then runs in float32
+        return encoder.after_pool(mean.float()[None])[0].double().numpy() if self.config.encoder.pooled else mean.numpy()
 
     @torch.no_grad()
     def decode(self, z) -> NBRDF:
@@ -203,6 +207,17 @@ class Model:
         from .reconstruct import reconstruct
 
         return reconstruct(self, values, directions, refine=refine)
+
+
+def load_model(model: str | os.PathLike) -> Model:
+    """``"pretrained"`` (the packaged model, :meth:`Model.pretrained`), a run folder or a checkpoint file."""
+    if str(model) == "pretrained":
+        return Model.pretrained()
+    path = Path(model)
+    if not path.exists():
+        raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file "
+                                "or 'pretrained')")
+    return Model.load(path)
 
 
 def interpolate(z_a, z_b, t, *, extrapolate: bool = False) -> np.ndarray:

@@ -1,4 +1,10 @@
-"""The set encoder: DeepSets over (mapped RGB, H, D) samples, mean pooled into a latent."""
+"""The set encoder: DeepSets over (mapped RGB, H, D) samples, mean pooled into a latent.
+
+DeepSets is z = ρ(mean φ(sample)). The paper's encoder (the default) has no ρ: z is the mean of
+per-sample codes, a linear functional of the samples' distribution. ``EncoderConfig.pooled`` gives it
+a ρ, an MLP after the mean, so that z can depend non-linearly on what the samples show together
+(docs/measurements.md measures what that does to the encoder's gap on real materials).
+"""
 
 from __future__ import annotations
 
@@ -32,13 +38,19 @@ class EncoderConfig:
     """Size of the latent z."""
     dropout: float = 0.0
     """Dropout probability after each hidden layer of the per-sample MLP while training (0: none)."""
+    pooled: tuple[int, ...] = ()
+    """Hidden widths of DeepSets' ρ, an MLP from the mean of the last hidden layer's features to the latent;
+    () (the paper's encoder): no ρ, the per-sample MLP ends in the latent and z is the mean of its outputs."""
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
-        if min(self.hidden, default=1) < 1 or self.latent < 1 or max((*self.hidden, self.latent)) > MAX_WIDTH \
-                or len(self.hidden) > MAX_LAYERS:
-            raise ValueError(f"encoder sizes must lie in 1 … {MAX_WIDTH} (at most {MAX_LAYERS} hidden layers), got "
-                             f"hidden={self.hidden}, latent={self.latent}")
+        self.pooled = tuple(int(h) for h in self.pooled)
+        widths = (*self.hidden, *self.pooled, self.latent)
+        if min(widths) < 1 or max(widths) > MAX_WIDTH or max(len(self.hidden), len(self.pooled)) > MAX_LAYERS:
+            raise ValueError(f"encoder sizes must lie in 1 … {MAX_WIDTH} (at most {MAX_LAYERS} hidden layers each), got "
+                             f"hidden={self.hidden}, pooled={self.pooled}, latent={self.latent}")
+        if self.pooled and not self.hidden:
+            raise ValueError("an encoder with a ρ (pooled) needs hidden layers: ρ reads the mean of the last one")
         if not 0.0 <= self.dropout < 1.0:
             raise ValueError(f"encoder dropout must lie in [0, 1), got {self.dropout}")
 
@@ -48,7 +60,16 @@ class SetEncoder(nn.Module):
 
     def __init__(self, config: EncoderConfig):
         super().__init__()
-        self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent], config.dropout)
+        if config.pooled:  # φ ends in a ReLU; its mean goes through ρ
+            self.per_sample = nn.Sequential(mlp([SAMPLE_SIZE, *config.hidden], config.dropout), nn.ReLU())
+            self.after_pool = mlp([config.hidden[-1], *config.pooled, config.latent])
+        else:  # the paper's encoder: the same state-dict keys as ever
+            self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent], config.dropout)
+            self.after_pool = nn.Identity()
+
+    def pooled_features(self, samples: torch.Tensor) -> torch.Tensor:
+        """The mean over the samples of the per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads."""
+        return self.per_sample(samples).mean(dim=-2)
 
     def forward(self, samples: torch.Tensor) -> torch.Tensor:
-        return self.per_sample(samples).mean(dim=-2)
+        return self.after_pool(self.pooled_features(samples))

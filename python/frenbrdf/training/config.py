@@ -132,6 +132,10 @@ class TrainConfig:
     """What picks ``best.pt`` (and stops early): ``"loss"``, the lowest validation reconstruction loss
     (every epoch), or ``"psnr"``, the highest validation render PSNR (needs ``render_every``). With
     ``render_every`` the other rule's pick is kept too, as ``best-loss.pt`` or ``best-psnr.pt``."""
+    decoder_from: str = ""
+    """A trained model whose decoder and mapping this run takes over, frozen, so that only the encoder trains:
+    a run folder, a checkpoint or ``"pretrained"`` (docs/usage.md, "A new encoder for a trained decoder").
+    Its latent size, decoder and NBRDF must be this config's. Empty: the whole autoencoder trains."""
     device: str = "cpu"
     """``"cpu"``, ``"cuda"`` or ``"auto"``."""
     cache_dir: str = ""

@@ -27,7 +27,7 @@ from ..data.folders import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
 from ..io import checkpoints
 from ..io.atomic import save_json
-from ..models.autoencoder import AutoEncoder, Model
+from ..models.autoencoder import AutoEncoder, Model, load_model
 from ..models.losses import FrequencyLoss
 from ..presets import SELECTION_RULES
 from ..render.scoring import ScoringSet
@@ -92,7 +92,10 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     if batch_size % ranks.world:
         raise ValueError(f"a batch of {batch_size} materials does not split evenly across {ranks.world} ranks; "
                          "choose batch_materials divisible by the number of ranks")
-    data = prepare(cfg, split, files, ranks, data_cache)  # reads every file: bad data fails here
+    source = load_model(cfg.decoder_from) if cfg.decoder_from else None
+    if source is not None:
+        check_decoder_source(cfg, source)
+    data = prepare(cfg, split, files, ranks, data_cache, mapping=source and source.mapping)  # bad data fails here
     if ranks.main:
         run_dir.mkdir(parents=True, exist_ok=True)
         if not resume:  # overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's)
@@ -103,7 +106,11 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
         checkpoints.save_mapping(run_dir, data.mapping.state())
 
     torch.manual_seed(cfg.seed)
-    network = AutoEncoder(cfg.model).to(device)
+    network = AutoEncoder(cfg.model)
+    if source is not None:  # the trained decoder, frozen: only the encoder learns
+        network.decoder.load_state_dict(source.network.decoder.state_dict())
+        network.decoder.requires_grad_(False)
+    network = network.to(device)
     frequency = FrequencyLoss(cfg.loss.frequency, data.mapping).to(device) if data.truth is not None else None
     optimizer = make_optimizer(network, cfg)
     drawer = BatchDrawer(cfg, data, with_truth=cfg.loss.eta > 0)
@@ -207,10 +214,23 @@ def render_validation(network, data: PreparedData, cfg: TrainConfig, materials: 
 
 
 def make_optimizer(network: torch.nn.Module, cfg: TrainConfig) -> torch.optim.Optimizer:
-    """Adam, or AdamW (decoupled weight decay) with ``cfg.weight_decay > 0``."""
+    """Adam, or AdamW (decoupled weight decay) with ``cfg.weight_decay > 0``, over the parameters that train
+    (a frozen decoder's do not)."""
+    trained = [p for p in network.parameters() if p.requires_grad]
     if cfg.weight_decay > 0:
-        return torch.optim.AdamW(network.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    return torch.optim.Adam(network.parameters(), lr=cfg.lr)
+        return torch.optim.AdamW(trained, lr=cfg.lr, weight_decay=cfg.weight_decay)
+    return torch.optim.Adam(trained, lr=cfg.lr)
+
+
+def check_decoder_source(cfg: TrainConfig, source: Model):
+    """That the model ``cfg.decoder_from`` names has the decoder, NBRDF, latent size and mapping ``cfg`` asks for."""
+    ours, theirs = to_dict(cfg.model), to_dict(source.config)
+    differ = [name for name in ("decoder", "nbrdf", "mapping") if ours[name] != theirs[name]]
+    if ours["encoder"]["latent"] != theirs["encoder"]["latent"]:
+        differ.append("encoder.latent")
+    if differ:
+        raise ValueError(f"decoder_from {cfg.decoder_from!r}: its model config differs from this run's in "
+                         f"{', '.join(differ)}; give this run its model config (only the encoder may differ)")
 
 
 def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Path) -> Split:

@@ -95,20 +95,22 @@ def file_hash(path: Path) -> str:
 
 
 def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distributed = Distributed(),
-            data_cache: dict | None = None) -> PreparedData:
-    """Reads the materials, builds the mapping from the training split, and the true coefficients.
+            data_cache: dict | None = None, mapping: LogRelativeMapping | None = None) -> PreparedData:
+    """Reads the materials, builds the mapping from the training split (unless ``mapping`` is given: a
+    trained decoder's), and the true coefficients.
 
     With ``data_cache`` (a dict the caller keeps), the mapping and the mapped bank are kept
     in it under the files, split and mapping settings, and later runs that share those
     reuse them instead of reading the materials again.
     """
     names = list(split.train) + list(split.val)
-    key = json.dumps([[str(files[n]) for n in names], len(split.train), dataclasses.asdict(cfg.model.mapping)])
+    key = json.dumps([[str(files[n]) for n in names], len(split.train), dataclasses.asdict(cfg.model.mapping),
+                      cfg.decoder_from])
     if data_cache is not None and key in data_cache:
         mapping, bank = data_cache[key]
     else:
         tables = read_tables([files[n] for n in names], progress=cfg.progress and ranks.main)
-        mapping = LogRelativeMapping.from_tables(tables[:len(split.train)], cfg.model.mapping)
+        mapping = mapping or LogRelativeMapping.from_tables(tables[:len(split.train)], cfg.model.mapping)
         bank = mapped_bank(names, tables, mapping)
         del tables
         if data_cache is not None:

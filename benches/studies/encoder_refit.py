@@ -1,0 +1,170 @@
+"""Encoders for one decoder: how close each lands to a material no training saw, measured and fitted.
+
+    python benches/studies/encoder_refit.py --models pretrained local/refit/rho-s0 local/refit/rho-s1 \\
+        --labels v2 rho/0 rho/1 --measurements ../shared/data/rgl-measured/*.bsdf \\
+        --tables local/v2/test/*.binary --draws 0 1 2 --out docs/results/encoder-refit
+
+Every model encodes every material from ``--samples`` random valid MERL bins of each draw (the same
+bins for every model), then refines the latent on them (``latent``: today's budget); each result is
+rendered and compared with the render of the truth (a ``.bsdf`` measurement itself, or a table). A
+label ``NAME/SEED`` puts runs of one variant together: the report gives each variant's mean over its
+runs, the spread between its runs, and the difference from the first model (the baseline) per
+material, with a 95 % t-interval over the materials. Writes ``refit.json``, ``refit.md`` and
+``refit.png`` (the measurements, draw 0: truth, then each variant's first run, encoder only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from frenbrdf import Model
+from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.io.measured import as_table, is_bsdf, read_truth
+from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.study.statistics import paired_interval
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
+from common import pyplot, run_metadata, save_figure  # noqa: E402
+
+BUDGETS = ("none", "latent")
+METRICS = ("psnr", "delta_e")
+
+
+def open_model(spec: str) -> Model:
+    """'pretrained', a run folder or checkpoint, or a packed model's folder (card.json beside model.pt)."""
+    return Model.pretrained(spec) if (Path(spec) / "card.json").exists() else load_model(spec)
+
+
+def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene):
+    """Rows ``{model, material, group, draw, budget, psnr, delta_e}`` and the draw-0 encoder images."""
+    mask, rows, images = material_mask(scene), [], defaultdict(dict)
+    for path in tqdm(paths, desc="materials"):
+        truth = read_truth(path)
+        table, truth_image = as_table(truth), tonemap(render_linear(truth, scene))
+        group = "measured" if is_bsdf(path) else "tables"
+        images[path.stem]["truth"] = truth_image
+        for draw in draws:
+            bins = sample_bins(table, np.random.default_rng(draw), samples)
+            for label, model in models.items():
+                for budget in BUDGETS:
+                    config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
+                    _, image, _ = refined_reconstruction(model, table, bins, scene, config)
+                    metrics = image_metrics(truth_image, image, mask)
+                    rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
+                                 "budget": budget, **{key: metrics[key] for key in METRICS}})
+                    if draw == draws[0] and budget == "none" and group == "measured":
+                        images[path.stem][label] = image
+    return rows, images
+
+
+def variant(label: str) -> str:
+    return label.split("/")[0]
+
+
+def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]]) -> dict:
+    """Per group of materials, budget and variant: the mean and the spread over its runs, and the per-material
+    difference from the baseline with its interval."""
+    def mean_of(selected, key):
+        return float(np.mean([r[key] for r in selected]))
+
+    out = {}
+    for group, materials in groups.items():
+        for budget in BUDGETS:
+            chosen = [r for r in rows if r["budget"] == budget and r["material"] in materials]
+            for name in dict.fromkeys(variant(r["model"]) for r in chosen):
+                mine = [r for r in chosen if variant(r["model"]) == name]
+                runs = sorted({r["model"] for r in mine})
+                entry = {"runs": runs}
+                for key in METRICS:
+                    per_run = [mean_of([r for r in mine if r["model"] == run], key) for run in runs]
+                    entry[key] = float(np.mean(per_run))
+                    entry[f"{key}_run_sd"] = float(np.std(per_run, ddof=1)) if len(per_run) > 1 else None
+                    if name != baseline:
+                        base = [r for r in chosen if r["model"] == baseline]
+                        differences = [mean_of([r for r in mine if r["material"] == m], key)
+                                       - mean_of([r for r in base if r["material"] == m], key) for m in materials]
+                        entry[f"{key}_change"] = paired_interval(differences)
+                per_material = {m: mean_of([r for r in mine if r["material"] == m], "psnr") for m in materials}
+                entry["worst_material"] = min(per_material, key=per_material.get)
+                entry["max_delta_e"] = max(mean_of([r for r in mine if r["material"] == m], "delta_e")
+                                           for m in materials)
+                out.setdefault(group, {}).setdefault(budget, {})[name] = entry
+    return out
+
+
+def markdown(summary: dict) -> str:
+    lines = ["PSNR dB / ΔE: each variant's mean over its runs (sd between runs); change: per-material difference from "
+             "the baseline, mean [95 % interval over the materials].", ""]
+    for group, budgets in summary.items():
+        for budget, variants in budgets.items():
+            lines += [f"**{group}, {'encoder only' if budget == 'none' else budget}**", "",
+                      "| variant | runs | PSNR | ΔE | ΔE max | PSNR change | ΔE change |", "|---|---|---|---|---|---|---|"]
+            for name, e in variants.items():
+                def spread(key):
+                    return f" ({e[f'{key}_run_sd']:.2f})" if e[f"{key}_run_sd"] is not None else ""
+
+                def change(key):
+                    c = e.get(f"{key}_change")
+                    if c is None:
+                        return "–"
+                    interval = f" [{c['low']:+.2f}, {c['high']:+.2f}]" if c["low"] is not None else ""
+                    return f"{c['mean']:+.2f}{interval}"
+                lines.append(f"| {name} | {len(e['runs'])} | {e['psnr']:.2f}{spread('psnr')} | "
+                             f"{e['delta_e']:.2f}{spread('delta_e')} | {e['max_delta_e']:.2f} | {change('psnr')} | "
+                             f"{change('delta_e')} |")
+            lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--models", nargs="+", required=True, help="the baseline first")
+    parser.add_argument("--labels", nargs="+", required=True, help="one per model; NAME/SEED groups runs")
+    parser.add_argument("--measurements", nargs="*", default=[], help=".bsdf files")
+    parser.add_argument("--tables", nargs="*", default=[], help="MERL files (e.g. a test split)")
+    parser.add_argument("--draws", type=int, nargs="+", default=[0])
+    parser.add_argument("--samples", type=int, default=4000)
+    parser.add_argument("--resolution", type=int, default=256)
+    parser.add_argument("--out", required=True, help="folder for refit.json, refit.md, refit.png")
+    args = parser.parse_args(argv)
+    if len(args.models) != len(args.labels):
+        parser.error("give one label per model")
+    models = {label: open_model(spec) for label, spec in zip(args.labels, args.models)}
+    measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
+    rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution))
+    groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
+    summary = summarise(rows, variant(args.labels[0]), groups)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    save_json(out / "refit.json", {"run": run_metadata(), "models": dict(zip(args.labels, args.models)),
+                                   "draws": args.draws, "samples": args.samples, "summary": summary, "rows": rows})
+    write_text(out / "refit.md", markdown(summary))
+    if measured:
+        columns = ["truth"] + [next(label for label in models if variant(label) == name)
+                               for name in dict.fromkeys(map(variant, models))]
+        plt = pyplot()
+        figure, axes = plt.subplots(len(measured), len(columns), figsize=(2 * len(columns), 2 * len(measured)),
+                                    squeeze=False)
+        for row, path in zip(axes, measured):
+            for axis, column in zip(row, columns):
+                axis.imshow(images[path.stem][column])
+                axis.set_xticks([]), axis.set_yticks([])
+                axis.set_title(column if column == "truth" else f"{variant(column)} encoder", fontsize=7)
+            row[0].set_ylabel(path.stem, fontsize=7)
+        save_figure(figure, out / "refit.png")
+    print(markdown(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

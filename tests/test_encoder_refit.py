@@ -1,0 +1,77 @@
+"""An encoder with DeepSets' ρ (``EncoderConfig.pooled``) and a run that trains only an encoder for a trained,
+frozen decoder (``TrainConfig.decoder_from``)."""
+
+import numpy as np
+import pytest
+import torch
+
+import frenbrdf
+from frenbrdf.models.autoencoder import AutoEncoder, ModelConfig
+from frenbrdf.models.encoder import EncoderConfig, SetEncoder
+from frenbrdf.training import train
+
+from .conftest import tiny
+
+
+def test_a_pooled_encoder_is_order_invariant_and_not_a_mean_of_codes():
+    torch.manual_seed(0)
+    encoder = SetEncoder(EncoderConfig(hidden=(16, 16), latent=4, pooled=(8,)))
+    samples = torch.cat([torch.randn(2, 25, 9) + 3, torch.randn(2, 25, 9) - 3], dim=1)  # two unlike halves
+    z = encoder(samples)
+    assert z.shape == (2, 4)
+    torch.testing.assert_close(encoder(samples[:, torch.randperm(50)]), z)
+    # Without ρ, z of a set is the mean of the codes of its halves; with ρ it is not.
+    halves = (encoder(samples[:, :25]) + encoder(samples[:, 25:])) / 2
+    assert not torch.allclose(halves, z, atol=1e-3)
+    plain = SetEncoder(EncoderConfig(hidden=(16, 16), latent=4))
+    torch.testing.assert_close((plain(samples[:, :25]) + plain(samples[:, 25:])) / 2, plain(samples))
+
+
+def test_the_paper_encoder_keeps_its_state_dict_keys_and_parameter_count():
+    config = ModelConfig()
+    keys = [k for k in AutoEncoder(config).state_dict() if k.startswith("encoder.")]
+    assert keys == [f"encoder.per_sample.{i}.{p}" for i in (0, 2, 4, 6) for p in ("weight", "bias")]
+    pooled = ModelConfig(encoder=EncoderConfig(pooled=(128,)))
+    for cfg in (config, pooled):
+        assert cfg.n_parameters == sum(p.numel() for p in AutoEncoder(cfg).parameters())
+
+
+@pytest.mark.parametrize("bad", [dict(pooled=(0,)), dict(pooled=(8,), hidden=()), dict(pooled=(8,) * 17)])
+def test_bad_pooled_encoder_configs_are_refused_by_name(bad):
+    with pytest.raises(ValueError, match="pooled|ρ"):
+        EncoderConfig(**bad)
+
+
+def test_encoding_a_large_set_in_chunks_equals_encoding_it_whole(toy_materials, tmp_path, monkeypatch):
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1)
+    cfg.model.encoder.pooled = (16,)
+    model = frenbrdf.Model.load(train(cfg).path)
+    rng = np.random.default_rng(0)
+    wi, wo = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in np.abs(rng.normal(size=(2, 3000, 3))))
+    values = rng.uniform(0.01, 1.0, (3000, 3))
+    whole = model.encode(values, (wi, wo))
+    monkeypatch.setattr("frenbrdf.models.autoencoder.ENCODE_CHUNK", 700)
+    np.testing.assert_allclose(model.encode(values, (wi, wo)), whole, rtol=1e-5, atol=1e-6)
+
+
+def test_an_encoder_trained_for_a_frozen_decoder_keeps_that_decoder_and_mapping(toy_materials, tmp_path):
+    source = train(tiny("frenbrdf", toy_materials, tmp_path / "source", epochs=2))
+    cfg = tiny("frenbrdf", toy_materials, tmp_path / "refit", epochs=6, decoder_from=str(source.path))
+    cfg.model.encoder.pooled = (16,)
+    refit = train(cfg)
+    old, new = frenbrdf.Model.load(source.path), frenbrdf.Model.load(refit.path)
+    for name, weight in old.network.decoder.state_dict().items():
+        torch.testing.assert_close(new.network.decoder.state_dict()[name], weight)
+    np.testing.assert_array_equal(new.mapping.state()["reference"], old.mapping.state()["reference"])
+    untrained, best = refit.history[0], refit.best  # epoch −1: the new encoder before any step
+    assert best["val_rec"] < untrained["val_rec"] - 1e-3  # the encoder learned
+    assert new.config.encoder.pooled == (16,)
+
+
+def test_a_decoder_of_another_shape_is_refused_before_training(toy_materials, tmp_path):
+    source = train(tiny("nbrdf", toy_materials, tmp_path / "source", epochs=1))
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "refit", decoder_from=str(source.path))
+    cfg.model.nbrdf.hidden = (8, 8)
+    with pytest.raises(ValueError, match="differs from this run's in nbrdf"):
+        train(cfg)
+    assert not (tmp_path / "refit" / "config.json").exists()
