@@ -75,3 +75,23 @@ def test_a_decoder_of_another_shape_is_refused_before_training(toy_materials, tm
     with pytest.raises(ValueError, match="differs from this run's in nbrdf"):
         train(cfg)
     assert not (tmp_path / "refit" / "config.json").exists()
+
+
+def test_a_fine_tune_starts_where_its_source_ended_and_trains_everything(toy_materials, tmp_path):
+    source = train(tiny("frenbrdf", toy_materials, tmp_path / "source", epochs=2))
+    tuned = train(tiny("frenbrdf", toy_materials, tmp_path / "tuned", epochs=2, init_from=str(source.path)))
+    assert tuned.history[0]["val_rec"] == pytest.approx(source.best["val_rec"], rel=1e-6)  # before its first step
+    old, new = frenbrdf.Model.load(source.path), frenbrdf.Model.load(tuned.path)
+    np.testing.assert_array_equal(new.mapping.state()["reference"], old.mapping.state()["reference"])
+    changed = [not torch.equal(new.network.decoder.state_dict()[k], w) for k, w in old.network.decoder.state_dict().items()]
+    assert any(changed)
+
+
+def test_init_from_needs_the_same_model_and_excludes_decoder_from(toy_materials, tmp_path):
+    source = train(tiny("nbrdf", toy_materials, tmp_path / "source", epochs=1))
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "tuned", init_from=str(source.path))
+    cfg.model.encoder.pooled = (8,)
+    with pytest.raises(ValueError, match="init_from .* differs from this run's in encoder"):
+        train(cfg)
+    with pytest.raises(ValueError, match="not both"):
+        tiny("nbrdf", toy_materials, tmp_path / "both", init_from="pretrained", decoder_from="pretrained")

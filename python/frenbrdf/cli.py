@@ -81,7 +81,7 @@ def _train(args: argparse.Namespace) -> int:
         out = str(Path(args.out) / f"seed-{seed}") if args.seeds is not None else args.out
         overrides = {"method": args.method, "data": args.data, "out": out, "epochs": args.epochs, "seed": seed,
                      "device": args.device, "holdout": args.holdout, "render_every": args.render_every,
-                     "select": args.select, "decoder_from": args.decoder_from}
+                     "select": args.select, "decoder_from": args.decoder_from, "init_from": args.init_from}
         if args.config:
             cfg = load_config(args.config, **overrides)
         else:
@@ -293,6 +293,8 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))
     train.add_argument("--decoder-from", metavar="MODEL", help="train only an encoder, for the decoder and mapping "
                        "of this model (a run folder, a checkpoint or 'pretrained'), kept frozen")
+    train.add_argument("--init-from", metavar="MODEL", help="fine-tune: start from every weight and the mapping of "
+                       "this model (a run folder, a checkpoint or 'pretrained'; the same model config)")
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     train.add_argument("--overwrite", action="store_true", help="train into --out although it holds files (an "
                        "earlier run's files are replaced); without it a non-empty --out is refused")

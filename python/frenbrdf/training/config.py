@@ -136,6 +136,10 @@ class TrainConfig:
     """A trained model whose decoder and mapping this run takes over, frozen, so that only the encoder trains:
     a run folder, a checkpoint or ``"pretrained"`` (docs/usage.md, "A new encoder for a trained decoder").
     Its latent size, decoder and NBRDF must be this config's. Empty: the whole autoencoder trains."""
+    init_from: str = ""
+    """A trained model of this run's model config whose weights and mapping this run starts from (fine-tuning,
+    e.g. on data with new materials): a run folder, a checkpoint or ``"pretrained"``. Everything trains.
+    Empty: a fresh initialisation from ``seed``."""
     device: str = "cpu"
     """``"cpu"``, ``"cuda"`` or ``"auto"``."""
     cache_dir: str = ""
@@ -174,6 +178,8 @@ class TrainConfig:
             problems.append("select 'psnr' needs render_every > 0 (the validation renders it selects by)")
         elif self.select == "psnr" and 0 < self.patience < self.render_every:
             problems.append(f"patience ({self.patience}) must be ≥ render_every ({self.render_every}) with select 'psnr'")
+        if self.decoder_from and self.init_from:
+            problems.append("give decoder_from (a frozen decoder) or init_from (start from a whole model), not both")
         if self.device not in ("cpu", "cuda", "auto"):
             problems.append(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
         if problems:

@@ -92,9 +92,9 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     if batch_size % ranks.world:
         raise ValueError(f"a batch of {batch_size} materials does not split evenly across {ranks.world} ranks; "
                          "choose batch_materials divisible by the number of ranks")
-    source = load_model(cfg.decoder_from) if cfg.decoder_from else None
+    source = load_model(cfg.decoder_from or cfg.init_from) if cfg.decoder_from or cfg.init_from else None
     if source is not None:
-        check_decoder_source(cfg, source)
+        check_source(cfg, source)
     data = prepare(cfg, split, files, ranks, data_cache, mapping=source and source.mapping)  # bad data fails here
     if ranks.main:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -107,7 +107,9 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
 
     torch.manual_seed(cfg.seed)
     network = AutoEncoder(cfg.model)
-    if source is not None:  # the trained decoder, frozen: only the encoder learns
+    if cfg.init_from:  # fine-tuning: every weight starts where the source's ended
+        network.load_state_dict(source.network.state_dict())
+    elif cfg.decoder_from:  # the trained decoder, frozen: only the encoder learns
         network.decoder.load_state_dict(source.network.decoder.state_dict())
         network.decoder.requires_grad_(False)
     network = network.to(device)
@@ -222,15 +224,21 @@ def make_optimizer(network: torch.nn.Module, cfg: TrainConfig) -> torch.optim.Op
     return torch.optim.Adam(trained, lr=cfg.lr)
 
 
-def check_decoder_source(cfg: TrainConfig, source: Model):
-    """That the model ``cfg.decoder_from`` names has the decoder, NBRDF, latent size and mapping ``cfg`` asks for."""
+def check_source(cfg: TrainConfig, source: Model):
+    """That the model ``cfg.decoder_from`` or ``cfg.init_from`` names fits this run: for ``decoder_from`` the same
+    decoder, NBRDF, latent size and mapping (the encoder may differ), for ``init_from`` the same model config."""
     ours, theirs = to_dict(cfg.model), to_dict(source.config)
-    differ = [name for name in ("decoder", "nbrdf", "mapping") if ours[name] != theirs[name]]
-    if ours["encoder"]["latent"] != theirs["encoder"]["latent"]:
-        differ.append("encoder.latent")
+    if cfg.init_from:
+        differ = [name for name in ours if ours[name] != theirs[name]]
+    else:
+        differ = [name for name in ("decoder", "nbrdf", "mapping") if ours[name] != theirs[name]]
+        if ours["encoder"]["latent"] != theirs["encoder"]["latent"]:
+            differ.append("encoder.latent")
     if differ:
-        raise ValueError(f"decoder_from {cfg.decoder_from!r}: its model config differs from this run's in "
-                         f"{', '.join(differ)}; give this run its model config (only the encoder may differ)")
+        field, rule = (("init_from", "the same model config") if cfg.init_from else
+                       ("decoder_from", "its model config; only the encoder may differ"))
+        raise ValueError(f"{field} {getattr(cfg, field)!r}: its model config differs from this run's in "
+                         f"{', '.join(differ)}; give this run {rule}")
 
 
 def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Path) -> Split:

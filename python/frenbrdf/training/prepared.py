@@ -105,7 +105,7 @@ def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distr
     """
     names = list(split.train) + list(split.val)
     key = json.dumps([[str(files[n]) for n in names], len(split.train), dataclasses.asdict(cfg.model.mapping),
-                      cfg.decoder_from])
+                      cfg.decoder_from, cfg.init_from])
     if data_cache is not None and key in data_cache:
         mapping, bank = data_cache[key]
     else:
