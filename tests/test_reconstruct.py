@@ -264,6 +264,24 @@ def test_real_measurement_study_runs_on_a_bsdf(run_dir, tmp_path):
     assert all(np.isfinite(row["psnr"]) and 0 < row["seconds"] < 60 for row in rows.values())
 
 
+def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir, toy_materials, tmp_path):
+    measurement = tmp_path / "flat_rgb.bsdf"
+    measurement.write_bytes(tensor_file(flat_material()))
+    tables = sorted(toy_materials.glob("*.binary"))[:2]
+    study = bench_module("compare_models")
+    assert study.main(["--models", str(run_dir), str(run_dir), "--labels", "base", "same/0", "--measurements",
+                       str(measurement), "--tables", *map(str, tables), "--samples", "300", "--resolution", "16",
+                       "--trained-on", f"same/0={tables[0].stem}", "--out", str(tmp_path / "out")]) == 0
+    report = json.loads((tmp_path / "out" / "compare.json").read_text())
+    assert not [r for r in report["rows"] if r["model"] == "same/0" and r["material"] == tables[0].stem]
+    for budget in ("none", "latent"):  # the same model on the same samples: no change, and one table left out
+        same = report["summary"]["tables"][budget]["same"]
+        assert same["materials"] == 1 and same["psnr_change"]["mean"] == pytest.approx(0, abs=1e-9)
+        assert report["summary"]["measured"][budget]["same"]["delta_e_change"]["mean"] == pytest.approx(0, abs=1e-9)
+    with pytest.raises(SystemExit):
+        study.main(["--models", str(run_dir), "--labels", "base", "--trained-on", "other=x", "--out", str(tmp_path)])
+
+
 @pytest.mark.slow  # trains, evaluates and packs: about 40 s on a shared 2-core machine
 def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
     config = tmp_path / "tiny.json"

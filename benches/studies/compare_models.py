@@ -1,16 +1,18 @@
-"""Encoders for one decoder: how close each lands to a material no training saw, measured and fitted.
+"""Models compared on the same samples of materials no training saw: measurements and tables.
 
-    python benches/studies/encoder_refit.py --models pretrained local/refit/rho-s0 local/refit/rho-s1 \\
+    python benches/studies/compare_models.py --models pretrained local/refit/rho-s0 local/refit/rho-s1 \\
         --labels v2 rho/0 rho/1 --measurements ../shared/data/rgl-measured/*.bsdf \\
         --tables local/v2/test/*.binary --draws 0 1 2 --out docs/results/encoder-refit
 
 Every model encodes every material from ``--samples`` random valid MERL bins of each draw (the same
 bins for every model), then refines the latent on them (``latent``: today's budget); each result is
 rendered and compared with the render of the truth (a ``.bsdf`` measurement itself, or a table). A
-label ``NAME/SEED`` puts runs of one variant together: the report gives each variant's mean over its
+label ``NAME/RUN`` puts runs of one variant together: the report gives each variant's mean over its
 runs, the spread between its runs, and the difference from the first model (the baseline) per
-material, with a 95 % t-interval over the materials. Writes ``refit.json``, ``refit.md`` and
-``refit.png`` (the measurements, draw 0: truth, then each variant's first run, encoder only).
+material, with a 95 % t-interval over the materials. ``--trained-on LABEL=MATERIAL`` leaves out a
+material that model trained on (a fold of a cross-validation is then judged on its held-out materials
+only). Writes ``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth,
+then each variant's first run that was scored on it, encoder only).
 """
 
 from __future__ import annotations
@@ -45,8 +47,10 @@ def open_model(spec: str) -> Model:
     return Model.pretrained(spec) if (Path(spec) / "card.json").exists() else load_model(spec)
 
 
-def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene):
-    """Rows ``{model, material, group, draw, budget, psnr, delta_e}`` and the draw-0 encoder images."""
+def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene,
+          trained_on: set[tuple[str, str]]):
+    """Rows ``{model, material, group, draw, budget, psnr, delta_e}`` and the draw-0 encoder images; no row for a
+    ``(label, material)`` pair of ``trained_on``."""
     mask, rows, images = material_mask(scene), [], defaultdict(dict)
     for path in tqdm(paths, desc="materials"):
         truth = read_truth(path)
@@ -56,6 +60,8 @@ def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples
         for draw in draws:
             bins = sample_bins(table, np.random.default_rng(draw), samples)
             for label, model in models.items():
+                if (label, path.stem) in trained_on:
+                    continue
                 for budget in BUDGETS:
                     config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
                     _, image, _ = refined_reconstruction(model, table, bins, scene, config)
@@ -84,6 +90,7 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]]) -> 
             for name in dict.fromkeys(variant(r["model"]) for r in chosen):
                 mine = [r for r in chosen if variant(r["model"]) == name]
                 runs = sorted({r["model"] for r in mine})
+                scored = [m for m in materials if any(r["material"] == m for r in mine)]
                 entry = {"runs": runs}
                 for key in METRICS:
                     per_run = [mean_of([r for r in mine if r["model"] == run], key) for run in runs]
@@ -92,12 +99,13 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]]) -> 
                     if name != baseline:
                         base = [r for r in chosen if r["model"] == baseline]
                         differences = [mean_of([r for r in mine if r["material"] == m], key)
-                                       - mean_of([r for r in base if r["material"] == m], key) for m in materials]
+                                       - mean_of([r for r in base if r["material"] == m], key) for m in scored]
                         entry[f"{key}_change"] = paired_interval(differences)
-                per_material = {m: mean_of([r for r in mine if r["material"] == m], "psnr") for m in materials}
+                per_material = {m: mean_of([r for r in mine if r["material"] == m], "psnr") for m in scored}
+                entry["materials"] = len(scored)
                 entry["worst_material"] = min(per_material, key=per_material.get)
                 entry["max_delta_e"] = max(mean_of([r for r in mine if r["material"] == m], "delta_e")
-                                           for m in materials)
+                                           for m in scored)
                 out.setdefault(group, {}).setdefault(budget, {})[name] = entry
     return out
 
@@ -108,7 +116,8 @@ def markdown(summary: dict) -> str:
     for group, budgets in summary.items():
         for budget, variants in budgets.items():
             lines += [f"**{group}, {'encoder only' if budget == 'none' else budget}**", "",
-                      "| variant | runs | PSNR | ΔE | ΔE max | PSNR change | ΔE change |", "|---|---|---|---|---|---|---|"]
+                      "| variant | runs | materials | PSNR | ΔE | ΔE max | PSNR change | ΔE change |",
+                      "|---|---|---|---|---|---|---|---|"]
             for name, e in variants.items():
                 def spread(key):
                     return f" ({e[f'{key}_run_sd']:.2f})" if e[f"{key}_run_sd"] is not None else ""
@@ -119,7 +128,7 @@ def markdown(summary: dict) -> str:
                         return "–"
                     interval = f" [{c['low']:+.2f}, {c['high']:+.2f}]" if c["low"] is not None else ""
                     return f"{c['mean']:+.2f}{interval}"
-                lines.append(f"| {name} | {len(e['runs'])} | {e['psnr']:.2f}{spread('psnr')} | "
+                lines.append(f"| {name} | {len(e['runs'])} | {e['materials']} | {e['psnr']:.2f}{spread('psnr')} | "
                              f"{e['delta_e']:.2f}{spread('delta_e')} | {e['max_delta_e']:.2f} | {change('psnr')} | "
                              f"{change('delta_e')} |")
             lines.append("")
@@ -135,33 +144,41 @@ def main(argv=None) -> int:
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--resolution", type=int, default=256)
-    parser.add_argument("--out", required=True, help="folder for refit.json, refit.md, refit.png")
+    parser.add_argument("--trained-on", nargs="*", default=[], metavar="LABEL=MATERIAL",
+                        help="a material that model trained on: not scored for it")
+    parser.add_argument("--out", required=True, help="folder for compare.json, compare.md, compare.png")
     args = parser.parse_args(argv)
     if len(args.models) != len(args.labels):
         parser.error("give one label per model")
+    trained_on = {tuple(pair.split("=", 1)) for pair in args.trained_on}
+    if any(len(pair) != 2 or pair[0] not in args.labels for pair in trained_on):
+        parser.error("--trained-on takes LABEL=MATERIAL pairs with a LABEL of --labels")
     models = {label: open_model(spec) for label, spec in zip(args.labels, args.models)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
-    rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution))
+    rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
+                         trained_on)
     groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
     summary = summarise(rows, variant(args.labels[0]), groups)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    save_json(out / "refit.json", {"run": run_metadata(), "models": dict(zip(args.labels, args.models)),
+    save_json(out / "compare.json", {"run": run_metadata(), "models": dict(zip(args.labels, args.models)),
+                                     "trained_on": sorted(args.trained_on),
                                    "draws": args.draws, "samples": args.samples, "summary": summary, "rows": rows})
-    write_text(out / "refit.md", markdown(summary))
+    write_text(out / "compare.md", markdown(summary))
     if measured:
-        columns = ["truth"] + [next(label for label in models if variant(label) == name)
-                               for name in dict.fromkeys(map(variant, models))]
+        names = list(dict.fromkeys(map(variant, models)))
         plt = pyplot()
-        figure, axes = plt.subplots(len(measured), len(columns), figsize=(2 * len(columns), 2 * len(measured)),
+        figure, axes = plt.subplots(len(measured), len(names) + 1, figsize=(2 * len(names) + 2, 2 * len(measured)),
                                     squeeze=False)
         for row, path in zip(axes, measured):
-            for axis, column in zip(row, columns):
-                axis.imshow(images[path.stem][column])
+            shown = images[path.stem]  # the truth, then each variant's first run scored on this material
+            columns = ["truth"] + [next((label for label in shown if variant(label) == name), None) for name in names]
+            for axis, column, name in zip(row, columns, ["truth", *names]):
+                axis.imshow(shown[column] if column else np.zeros_like(shown["truth"]))
                 axis.set_xticks([]), axis.set_yticks([])
-                axis.set_title(column if column == "truth" else f"{variant(column)} encoder", fontsize=7)
+                axis.set_title(name if column in ("truth", None) else f"{column} encoder", fontsize=7)
             row[0].set_ylabel(path.stem, fontsize=7)
-        save_figure(figure, out / "refit.png")
+        save_figure(figure, out / "compare.png")
     print(markdown(summary))
     return 0
 
