@@ -95,7 +95,9 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]]) -> 
                 for key in METRICS:
                     per_run = [mean_of([r for r in mine if r["model"] == run], key) for run in runs]
                     entry[key] = float(np.mean(per_run))
-                    entry[f"{key}_run_sd"] = float(np.std(per_run, ddof=1)) if len(per_run) > 1 else None
+                    same_materials = len({frozenset(r["material"] for r in mine if r["model"] == run) for run in runs}) == 1
+                    entry[f"{key}_run_sd"] = (float(np.std(per_run, ddof=1)) if len(per_run) > 1 and same_materials
+                                              else None)  # runs judged on other materials (folds): no spread
                     if name != baseline:
                         base = [r for r in chosen if r["model"] == baseline]
                         differences = [mean_of([r for r in mine if r["material"] == m], key)
