@@ -109,7 +109,7 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
   {card['materials']['validation']} validation and {card['materials']['test']} held-out test materials
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
-  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.
+  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}
 - **Regenerate**: `bash benches/pretrained.sh` (the MERL fits, the RGL fits but the four measured
   materials of [measurements.md](measurements.md), the bank; then training and packing). These files
   were packed by `{card['command']}`.
@@ -129,6 +129,17 @@ With the latent refined on the same samples (`--refine latent`; `frenbrdf recons
 
 Real gonio-photometer measurements that no training saw: [measurements.md](measurements.md).
 """
+
+
+def encoders_text(card: dict) -> str:
+    """The card's line on an encoder mean (benches/encoder_mean.py), if the model has one."""
+    if "encoders" not in card:
+        return ""
+    members = ", ".join(f"`{m}`" for m in card["encoders"]["members"])
+    return (f"\n- **Encoders**: z is the mean of {len(card['encoders']['members']) + 1} encoders of this decoder: "
+            f"the training run's and {members}, each trained for the frozen decoder (`frenbrdf train "
+            f"--decoder-from`); why and the rule that chose it: [encoder-refit](results/encoder-refit/README.md). "
+            f"Packed by `{card['encoders']['command']}`.")
 
 
 def by_source_text(groups: dict) -> str:

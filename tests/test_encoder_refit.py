@@ -95,3 +95,31 @@ def test_init_from_needs_the_same_model_and_excludes_decoder_from(toy_materials,
         train(cfg)
     with pytest.raises(ValueError, match="not both"):
         tiny("nbrdf", toy_materials, tmp_path / "both", init_from="pretrained", decoder_from="pretrained")
+
+
+def test_an_encoder_mean_averages_its_members_and_packs_and_loads(toy_materials, tmp_path):
+    from frenbrdf.models import pretrained
+
+    from .conftest import bench_module
+
+    base_run = train(tiny("nbrdf", toy_materials, tmp_path / "base", epochs=1))
+    packed = tmp_path / "packed"
+    pretrained.pack_pretrained(base_run.path, packed, half=False)
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "member", epochs=1, decoder_from=str(packed))
+    cfg.model.encoder.pooled = (16,)
+    member = train(cfg)
+    checkpoint, mapping, _ = bench_module("encoder_mean").assemble(str(packed), [str(member.path)])
+    mean = frenbrdf.Model.from_checkpoint(checkpoint, mapping)
+    assert mean.config.extra_encoders[0].pooled == (16,)
+    rng = np.random.default_rng(1)
+    wi, wo = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in np.abs(rng.normal(size=(2, 500, 3))))
+    values = rng.uniform(0.01, 1.0, (500, 3))
+    parts = [frenbrdf.Model.load(base_run.path), frenbrdf.Model.load(member.path)]
+    expected = np.mean([m.encode(values, (wi, wo)) for m in parts], axis=0)
+    np.testing.assert_allclose(mean.encode(values, (wi, wo)), expected, rtol=1e-5, atol=1e-6)
+    pretrained.pack_checkpoint(checkpoint, mapping, tmp_path / "mean", half=False)
+    reloaded = frenbrdf.models.autoencoder.load_model(tmp_path / "mean")  # a packed folder loads like a run
+    np.testing.assert_allclose(reloaded.encode(values, (wi, wo)), expected, rtol=1e-5, atol=1e-6)
+    other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=3))  # another decoder
+    with pytest.raises(ValueError, match="not the base's"):
+        bench_module("encoder_mean").assemble(str(packed), [str(other.path)])

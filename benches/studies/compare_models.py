@@ -26,10 +26,9 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from frenbrdf import Model
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.io.measured import as_table, is_bsdf, read_truth
-from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.autoencoder import Model, load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
@@ -40,11 +39,6 @@ from common import pyplot, run_metadata, save_figure  # noqa: E402
 
 BUDGETS = ("none", "latent")
 METRICS = ("psnr", "delta_e")
-
-
-def open_model(spec: str) -> Model:
-    """'pretrained', a run folder or checkpoint, or a packed model's folder (card.json beside model.pt)."""
-    return Model.pretrained(spec) if (Path(spec) / "card.json").exists() else load_model(spec)
 
 
 def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene,
@@ -155,7 +149,7 @@ def main(argv=None) -> int:
     trained_on = {tuple(pair.split("=", 1)) for pair in args.trained_on}
     if any(len(pair) != 2 or pair[0] not in args.labels for pair in trained_on):
         parser.error("--trained-on takes LABEL=MATERIAL pairs with a LABEL of --labels")
-    models = {label: open_model(spec) for label, spec in zip(args.labels, args.models)}
+    models = {label: load_model(spec) for label, spec in zip(args.labels, args.models)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
                          trained_on)

@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from frenbrdf import Model
 from frenbrdf.data.fitting import FitConfig, fit_nbrdf
 from frenbrdf.data.materials import load_material_file
 from frenbrdf.io.atomic import save_json, write_text
@@ -89,8 +88,7 @@ def main(argv=None) -> int:
                         "make on a whole table); 0: no fit-nbrdf column")
     parser.add_argument("--out", required=True, help="folder for real.md, real.json, real.png")
     args = parser.parse_args(argv)
-    packed = Path(args.model) / "card.json"  # a packed model's folder, e.g. an earlier shipped version
-    model = Model.pretrained(packed.parent) if packed.exists() else load_model(args.model)
+    model = load_model(args.model)
     scene = Scene(resolution=args.resolution)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

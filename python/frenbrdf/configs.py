@@ -43,12 +43,14 @@ def from_dict(cls, data: dict, where: str = "config"):
 
 def checked_value(value, hint, where: str):
     """``value`` checked against a field's type (``int``, ``float``, ``str``, ``bool``, ``X | None``,
-    ``tuple[X, ...]``, ``tuple[X, Y]``); lists become tuples. A wrong type is a ValueError naming the setting:
+    ``tuple[X, ...]``, ``tuple[X, Y]``, a dataclass); lists become tuples. A wrong type is a ValueError naming the setting:
     ``"1"`` is not an integer, 1.5 is not an integer, ``true`` is not a number.
 
     A config read from a file meets here what the code assumes, before any work is done.
     """
     origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if dataclasses.is_dataclass(hint):  # e.g. an item of tuple[EncoderConfig, ...]
+        return value if isinstance(value, hint) else from_dict(hint, value, where)
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
             return None

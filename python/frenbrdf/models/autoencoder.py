@@ -14,7 +14,7 @@ from torch import nn
 
 from ..configs import from_dict
 from ..io import checkpoints
-from .encoder import EncoderConfig, SetEncoder
+from .encoder import EncoderConfig, EncoderMean, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .mapping import LogRelativeMapping, MappingConfig
 from .nbrdf import NBRDF, NBRDFConfig, mapped_samples
@@ -34,8 +34,15 @@ class ModelConfig:
     encoder: EncoderConfig = field(default_factory=EncoderConfig)
     decoder: DecoderConfig = field(default_factory=DecoderConfig)
     mapping: MappingConfig = field(default_factory=MappingConfig)
+    extra_encoders: tuple[EncoderConfig, ...] = ()
+    """More set encoders of the same latent space: z is then the mean of every encoder's latent
+    (:class:`~.encoder.EncoderMean`; ``benches/encoder_mean.py`` builds one from encoders trained for one decoder)."""
 
     def __post_init__(self):
+        self.extra_encoders = tuple(self.extra_encoders)
+        if any(extra.latent != self.encoder.latent for extra in self.extra_encoders):
+            raise ValueError(f"extra encoders must have the latent size of the encoder ({self.encoder.latent}), got "
+                             f"{[extra.latent for extra in self.extra_encoders]}")
         if self.n_parameters > MAX_PARAMETERS:
             raise ValueError(f"this model config has {self.n_parameters:,} parameters, more than the {MAX_PARAMETERS:,} "
                              f"a model may have (encoder {self.encoder.hidden} → {self.encoder.latent}, decoder heads "
@@ -49,11 +56,19 @@ class ModelConfig:
 
         from .encoder import SAMPLE_SIZE
 
-        latent, encoder = self.encoder.latent, self.encoder
-        encoder_size = (mlp([SAMPLE_SIZE, *encoder.hidden]) + mlp([encoder.hidden[-1], *encoder.pooled, latent])
-                        if encoder.pooled else mlp([SAMPLE_SIZE, *encoder.hidden, latent]))
-        return encoder_size + sum(
+        latent = self.encoder.latent
+
+        def encoder_size(encoder: EncoderConfig) -> int:
+            return (mlp([SAMPLE_SIZE, *encoder.hidden]) + mlp([encoder.hidden[-1], *encoder.pooled, latent])
+                    if encoder.pooled else mlp([SAMPLE_SIZE, *encoder.hidden, latent]))
+
+        return sum(map(encoder_size, self.encoders)) + sum(
             mlp([latent, *self.decoder.hidden, math.prod(shape)]) for shape in self.nbrdf.shapes())
+
+    @property
+    def encoders(self) -> tuple[EncoderConfig, ...]:
+        """Every encoder's config, the first one's first."""
+        return (self.encoder, *self.extra_encoders)
 
     @classmethod
     def from_checkpoint(cls, checkpoint: dict) -> ModelConfig:
@@ -66,7 +81,7 @@ class AutoEncoder(nn.Module):
 
     def __init__(self, config: ModelConfig):
         super().__init__()
-        self.encoder = SetEncoder(config.encoder)
+        self.encoder = SetEncoder(config.encoder) if not config.extra_encoders else EncoderMean(config.encoders)
         self.decoder = HyperNetwork(config.encoder.latent, config.nbrdf.shapes(), config.decoder)
 
     def forward(self, samples: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor]]:
@@ -178,14 +193,11 @@ class Model:
         """
         mapped, coords, _ = mapped_samples(self.mapping, values, directions)
         samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
-        encoder = self.network.encoder
         if len(samples) <= ENCODE_CHUNK:
-            return encoder(samples[None])[0].numpy().astype(np.float64)
-        # The encoder is a per-sample MLP, a mean and ρ: a large set (all 1.1 million bins of a
-        # table) goes through in chunks, which bounds memory and runs several times faster.
-        total = sum(len(chunk) * encoder.pooled_features(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK))
-        mean = total / len(samples)  # float64: a mean of up to a million codes; ρ then runs in float32
-        return encoder.after_pool(mean.float()[None])[0].double().numpy() if self.config.encoder.pooled else mean.numpy()
+            return self.network.encoder(samples[None])[0].numpy().astype(np.float64)
+        encoder = self.network.encoder
+        members = encoder.members if isinstance(encoder, EncoderMean) else [encoder]
+        return np.mean([encode_in_chunks(member, samples) for member in members], axis=0)
 
     @torch.no_grad()
     def decode(self, z) -> NBRDF:
@@ -209,14 +221,28 @@ class Model:
         return reconstruct(self, values, directions, refine=refine)
 
 
+def encode_in_chunks(encoder: SetEncoder, samples: torch.Tensor) -> np.ndarray:
+    """The latent of a large sample set ``(N, 9)``: a set encoder is a per-sample MLP, a mean and ρ, so
+    the set (all 1.1 million bins of a table) goes through in chunks, which bounds memory and runs several
+    times faster."""
+    total = sum(len(chunk) * encoder.pooled_features(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK))
+    mean = total / len(samples)  # float64: a mean of up to a million codes; ρ then runs in float32
+    if isinstance(encoder.after_pool, nn.Identity):
+        return mean.numpy()
+    return encoder.after_pool(mean.float()[None])[0].double().numpy()
+
+
 def load_model(model: str | os.PathLike) -> Model:
-    """``"pretrained"`` (the packaged model, :meth:`Model.pretrained`), a run folder or a checkpoint file."""
+    """``"pretrained"`` (the packaged model, :meth:`Model.pretrained`), a packed model's folder (``card.json``
+    beside ``model.pt``), a run folder or a checkpoint file."""
     if str(model) == "pretrained":
         return Model.pretrained()
     path = Path(model)
     if not path.exists():
-        raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file "
-                                "or 'pretrained')")
+        raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file, a "
+                                "packed model's folder or 'pretrained')")
+    if path.is_dir() and (path / "card.json").is_file():
+        return Model.pretrained(path)
     return Model.load(path)
 
 

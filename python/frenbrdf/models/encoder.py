@@ -73,3 +73,18 @@ class SetEncoder(nn.Module):
 
     def forward(self, samples: torch.Tensor) -> torch.Tensor:
         return self.after_pool(self.pooled_features(samples))
+
+
+class EncoderMean(nn.Module):
+    """Several set encoders of one latent space; z is the mean of their latents.
+
+    Encoders trained for one decoder agree on the materials they trained near, and give an unseen
+    saturated one different hues, depending on their seed (docs/results/encoder-refit); their mean
+    depends on the seed less."""
+
+    def __init__(self, configs: list[EncoderConfig]):
+        super().__init__()
+        self.members = nn.ModuleList(SetEncoder(config) for config in configs)
+
+    def forward(self, samples: torch.Tensor) -> torch.Tensor:
+        return torch.stack([member(samples) for member in self.members]).mean(dim=0)

@@ -36,7 +36,7 @@ MODEL_FILE, MAPPING_FILE, CARD_FILE = "model.pt", "mapping.npz", "card.json"
 #: The format of the packed files that :func:`pack_pretrained` writes and :func:`load_packed` reads.
 FORMAT = 1
 #: The version of the shipped model (the card's ``version``; docs/pretrained.md states it).
-VERSION = "2"
+VERSION = "3"
 #: Quantisation levels of ln(f_ref + ε): 16 bits.
 LEVELS = 65535
 
@@ -88,10 +88,16 @@ def pack_pretrained(run_dir: str | os.PathLike, dest: str | os.PathLike | None =
     dict
         Bytes of each file written.
     """
-    run_dir = Path(run_dir)
+    checkpoint = checkpoints.load(Path(run_dir) / "best.pt")
+    mapping = checkpoints.load_mapping(Path(run_dir) / "best.pt", checkpoint)
+    return pack_checkpoint(checkpoint, mapping, dest, card=card, half=half)
+
+
+def pack_checkpoint(checkpoint: dict, mapping: dict, dest: str | os.PathLike | None = None, *,
+                    card: dict | None = None, half: bool = True) -> dict[str, int]:
+    """Packs a checkpoint (``method``, ``config``, ``model``) and its mapping's state: :func:`pack_pretrained`
+    without a run folder (e.g. a model assembled from others, ``benches/encoder_mean.py``)."""
     dest = Path(dest) if dest is not None else PACKAGE_DIR
-    checkpoint = checkpoints.load(run_dir / "best.pt")
-    mapping = checkpoints.load_mapping(run_dir / "best.pt", checkpoint)
     dtype = torch.float16 if half else torch.float32
     packed = {"format": FORMAT, "method": checkpoint["method"], "config": checkpoint["config"],
               "model": {name: value.to(dtype) for name, value in checkpoint["model"].items()}}
