@@ -12,7 +12,7 @@ runs, the spread between its runs, and the difference from the first model (the 
 material, with a 95 % t-interval over the materials. ``--trained-on LABEL=MATERIAL`` leaves out a
 material that model trained on (a fold of a cross-validation is then judged on its held-out materials
 only). Writes ``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth,
-then each variant's first run that was scored on it, encoder only).
+then each variant's first run that was scored on it, under the first of ``--budgets``).
 """
 
 from __future__ import annotations
@@ -38,11 +38,12 @@ sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve
 from common import pyplot, run_metadata, save_figure  # noqa: E402
 
 BUDGETS = ("none", "latent")
+"""The refinement budgets measured unless ``--budgets`` says others."""
 METRICS = ("psnr", "delta_e")
 
 
 def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene,
-          trained_on: set[tuple[str, str]]):
+          trained_on: set[tuple[str, str]], budgets=BUDGETS):
     """Rows ``{model, material, group, draw, budget, psnr, delta_e}`` and the draw-0 encoder images; no row for a
     ``(label, material)`` pair of ``trained_on``."""
     mask, rows, images = material_mask(scene), [], defaultdict(dict)
@@ -56,13 +57,13 @@ def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples
             for label, model in models.items():
                 if (label, path.stem) in trained_on:
                     continue
-                for budget in BUDGETS:
+                for budget in budgets:
                     config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
                     _, image, _ = refined_reconstruction(model, table, bins, scene, config)
                     metrics = image_metrics(truth_image, image, mask)
                     rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
                                  "budget": budget, **{key: metrics[key] for key in METRICS}})
-                    if draw == draws[0] and budget == "none" and group == "measured":
+                    if draw == draws[0] and budget == budgets[0] and group == "measured":
                         images[path.stem][label] = image
     return rows, images
 
@@ -71,7 +72,7 @@ def variant(label: str) -> str:
     return label.split("/")[0]
 
 
-def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]]) -> dict:
+def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], budgets=BUDGETS) -> dict:
     """Per group of materials, budget and variant: the mean and the spread over its runs, and the per-material
     difference from the baseline with its interval."""
     def mean_of(selected, key):
@@ -79,7 +80,7 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]]) -> 
 
     out = {}
     for group, materials in groups.items():
-        for budget in BUDGETS:
+        for budget in budgets:
             chosen = [r for r in rows if r["budget"] == budget and r["material"] in materials]
             for name in dict.fromkeys(variant(r["model"]) for r in chosen):
                 mine = [r for r in chosen if variant(r["model"]) == name]
@@ -138,6 +139,7 @@ def main(argv=None) -> int:
     parser.add_argument("--measurements", nargs="*", default=[], help=".bsdf files")
     parser.add_argument("--tables", nargs="*", default=[], help="MERL files (e.g. a test split)")
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
+    parser.add_argument("--budgets", nargs="+", default=list(BUDGETS), choices=("none", "latent", "full"))
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--resolution", type=int, default=256)
     parser.add_argument("--trained-on", nargs="*", default=[], metavar="LABEL=MATERIAL",
@@ -152,9 +154,9 @@ def main(argv=None) -> int:
     models = {label: load_model(spec) for label, spec in zip(args.labels, args.models)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
-                         trained_on)
+                         trained_on, args.budgets)
     groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
-    summary = summarise(rows, variant(args.labels[0]), groups)
+    summary = summarise(rows, variant(args.labels[0]), groups, args.budgets)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     save_json(out / "compare.json", {"run": run_metadata(), "models": dict(zip(args.labels, args.models)),
@@ -172,7 +174,7 @@ def main(argv=None) -> int:
             for axis, column, name in zip(row, columns, ["truth", *names]):
                 axis.imshow(shown[column] if column else np.zeros_like(shown["truth"]))
                 axis.set_xticks([]), axis.set_yticks([])
-                axis.set_title(name if column in ("truth", None) else f"{column} encoder", fontsize=7)
+                axis.set_title(name if column in ("truth", None) else f"{column}, {args.budgets[0]}", fontsize=7)
             row[0].set_ylabel(path.stem, fontsize=7)
         save_figure(figure, out / "compare.png")
     print(markdown(summary))
