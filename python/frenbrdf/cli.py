@@ -292,9 +292,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "(needs --render-every)")
     train.add_argument("--device", choices=("cpu", "cuda", "auto"))
     train.add_argument("--decoder-from", metavar="MODEL", help="train only an encoder, for the decoder and mapping "
-                       "of this model (a run folder, a checkpoint or 'pretrained'), kept frozen")
+                       "of this model (a run folder, a checkpoint, a packed model's folder or 'pretrained'), kept frozen")
     train.add_argument("--init-from", metavar="MODEL", help="fine-tune: start from every weight and the mapping of "
-                       "this model (a run folder, a checkpoint or 'pretrained'; the same model config)")
+                       "this model (a run folder, a checkpoint, a packed folder or 'pretrained'; the same model config)")
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     train.add_argument("--overwrite", action="store_true", help="train into --out although it holds files (an "
                        "earlier run's files are replaced); without it a non-empty --out is refused")

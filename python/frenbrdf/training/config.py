@@ -134,11 +134,13 @@ class TrainConfig:
     ``render_every`` the other rule's pick is kept too, as ``best-loss.pt`` or ``best-psnr.pt``."""
     decoder_from: str = ""
     """A trained model whose decoder and mapping this run takes over, frozen, so that only the encoder trains:
-    a run folder, a checkpoint or ``"pretrained"`` (docs/usage.md, "A new encoder for a trained decoder").
+    a run folder, a checkpoint, a packed model's folder or ``"pretrained"`` (docs/usage.md, "Starting from a
+    trained model").
     Its latent size, decoder and NBRDF must be this config's. Empty: the whole autoencoder trains."""
     init_from: str = ""
     """A trained model of this run's model config whose weights and mapping this run starts from (fine-tuning,
-    e.g. on data with new materials): a run folder, a checkpoint or ``"pretrained"``. Everything trains.
+    e.g. on data with new materials): a run folder, a checkpoint, a packed model's folder or ``"pretrained"``.
+    Everything trains.
     Empty: a fresh initialisation from ``seed``."""
     device: str = "cpu"
     """``"cpu"``, ``"cuda"`` or ``"auto"``."""

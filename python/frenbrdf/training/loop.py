@@ -92,7 +92,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     if batch_size % ranks.world:
         raise ValueError(f"a batch of {batch_size} materials does not split evenly across {ranks.world} ranks; "
                          "choose batch_materials divisible by the number of ranks")
-    source = load_model(cfg.decoder_from or cfg.init_from) if cfg.decoder_from or cfg.init_from else None
+    source_spec = cfg.decoder_from or cfg.init_from  # at most one of them (TrainConfig checks)
+    source = load_model(source_spec) if source_spec else None
     if source is not None:
         check_source(cfg, source)
     data = prepare(cfg, split, files, ranks, data_cache, mapping=source and source.mapping)  # bad data fails here
