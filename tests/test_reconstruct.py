@@ -50,6 +50,32 @@ def test_refinement_lowers_the_sample_loss(model, material):
     assert np.all(np.isfinite(result.nbrdf(material.wi, material.wo)))
 
 
+@pytest.mark.parametrize("kind", ["l1", "mse"])
+@pytest.mark.parametrize("penalty", ["per_tensor", "all"])
+@pytest.mark.parametrize("hidden", [(8,), (16, 12, 10)])
+def test_the_written_out_weight_gradient_is_autograds(kind, penalty, hidden):
+    from frenbrdf.models.losses import LossConfig, reconstruction_loss, weight_penalty
+    from frenbrdf.models.nbrdf import NBRDFConfig, nbrdf_forward
+    from frenbrdf.models.reconstruct import _Samples, weight_gradient
+
+    generator = torch.Generator().manual_seed(3)
+    params = [torch.randn(1, *shape, generator=generator, dtype=torch.float64) for shape in NBRDFConfig(hidden).shapes()]
+    batch = _Samples(torch.randn(1, 500, 6, generator=generator, dtype=torch.float64),
+                     torch.randn(1, 500, 3, generator=generator, dtype=torch.float64),
+                     torch.rand(1, 500, generator=generator, dtype=torch.float64))
+    loss = LossConfig(kind=kind, weight_penalty=penalty, lambda_weights=0.3)
+    value = weight_gradient(params, batch, loss)
+
+    leaves = [p.clone().requires_grad_(True) for p in params]
+    expected = reconstruction_loss(nbrdf_forward(leaves, batch.coords), batch.values, batch.cos_in, kind) \
+        + loss.lambda_weights * weight_penalty(leaves, penalty)
+    expected.backward()
+    assert float(value) == pytest.approx(float(expected), rel=1e-12)
+    for written, leaf in zip(params, leaves):
+        assert written.grad.shape == leaf.shape
+        torch.testing.assert_close(written.grad, leaf.grad, rtol=1e-10, atol=1e-12)
+
+
 def test_cosine_schedule_starts_at_the_rate_then_decays(model, material):
     def z_after(steps, schedule):
         config = RefineConfig(latent_steps=steps, latent_lr=0.05, schedule=schedule)
@@ -262,6 +288,20 @@ def test_real_measurement_study_runs_on_a_bsdf(run_dir, tmp_path):
     rows = report["materials"]["flat_rgb"]
     assert set(rows) == {"encoder", "latent", "full"}
     assert all(np.isfinite(row["psnr"]) and 0 < row["seconds"] < 60 for row in rows.values())
+
+
+def test_full_limits_study_measures_every_variant_and_the_table(run_dir, tmp_path):
+    measurement = tmp_path / "flat_rgb.bsdf"
+    measurement.write_bytes(tensor_file(flat_material()))
+    study = bench_module("full_limits")
+    assert study.main([str(measurement), "--model", str(run_dir), "--samples", "200", "400", "--weight-steps", "2",
+                       "5", "--draws", "0", "1", "--resolution", "16", "--out", str(tmp_path / "out")]) == 0
+    report = json.loads((tmp_path / "out" / "limits.json").read_text())
+    rows = report["materials"]["flat_rgb"]
+    assert set(rows) == {"table lookup", *(f"{n} samples, {k} weight steps" for n in (200, 400) for k in (2, 5))}
+    assert len(rows["table lookup"]) == 1 and all(len(v) == 2 for k, v in rows.items() if k != "table lookup")
+    assert all(np.isfinite(m["psnr"]) for v in rows.values() for m in v)
+    assert "| 200 samples, 2 weight steps |" in (tmp_path / "out" / "limits.md").read_text()
 
 
 def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir, toy_materials, tmp_path):

@@ -1,0 +1,101 @@
+"""What limits ``full`` on real measurements: the number of samples, or the number of weight steps?
+
+    OMP_NUM_THREADS=1 python benches/studies/full_limits.py ../shared/data/rgl-measured/*.bsdf \
+        --samples 4000 40000 --weight-steps 1000 3000 --draws 0 1 2 --out docs/results/full-limits
+
+For each measurement, sample draw, sample count and weight-step count: ``full`` (the named budget with
+only ``weight_steps`` changed; more samples than the budget's batch are drawn in random mini-batches),
+rendered and compared with the render of the measurement itself, as ``real_measurements.py`` does.
+Beside them, ``table lookup``: the measurement's own MERL table (whose bins every sample is drawn from)
+rendered by the metric renderer's table lookup, for scale. A diagnostic, not a choice of budget: the
+four measurements judge the budgets and never choose them. Writes ``limits.json`` and ``limits.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.io.measured import read_truth
+from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
+from common import run_metadata  # noqa: E402
+
+TABLE = "table lookup"
+
+
+def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps: list[int], draws: list[int]) -> dict:
+    """``{variant: [metrics of each draw]}`` for one measurement (the table lookup: one entry, no draw)."""
+    truth = read_truth(path)
+    table = truth.table()
+    truth_image = tonemap(render_linear(truth, scene))
+    mask = material_mask(scene)
+    rows = {TABLE: [image_metrics(truth_image, tonemap(render_linear(table, scene)), mask)]}
+    for count in samples:
+        for steps in weight_steps:
+            config = dataclasses.replace(refine_config("full"), weight_steps=steps)
+            for draw in draws:
+                bins = sample_bins(table, np.random.default_rng(draw), count)
+                result, image, _ = refined_reconstruction(model, table, bins, scene, dataclasses.replace(config, seed=draw))
+                metrics = image_metrics(truth_image, image, mask) | {"loss": result.losses["weights"]}
+                rows.setdefault(variant_name(count, steps), []).append(metrics)
+    return rows
+
+
+def variant_name(samples: int, steps: int) -> str:
+    return f"{samples} samples, {steps} weight steps"
+
+
+def markdown(report: dict) -> str:
+    materials = list(report["materials"])
+    lines = [f"Model `{report['model']}`, draws {report['draws']}, {report['resolution']}²; PSNR (dB) / ΔE, the mean over "
+             "the draws.", "", "| variant | " + " | ".join(materials) + " | mean |",
+             "|---|" + "---|" * (len(materials) + 1)]
+    for variant, mean in report["mean"].items():
+        cells = [f"{np.mean([m['psnr'] for m in report['materials'][name][variant]]):.2f} / "
+                 f"{np.mean([m['delta_e'] for m in report['materials'][name][variant]]):.2f}" for name in materials]
+        lines.append(f"| {variant} | " + " | ".join(cells) + f" | {mean['psnr']:.2f} / {mean['delta_e']:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("measurements", nargs="+", help=".bsdf files")
+    parser.add_argument("--model", default="pretrained", help="'pretrained', a run folder, a checkpoint or a packed "
+                        "model's folder")
+    parser.add_argument("--samples", type=int, nargs="+", default=[4000, 40000])
+    parser.add_argument("--weight-steps", type=int, nargs="+", default=[1000, 3000])
+    parser.add_argument("--draws", type=int, nargs="+", default=[0])
+    parser.add_argument("--resolution", type=int, default=256)
+    parser.add_argument("--out", required=True, help="folder for limits.json and limits.md")
+    args = parser.parse_args(argv)
+    model = load_model(args.model)
+    scene = Scene(resolution=args.resolution)
+    results = {Path(p).stem: measure(Path(p), model, scene, samples=args.samples, weight_steps=args.weight_steps,
+                                     draws=args.draws)
+               for p in tqdm(args.measurements, desc="measurements")}
+    variants = list(next(iter(results.values())))
+    mean = {variant: {key: float(np.mean([np.mean([m[key] for m in rows[variant]]) for rows in results.values()]))
+                      for key in ("psnr", "delta_e")} for variant in variants}
+    report = {"run": run_metadata(), "model": args.model, "draws": args.draws, "resolution": args.resolution,
+              "materials": results, "mean": mean}
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    save_json(out / "limits.json", report)
+    write_text(out / "limits.md", markdown(report))
+    print(markdown(report))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
