@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Fold 1 against the control for one seed (argument: 1 or 3): the 46 held-out tables (draw 0) and the
+# measurements fold 1 held out (draws 0-2; its own two skipped by --trained-on). Writes seeds/seedS/{tables,held-out}.
+set -eu
+seed=$1
+export PYTHONPATH=$PWD/python OMP_NUM_THREADS=1
+H=$(python -c "import json;print(' '.join('local/v2/data/'+n+'.binary' for n in json.load(open('docs/results/encoder-refit/config-plain.json'))['holdout']))")
+M="local/folds/seed$seed-control local/folds/seed$seed-fold1"
+D=docs/results/measured-training/seeds/seed$seed
+python benches/studies/compare_models.py --models $M --labels control fold/1 --tables $H --draws 0 --out $D/tables
+python benches/studies/compare_models.py --models $M --labels control fold/1 --measurements ../shared/data/rgl-measured/*.bsdf \
+  --draws 0 1 2 --budgets none latent full --trained-on fold/1=acrylic_felt_green_rgb fold/1=vch_golden_yellow_rgb --out $D/held-out
