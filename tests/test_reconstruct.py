@@ -50,32 +50,6 @@ def test_refinement_lowers_the_sample_loss(model, material):
     assert np.all(np.isfinite(result.nbrdf(material.wi, material.wo)))
 
 
-@pytest.mark.parametrize("kind", ["l1", "mse"])
-@pytest.mark.parametrize("penalty", ["per_tensor", "all"])
-@pytest.mark.parametrize("hidden", [(8,), (16, 12, 10)])
-def test_the_written_out_weight_gradient_is_autograds(kind, penalty, hidden):
-    from frenbrdf.models.losses import LossConfig, reconstruction_loss, weight_penalty
-    from frenbrdf.models.nbrdf import NBRDFConfig, nbrdf_forward
-    from frenbrdf.models.reconstruct import _Samples, weight_gradient
-
-    generator = torch.Generator().manual_seed(3)
-    params = [torch.randn(1, *shape, generator=generator, dtype=torch.float64) for shape in NBRDFConfig(hidden).shapes()]
-    batch = _Samples(torch.randn(1, 500, 6, generator=generator, dtype=torch.float64),
-                     torch.randn(1, 500, 3, generator=generator, dtype=torch.float64),
-                     torch.rand(1, 500, generator=generator, dtype=torch.float64))
-    loss = LossConfig(kind=kind, weight_penalty=penalty, lambda_weights=0.3)
-    value = weight_gradient(params, batch, loss)
-
-    leaves = [p.clone().requires_grad_(True) for p in params]
-    expected = reconstruction_loss(nbrdf_forward(leaves, batch.coords), batch.values, batch.cos_in, kind) \
-        + loss.lambda_weights * weight_penalty(leaves, penalty)
-    expected.backward()
-    assert float(value) == pytest.approx(float(expected), rel=1e-12)
-    for written, leaf in zip(params, leaves):
-        assert written.grad.shape == leaf.shape
-        torch.testing.assert_close(written.grad, leaf.grad, rtol=1e-10, atol=1e-12)
-
-
 def test_cosine_schedule_starts_at_the_rate_then_decays(model, material):
     def z_after(steps, schedule):
         config = RefineConfig(latent_steps=steps, latent_lr=0.05, schedule=schedule)

@@ -187,25 +187,27 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     if config.latent_steps:
         z = z.clone().requires_grad_(True)
 
-        def latent_gradient(batch: _Samples) -> torch.Tensor:
+        def latent_objective(batch: _Samples) -> torch.Tensor:
             predicted = nbrdf_forward(model.network.decoder(z), batch.coords)
-            value = reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind) \
+            return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind) \
                 + loss.lambda_latent * latent_penalty(z)
-            z.grad = None
-            value.backward()
-            return value
 
         with _frozen(model.network):
-            _optimise("latent", [z], latent_gradient, config.latent_steps, config.latent_lr, samples, config, result)
+            _optimise("latent", [z], latent_objective, config.latent_steps, config.latent_lr, samples, config, result)
         z = z.detach()
         with torch.no_grad():
             params = model.network.decoder(z)
         result.losses["latent"] = _sample_loss(params, samples, loss.kind)
 
     if config.weight_steps:
-        params = [p.detach().clone() for p in params]
-        _optimise("weights", params, lambda batch: weight_gradient(params, batch, loss), config.weight_steps,
-                  config.weight_lr, samples, config, result)
+        params = [p.detach().clone().requires_grad_(True) for p in params]
+
+        def weight_objective(batch: _Samples) -> torch.Tensor:
+            predicted = nbrdf_forward(params, batch.coords)
+            return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind) \
+                + loss.lambda_weights * weight_penalty(params, loss.weight_penalty)
+
+        _optimise("weights", params, weight_objective, config.weight_steps, config.weight_lr, samples, config, result)
         result.losses["weights"] = _sample_loss(params, samples, loss.kind)
 
     result.z = z[0].detach().numpy().astype(np.float64)
@@ -220,67 +222,29 @@ def _loss_config(model) -> LossConfig:
     return LossConfig(**{key: value for key, value in model.loss.items() if key in kept})
 
 
-def _optimise(stage: str, parameters: list[torch.Tensor], gradient: Callable[[_Samples], torch.Tensor], steps: int,
+def _optimise(stage: str, parameters: list[torch.Tensor], objective: Callable[[_Samples], torch.Tensor], steps: int,
               lr: float, samples: _Samples, config: RefineConfig, result: Reconstruction) -> None:
-    """Adam on ``parameters`` for ``steps`` steps or ``config.seconds``; records the time and steps taken.
-
-    ``gradient(batch)`` sets every parameter's ``.grad`` to the objective's gradient on the batch and returns the
-    objective."""
-    optimizer = torch.optim.Adam(parameters, lr=lr)
+    """Adam on ``parameters`` for ``steps`` steps or ``config.seconds``; records the time and steps taken."""
+    optimizer = torch.optim.Adam(parameters, lr=lr, fused=True)  # one kernel for all tensors (docs/performance.md)
     scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, steps) if config.schedule == "cosine" else None
     generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
     start, taken = time.perf_counter(), 0
     for _ in tqdm(range(steps), desc=f"refine {stage}", disable=not config.progress, leave=False):
         if config.seconds is not None and time.perf_counter() - start > config.seconds:
             break
-        value = gradient(samples.batch(config.batch, generator))
+        value = objective(samples.batch(config.batch, generator))
         if not torch.isfinite(value):  # finite at the start (checked), so the steps made it so
             setting = "latent_lr" if stage == "latent" else "weight_lr"
             raise ValueError(f"refinement ({stage}) diverged at step {taken} with {setting} {lr:g}: the loss is "
                              f"{float(value)}; try a smaller {setting}")
+        optimizer.zero_grad(set_to_none=True)
+        value.backward()
         optimizer.step()
         if scheduler is not None:
             scheduler.step()
         taken += 1
     result.timings[stage] = time.perf_counter() - start
     result.steps[stage] = taken
-
-
-@torch.no_grad()
-def weight_gradient(params: list[torch.Tensor], batch: _Samples, loss: LossConfig) -> torch.Tensor:
-    """Stage 2's objective on ``batch`` (the reconstruction loss + λ1 · the weight penalty, as in training), with
-    its gradient written into every parameter's ``.grad``; returns the objective.
-
-    Backpropagation written out for one NBRDF (a ReLU MLP, :func:`~frenbrdf.models.nbrdf.nbrdf_forward`): this is
-    the loop ``full`` spends its time in (1000 steps), and at this size autograd's bookkeeping costs about as much
-    as the arithmetic. ``tests/test_reconstruct.py`` checks it against autograd for both losses and penalties.
-    """
-    weights, biases = [p[0] for p in params[0::2]], [p[0] for p in params[1::2]]
-    inputs, hidden = [batch.coords[0]], []  # each layer's input; hidden pre-activations (for ReLU's gradient)
-    for layer, (weight, bias) in enumerate(zip(weights, biases)):
-        out = torch.addmm(bias, inputs[-1], weight.t())
-        if layer < len(weights) - 1:
-            hidden.append(out)
-            inputs.append(torch.relu(out))
-    cos_in = batch.cos_in[0].unsqueeze(-1)
-    error = (out - batch.values[0]) * cos_in
-    if loss.kind == "l1":
-        value = error.abs().mean()
-        upstream = torch.sign(error).mul_(cos_in / error.numel())
-    else:
-        value = error.square().mean()
-        upstream = error.mul_(cos_in * (2 / error.numel()))
-    for layer in reversed(range(len(weights))):
-        params[2 * layer].grad = (upstream.t() @ inputs[layer])[None]
-        params[2 * layer + 1].grad = upstream.sum(0)[None]
-        if layer:
-            upstream = (upstream @ weights[layer]).mul_(hidden[layer - 1] > 0)
-    # The penalty's own gradient: 2 λ1 p / (the count each tensor's squares are averaged over).
-    total = sum(p.numel() for p in params)
-    counts = [p.numel() if loss.weight_penalty == "per_tensor" else total for p in params]
-    for parameter, count in zip(params, counts):
-        parameter.grad.add_(parameter, alpha=2 * loss.lambda_weights / count)
-    return value + loss.lambda_weights * weight_penalty(params, loss.weight_penalty)
 
 
 @torch.no_grad()
