@@ -278,6 +278,22 @@ def test_full_limits_study_measures_every_variant_and_the_table(run_dir, tmp_pat
     assert "| 200 samples, 2 weight steps |" in (tmp_path / "out" / "limits.md").read_text()
 
 
+def test_refine_timing_times_this_tree_against_a_commit(run_dir, tmp_path, capsys):
+    import subprocess
+
+    if subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True).returncode:
+        pytest.skip("not a git checkout: the timing study reads earlier commits with git show")
+    measurement = tmp_path / "flat_rgb.bsdf"
+    measurement.write_bytes(tensor_file(flat_material()))
+    study = bench_module("refine_timing")
+    assert study.main([str(measurement), "--model", str(run_dir), "--budget", "latent", "--samples", "200",
+                       "--repeats", "2", "--against", "HEAD"]) == 0
+    summary = capsys.readouterr().out.split("best of 2:")[1]
+    assert "this tree  mean" in summary and "HEAD  mean" in summary
+    with pytest.raises(SystemExit, match="cannot read"):
+        study.main([str(measurement), "--model", str(run_dir), "--against", "no-such-commit"])
+
+
 def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir, toy_materials, tmp_path):
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
