@@ -100,6 +100,43 @@ def test_inputs_are_checked_like_encode(model, material):
         RefineConfig(latent_steps=-1)
 
 
+@pytest.mark.parametrize("hidden", [(32, 32), (5, 7, 4)])
+def test_widening_keeps_what_the_nbrdf_gives_back(hidden):
+    from frenbrdf.models.nbrdf import NBRDFConfig, nbrdf_forward, widen_params
+
+    generator = torch.Generator().manual_seed(0)
+    params = [torch.randn(2, *shape, generator=generator) for shape in NBRDFConfig(hidden).shapes()]
+    wide = widen_params(params, 48, generator)
+    assert [tuple(p.shape) for p in wide] == [(2, *shape) for shape in NBRDFConfig((48,) * len(hidden)).shapes()]
+    assert all(float(p.abs().sum()) > 0 for p in wide[0::2][:-1])  # new incoming weights are drawn, not 0
+    coords = torch.randn(2, 300, 6, generator=generator)
+    torch.testing.assert_close(nbrdf_forward(wide, coords), nbrdf_forward(params, coords), rtol=1e-5, atol=1e-5)
+    with pytest.raises(ValueError, match="can only be widened"):
+        widen_params(params, 4, generator)
+
+
+def test_a_wider_full_refinement_fits_further(model, material):
+    directions = (material.wi, material.wo)
+    base = dict(latent_steps=5, weight_steps=60, weight_lr=3e-3)
+    plain = model.reconstruct(material.values, directions, refine=RefineConfig(**base))
+    wide = model.reconstruct(material.values, directions, refine=RefineConfig(**base, width=48))
+    again = model.reconstruct(material.values, directions, refine=RefineConfig(**base, width=48))
+    assert wide.nbrdf.params[0].shape[1] == 48 and plain.nbrdf.params[0].shape[1] != 48
+    assert wide.losses["latent"] == plain.losses["latent"]  # widening starts where the latent stage ended
+    assert wide.losses["weights"] < wide.losses["latent"]
+    torch.testing.assert_close(_params(wide), _params(again))  # the new weights are drawn from the seed
+    assert np.isfinite(wide.nbrdf(*directions)).all()
+
+
+def test_a_width_needs_the_weight_stage_and_a_sane_size(model, material, tmp_path):
+    with pytest.raises(ValueError, match="width must be None or 1 to 1024 with weight_steps > 0"):
+        RefineConfig(latent_steps=10, width=64)
+    with pytest.raises(ValueError, match="width must be"):
+        RefineConfig(weight_steps=10, width=100000)
+    with pytest.raises(ValueError, match="can only be widened"):
+        model.reconstruct(material.values, (material.wi, material.wo), refine=RefineConfig(weight_steps=2, width=1))
+
+
 def test_named_budgets_are_copies():
     config = refine_config("full")
     config.latent_steps = 1
@@ -158,6 +195,20 @@ def test_a_failing_input_leaves_no_output(run_dir, tmp_path, capsys):
         _reconstruct(bad, "--out", tmp_path / "out", "--model", run_dir)
     assert exit_info.value.code == 2 and "bad.csv: row 2, column b" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_command_widens_on_request_and_names_a_width_without_full(run_dir, toy_materials, tmp_path, capsys):
+    source = sorted(toy_materials.glob("*.binary"))[1]
+    out = tmp_path / "wide"
+    assert _reconstruct(source, "--out", out, "--model", run_dir, "--samples", 300, "--width", 40) == 0
+    assert cli.main(["render", str(out / "material.pt"), "--out", str(tmp_path / "x.png"), "--resolution", "16"]) == 0
+    from frenbrdf.data.materials import load_material_file
+
+    assert load_material_file(out / "material.pt").params[0].shape[1] == 40  # saved 40 wide, and it renders
+    with pytest.raises(SystemExit) as exit_info:
+        _reconstruct(source, "--out", tmp_path / "latent", "--model", run_dir, "--refine", "latent", "--width", 40)
+    assert exit_info.value.code == 2 and "width must be None" in capsys.readouterr().err
+    assert not (tmp_path / "latent").exists()
 
 
 def test_a_failure_while_writing_leaves_no_output(run_dir, toy_materials, tmp_path, monkeypatch):
@@ -269,10 +320,13 @@ def test_full_limits_study_measures_every_variant_and_the_table(run_dir, tmp_pat
     measurement.write_bytes(tensor_file(flat_material()))
     study = bench_module("full_limits")
     assert study.main([str(measurement), "--model", str(run_dir), "--samples", "200", "400", "--weight-steps", "2",
-                       "5", "--draws", "0", "1", "--resolution", "16", "--out", str(tmp_path / "out")]) == 0
+                       "5", "--widths", "0", "40", "--draws", "0", "1", "--resolution", "16",
+                       "--out", str(tmp_path / "out")]) == 0
     report = json.loads((tmp_path / "out" / "limits.json").read_text())
     rows = report["materials"]["flat_rgb"]
-    assert set(rows) == {"table lookup", *(f"{n} samples, {k} weight steps" for n in (200, 400) for k in (2, 5))}
+    assert set(rows) == {"table lookup", *(f"{n} samples, {k} weight steps{w}" for n in (200, 400) for k in (2, 5)
+                                           for w in ("", ", width 40"))}
+    assert all(m["seconds"] > 0 for k, v in rows.items() if k != "table lookup" for m in v)
     assert len(rows["table lookup"]) == 1 and all(len(v) == 2 for k, v in rows.items() if k != "table lookup")
     assert all(np.isfinite(m["psnr"]) for v in rows.values() for m in v)
     assert "| 200 samples, 2 weight steps |" in (tmp_path / "out" / "limits.md").read_text()

@@ -3,8 +3,9 @@
     OMP_NUM_THREADS=1 python benches/studies/full_limits.py ../shared/data/rgl-measured/*.bsdf \
         --samples 4000 40000 --weight-steps 1000 3000 --draws 0 1 2 --out docs/results/full-limits
 
-For each measurement, sample draw, sample count and weight-step count: ``full`` (the named budget with
-only ``weight_steps`` changed; more samples than the budget's batch are drawn in random mini-batches),
+For each measurement, sample draw, sample count, weight-step count and NBRDF width: ``full`` (the named
+budget with only ``weight_steps`` and ``width`` changed, ``RefineConfig.width``; more samples than the
+budget's batch are drawn in random mini-batches), with its seconds of encoding and refinement,
 rendered and compared with the render of the measurement itself, as ``real_measurements.py`` does.
 Beside them, ``table lookup``: the measurement's own MERL table (whose bins every sample is drawn from)
 rendered by the metric renderer's table lookup, for scale. A diagnostic, not a choice of budget: the
@@ -19,6 +20,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import torch
 from tqdm.auto import tqdm
 
 from frenbrdf.io.atomic import save_json, write_text
@@ -34,7 +36,8 @@ from common import run_metadata  # noqa: E402
 TABLE = "table lookup"
 
 
-def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps: list[int], draws: list[int]) -> dict:
+def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps: list[int], widths: list[int | None],
+            draws: list[int]) -> dict:
     """``{variant: [metrics of each draw]}`` for one measurement (the table lookup: one entry, no draw)."""
     truth = read_truth(path)
     table = truth.table()
@@ -43,28 +46,38 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
     rows = {TABLE: [image_metrics(truth_image, tonemap(render_linear(table, scene)), mask)]}
     for count in samples:
         for steps in weight_steps:
-            config = dataclasses.replace(refine_config("full"), weight_steps=steps)
-            for draw in draws:
-                bins = sample_bins(table, np.random.default_rng(draw), count)
-                result, image, _ = refined_reconstruction(model, table, bins, scene, dataclasses.replace(config, seed=draw))
-                metrics = image_metrics(truth_image, image, mask) | {"loss": result.losses["weights"]}
-                rows.setdefault(variant_name(count, steps), []).append(metrics)
+            for width in widths:
+                config = dataclasses.replace(refine_config("full"), weight_steps=steps, width=width)
+                for draw in draws:
+                    bins = sample_bins(table, np.random.default_rng(draw), count)
+                    result, image, _ = refined_reconstruction(model, table, bins, scene,
+                                                              dataclasses.replace(config, seed=draw))
+                    metrics = image_metrics(truth_image, image, mask) | {"loss": result.losses["weights"],
+                                                                         "seconds": sum(result.timings.values())}
+                    rows.setdefault(variant_name(count, steps, width), []).append(metrics)
     return rows
 
 
-def variant_name(samples: int, steps: int) -> str:
-    return f"{samples} samples, {steps} weight steps"
+def mean_over_materials(results: dict, variant: str, key: str) -> float | None:
+    """The mean over the materials of each one's mean over its draws (None where the variant has no such key)."""
+    means = [np.mean([m[key] for m in rows[variant]]) for rows in results.values() if key in rows[variant][0]]
+    return float(np.mean(means)) if means else None
+
+
+def variant_name(samples: int, steps: int, width: int | None = None) -> str:
+    return f"{samples} samples, {steps} weight steps" + (f", width {width}" if width else "")
 
 
 def markdown(report: dict) -> str:
     materials = list(report["materials"])
     lines = [f"Model `{report['model']}`, draws {report['draws']}, {report['resolution']}²; PSNR (dB) / ΔE, the mean over "
-             "the draws.", "", "| variant | " + " | ".join(materials) + " | mean |",
-             "|---|" + "---|" * (len(materials) + 1)]
+             f"the draws; seconds of encoding and refinement ({report['threads']} threads), the mean over all.", "",
+             "| variant | " + " | ".join(materials) + " | mean | seconds |", "|---|" + "---|" * (len(materials) + 2)]
     for variant, mean in report["mean"].items():
         cells = [f"{np.mean([m['psnr'] for m in report['materials'][name][variant]]):.2f} / "
                  f"{np.mean([m['delta_e'] for m in report['materials'][name][variant]]):.2f}" for name in materials]
-        lines.append(f"| {variant} | " + " | ".join(cells) + f" | {mean['psnr']:.2f} / {mean['delta_e']:.2f} |")
+        seconds = f"{mean['seconds']:.2f}" if "seconds" in mean else "–"
+        lines.append(f"| {variant} | " + " | ".join(cells) + f" | {mean['psnr']:.2f} / {mean['delta_e']:.2f} | {seconds} |")
     return "\n".join(lines) + "\n"
 
 
@@ -75,19 +88,23 @@ def main(argv=None) -> int:
                         "model's folder")
     parser.add_argument("--samples", type=int, nargs="+", default=[4000, 40000])
     parser.add_argument("--weight-steps", type=int, nargs="+", default=[1000, 3000])
+    parser.add_argument("--widths", type=int, nargs="+", default=[0],
+                        help="hidden widths of the refined NBRDF (RefineConfig.width); 0: the model's own")
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
     parser.add_argument("--resolution", type=int, default=256)
     parser.add_argument("--out", required=True, help="folder for limits.json and limits.md")
     args = parser.parse_args(argv)
     model = load_model(args.model)
     scene = Scene(resolution=args.resolution)
+    widths = [width or None for width in args.widths]
     results = {Path(p).stem: measure(Path(p), model, scene, samples=args.samples, weight_steps=args.weight_steps,
-                                     draws=args.draws)
+                                     widths=widths, draws=args.draws)
                for p in tqdm(args.measurements, desc="measurements")}
     variants = list(next(iter(results.values())))
-    mean = {variant: {key: float(np.mean([np.mean([m[key] for m in rows[variant]]) for rows in results.values()]))
-                      for key in ("psnr", "delta_e")} for variant in variants}
+    mean = {variant: {key: value for key in ("psnr", "delta_e", "seconds")
+                      if (value := mean_over_materials(results, variant, key)) is not None} for variant in variants}
     report = {"run": run_metadata(), "model": args.model, "draws": args.draws, "resolution": args.resolution,
+              "threads": torch.get_num_threads(),
               "materials": results, "mean": mean}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -48,7 +48,7 @@ FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.pn
 
 def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
                      samples: int | None = 4000, refine: str = "full", seed: int = 0, resolution: int = 256,
-                     progress: bool = True, overwrite: bool = False) -> dict:
+                     progress: bool = True, overwrite: bool = False, width: int | None = None) -> dict:
     """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
 
     Parameters
@@ -66,6 +66,9 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         ``"none"``, ``"latent"`` or ``"full"`` (:data:`frenbrdf.models.reconstruct.BUDGETS`).
     seed
         Seeds the MERL sampling and the refinement's mini-batches.
+    width
+        ``refine="full"`` only: the hidden width of the refined NBRDF
+        (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the model's).
     overwrite
         Replace ``out_dir`` even when it holds files this function did not write (they are deleted).
 
@@ -74,8 +77,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     dict
         What ``reconstruction.json`` holds.
     """
+    config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress, width=width)  # checked first
     out = check_out(source, out_dir, model, overwrite=overwrite)
-    config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress)
     measurements = read_measurements(source, samples=samples, seed=seed)
     loaded = load_model(model)
     result = loaded.reconstruct(measurements.values, (measurements.wi, measurements.wo), refine=config)

@@ -237,6 +237,31 @@ def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Ten
     return x
 
 
+def widen_params(params: list[torch.Tensor], width: int, generator: torch.Generator) -> list[torch.Tensor]:
+    """The same NBRDFs with every hidden layer ``width`` wide, their output unchanged.
+
+    ``params`` as for :func:`nbrdf_forward`. A new unit's incoming weights are drawn at the scale of its layer's
+    (from ``generator``), its bias is 0, and every weight *from* a new unit is 0: the old units and the output see
+    nothing new until training moves those weights, and the gradient reaches all of them at once.
+    """
+    n_layers = len(params) // 2
+    widened = []
+    for layer in range(n_layers):
+        weight, bias = params[2 * layer], params[2 * layer + 1]
+        batch, rows, columns = weight.shape
+        new_rows = width if layer < n_layers - 1 else rows
+        new_columns = width if layer > 0 else columns
+        if new_rows < rows or new_columns < columns:
+            raise ValueError(f"an NBRDF can only be widened: its hidden layers are up to {max(rows, columns)} wide, "
+                             f"the width asked is {width}")
+        grown = torch.zeros(batch, new_rows, new_columns, dtype=weight.dtype)
+        grown[:, :rows, :columns] = weight
+        grown[:, rows:, :] = torch.randn(batch, new_rows - rows, new_columns, generator=generator,
+                                         dtype=weight.dtype) * weight.std()
+        widened += [grown, torch.cat([bias, bias.new_zeros(batch, new_rows - rows)], dim=1)]
+    return widened
+
+
 class NBRDF:
     """Decoded materials: evaluate them at direction pairs or write them as MERL tables.
 

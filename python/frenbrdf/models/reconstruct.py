@@ -41,7 +41,7 @@ import torch
 from tqdm.auto import tqdm
 
 from .losses import LossConfig, latent_penalty, reconstruction_loss, weight_penalty
-from .nbrdf import NBRDF, mapped_samples, nbrdf_forward
+from .nbrdf import MAX_WIDTH, NBRDF, mapped_samples, nbrdf_forward, widen_params
 
 #: Stages of :func:`reconstruct`, in order.
 STAGES = ("encode", "latent", "weights")
@@ -69,8 +69,13 @@ class RefineConfig:
     seconds: float | None = None
     """Wall-clock budget of *each* refinement stage: a stage stops after this many seconds even if
     steps remain (None: no limit). A stage stopped by time is no longer deterministic."""
+    width: int | None = None
+    """Hidden width of the NBRDF that stage 2 refines: the decoded NBRDF is first widened to it without changing its
+    output (:func:`frenbrdf.models.nbrdf.widen_params`), giving the weights more to fit with; the result is an NBRDF
+    of that width. None: the decoder's width (32 for the shipped model). Costs time: 48 about 1.3×, 64 about 1.75×
+    the weight steps' (docs/measurements.md, "What limits full")."""
     seed: int = 0
-    """Seeds the mini-batches."""
+    """Seeds the mini-batches (and a widened NBRDF's new weights)."""
     progress: bool = False
     """Show a progress bar per stage."""
 
@@ -88,6 +93,9 @@ class RefineConfig:
             problems.append(f"batch must be ≥ 1, got {self.batch}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
+        if self.width is not None and not (1 <= int(self.width) <= MAX_WIDTH and self.weight_steps):
+            problems.append(f"width must be None or 1 to {MAX_WIDTH} with weight_steps > 0, got {self.width} with "
+                            f"weight_steps {self.weight_steps}")
         if problems:
             raise ValueError("invalid refinement: " + "; ".join(problems))
 
@@ -200,7 +208,10 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
         result.losses["latent"] = _sample_loss(params, samples, loss.kind)
 
     if config.weight_steps:
-        params = [p.detach().clone().requires_grad_(True) for p in params]
+        params = [p.detach().clone() for p in params]
+        if config.width is not None:
+            params = widen_params(params, int(config.width), torch.Generator().manual_seed(config.seed))
+        params = [p.requires_grad_(True) for p in params]
 
         def weight_objective(batch: _Samples) -> torch.Tensor:
             predicted = nbrdf_forward(params, batch.coords)
