@@ -330,6 +330,7 @@ def test_full_limits_study_measures_every_variant_and_the_table(run_dir, tmp_pat
     assert len(rows["table lookup"]) == 1 and all(len(v) == 2 for k, v in rows.items() if k != "table lookup")
     assert all(np.isfinite(m["psnr"]) for v in rows.values() for m in v)
     assert "| 200 samples, 2 weight steps |" in (tmp_path / "out" / "limits.md").read_text()
+    assert (tmp_path / "out" / "limits.png").exists()
 
 
 def test_refine_timing_times_this_tree_against_a_commit(run_dir, tmp_path, capsys):

@@ -9,7 +9,8 @@ budget's batch are drawn in random mini-batches), with its seconds of encoding a
 rendered and compared with the render of the measurement itself, as ``real_measurements.py`` does.
 Beside them, ``table lookup``: the measurement's own MERL table (whose bins every sample is drawn from)
 rendered by the metric renderer's table lookup, for scale. A diagnostic, not a choice of budget: the
-four measurements judge the budgets and never choose them. Writes ``limits.json`` and ``limits.md``.
+four measurements judge the budgets and never choose them. Writes ``limits.json``, ``limits.md`` and
+``limits.png`` (the renders of the first draw: truth, table lookup, each variant).
 """
 
 from __future__ import annotations
@@ -31,19 +32,20 @@ from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonema
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from common import run_metadata  # noqa: E402
+from common import pyplot, run_metadata, save_figure  # noqa: E402
 
 TABLE = "table lookup"
 
 
 def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps: list[int], widths: list[int | None],
-            draws: list[int]) -> dict:
-    """``{variant: [metrics of each draw]}`` for one measurement (the table lookup: one entry, no draw)."""
+            draws: list[int]) -> tuple[dict, dict]:
+    """``{variant: [metrics of each draw]}`` for one measurement (the table lookup: one entry, no draw), and
+    ``{column: image}`` of the first draw."""
     truth = read_truth(path)
     table = truth.table()
-    truth_image = tonemap(render_linear(truth, scene))
+    images = {"truth": tonemap(render_linear(truth, scene)), TABLE: tonemap(render_linear(table, scene))}
     mask = material_mask(scene)
-    rows = {TABLE: [image_metrics(truth_image, tonemap(render_linear(table, scene)), mask)]}
+    rows = {TABLE: [image_metrics(images["truth"], images[TABLE], mask)]}
     for count in samples:
         for steps in weight_steps:
             for width in widths:
@@ -52,10 +54,11 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
                     bins = sample_bins(table, np.random.default_rng(draw), count)
                     result, image, _ = refined_reconstruction(model, table, bins, scene,
                                                               dataclasses.replace(config, seed=draw))
-                    metrics = image_metrics(truth_image, image, mask) | {"loss": result.losses["weights"],
-                                                                         "seconds": sum(result.timings.values())}
+                    metrics = image_metrics(images["truth"], image, mask) | {"loss": result.losses["weights"],
+                                                                             "seconds": sum(result.timings.values())}
                     rows.setdefault(variant_name(count, steps, width), []).append(metrics)
-    return rows
+                    images.setdefault(variant_name(count, steps, width), image)
+    return rows, images
 
 
 def mean_over_materials(results: dict, variant: str, key: str) -> float | None:
@@ -66,6 +69,23 @@ def mean_over_materials(results: dict, variant: str, key: str) -> float | None:
 
 def variant_name(samples: int, steps: int, width: int | None = None) -> str:
     return f"{samples} samples, {steps} weight steps" + (f", width {width}" if width else "")
+
+
+def draw_renders(grid: dict, results: dict, path: Path) -> None:
+    """One row per measurement: the truth, then every column with its PSNR / ΔE in that draw."""
+    plt = pyplot()
+    columns = list(next(iter(grid.values())))
+    figure, axes = plt.subplots(len(grid), len(columns), figsize=(2 * len(columns), 2.1 * len(grid)), squeeze=False)
+    for row, (name, images) in zip(axes, grid.items()):
+        for axis, column in zip(row, columns):
+            axis.imshow(images[column])
+            axis.set_xticks([]), axis.set_yticks([])
+            metrics = results[name].get(column, [None])[0]
+            title = column.replace(" samples, ", " s., ").replace(" weight steps", " steps")
+            axis.set_title(title if not metrics else f"{title}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.2f}",
+                           fontsize=6)
+        row[0].set_ylabel(name, fontsize=7)
+    save_figure(figure, path)
 
 
 def markdown(report: dict) -> str:
@@ -97,9 +117,10 @@ def main(argv=None) -> int:
     model = load_model(args.model)
     scene = Scene(resolution=args.resolution)
     widths = [width or None for width in args.widths]
-    results = {Path(p).stem: measure(Path(p), model, scene, samples=args.samples, weight_steps=args.weight_steps,
-                                     widths=widths, draws=args.draws)
-               for p in tqdm(args.measurements, desc="measurements")}
+    results, grid = {}, {}
+    for path in tqdm([Path(p) for p in args.measurements], desc="measurements"):
+        results[path.stem], grid[path.stem] = measure(path, model, scene, samples=args.samples,
+                                                      weight_steps=args.weight_steps, widths=widths, draws=args.draws)
     variants = list(next(iter(results.values())))
     mean = {variant: {key: value for key in ("psnr", "delta_e", "seconds")
                       if (value := mean_over_materials(results, variant, key)) is not None} for variant in variants}
@@ -110,6 +131,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     save_json(out / "limits.json", report)
     write_text(out / "limits.md", markdown(report))
+    draw_renders(grid, results, out / "limits.png")
     print(markdown(report))
     return 0
 
