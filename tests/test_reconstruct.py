@@ -315,7 +315,7 @@ def test_real_measurement_study_runs_on_a_bsdf(run_dir, tmp_path):
     assert all(np.isfinite(row["psnr"]) and 0 < row["seconds"] < 60 for row in rows.values())
 
 
-def test_full_limits_study_measures_every_variant_and_the_table(run_dir, tmp_path):
+def test_full_limits_study_measures_every_variant_and_the_table(run_dir, toy_materials, tmp_path):
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
     study = bench_module("full_limits")
@@ -331,6 +331,12 @@ def test_full_limits_study_measures_every_variant_and_the_table(run_dir, tmp_pat
     assert all(np.isfinite(m["psnr"]) for v in rows.values() for m in v)
     assert "| 200 samples, 2 weight steps |" in (tmp_path / "out" / "limits.md").read_text()
     assert (tmp_path / "out" / "limits.png").exists()
+    # A MERL table is its own truth: no table-lookup row, and it mixes with a measurement.
+    table = sorted(toy_materials.glob("*.binary"))[0]
+    assert study.main([str(table), str(measurement), "--model", str(run_dir), "--samples", "200", "--weight-steps",
+                       "2", "--resolution", "16", "--out", str(tmp_path / "mixed")]) == 0
+    mixed = json.loads((tmp_path / "mixed" / "limits.json").read_text())["materials"]
+    assert "table lookup" not in mixed[table.stem] and "table lookup" in mixed["flat_rgb"]
 
 
 def test_refine_timing_times_this_tree_against_a_commit(run_dir, tmp_path, capsys):

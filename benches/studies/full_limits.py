@@ -25,7 +25,7 @@ import torch
 from tqdm.auto import tqdm
 
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
@@ -42,10 +42,13 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
     """``{variant: [metrics of each draw]}`` for one measurement (the table lookup: one entry, no draw), and
     ``{column: image}`` of the first draw."""
     truth = read_truth(path)
-    table = truth.table()
-    images = {"truth": tonemap(render_linear(truth, scene)), TABLE: tonemap(render_linear(table, scene))}
+    table = as_table(truth)
+    images = {"truth": tonemap(render_linear(truth, scene))}
     mask = material_mask(scene)
-    rows = {TABLE: [image_metrics(images["truth"], images[TABLE], mask)]}
+    rows = {}
+    if table is not truth:  # a measurement: its table is a second, quantised truth; a MERL file is its own
+        images[TABLE] = tonemap(render_linear(table, scene))
+        rows[TABLE] = [image_metrics(images["truth"], images[TABLE], mask)]
     for count in samples:
         for steps in weight_steps:
             for width in widths:
@@ -63,7 +66,8 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
 
 def mean_over_materials(results: dict, variant: str, key: str) -> float | None:
     """The mean over the materials of each one's mean over its draws (None where the variant has no such key)."""
-    means = [np.mean([m[key] for m in rows[variant]]) for rows in results.values() if key in rows[variant][0]]
+    means = [np.mean([m[key] for m in rows[variant]]) for rows in results.values()
+             if variant in rows and key in rows[variant][0]]
     return float(np.mean(means)) if means else None
 
 
@@ -74,11 +78,12 @@ def variant_name(samples: int, steps: int, width: int | None = None) -> str:
 def draw_renders(grid: dict, results: dict, path: Path) -> None:
     """One row per measurement: the truth, then every column with its PSNR / ΔE in that draw."""
     plt = pyplot()
-    columns = list(next(iter(grid.values())))
+    columns = list(dict.fromkeys(column for images in grid.values() for column in images))
     figure, axes = plt.subplots(len(grid), len(columns), figsize=(2 * len(columns), 2.1 * len(grid)), squeeze=False)
     for row, (name, images) in zip(axes, grid.items()):
         for axis, column in zip(row, columns):
-            axis.imshow(images[column])
+            if column in images:
+                axis.imshow(images[column])
             axis.set_xticks([]), axis.set_yticks([])
             metrics = results[name].get(column, [None])[0]
             title = column.replace(" samples, ", " s., ").replace(" weight steps", " steps")
@@ -88,14 +93,20 @@ def draw_renders(grid: dict, results: dict, path: Path) -> None:
     save_figure(figure, path)
 
 
+def cell(metrics: list[dict] | None) -> str:
+    """PSNR / ΔE, the mean over the draws ("–" where a material has no such row)."""
+    if not metrics:
+        return "–"
+    return f"{np.mean([m['psnr'] for m in metrics]):.2f} / {np.mean([m['delta_e'] for m in metrics]):.2f}"
+
+
 def markdown(report: dict) -> str:
     materials = list(report["materials"])
     lines = [f"Model `{report['model']}`, draws {report['draws']}, {report['resolution']}²; PSNR (dB) / ΔE, the mean over "
              f"the draws; seconds of encoding and refinement ({report['threads']} threads), the mean over all.", "",
              "| variant | " + " | ".join(materials) + " | mean | seconds |", "|---|" + "---|" * (len(materials) + 2)]
     for variant, mean in report["mean"].items():
-        cells = [f"{np.mean([m['psnr'] for m in report['materials'][name][variant]]):.2f} / "
-                 f"{np.mean([m['delta_e'] for m in report['materials'][name][variant]]):.2f}" for name in materials]
+        cells = [cell(report["materials"][name].get(variant)) for name in materials]
         seconds = f"{mean['seconds']:.2f}" if "seconds" in mean else "–"
         lines.append(f"| {variant} | " + " | ".join(cells) + f" | {mean['psnr']:.2f} / {mean['delta_e']:.2f} | {seconds} |")
     return "\n".join(lines) + "\n"
@@ -121,7 +132,7 @@ def main(argv=None) -> int:
     for path in tqdm([Path(p) for p in args.measurements], desc="measurements"):
         results[path.stem], grid[path.stem] = measure(path, model, scene, samples=args.samples,
                                                       weight_steps=args.weight_steps, widths=widths, draws=args.draws)
-    variants = list(next(iter(results.values())))
+    variants = list(dict.fromkeys(variant for rows in results.values() for variant in rows))
     mean = {variant: {key: value for key in ("psnr", "delta_e", "seconds")
                       if (value := mean_over_materials(results, variant, key)) is not None} for variant in variants}
     report = {"run": run_metadata(), "model": args.model, "draws": args.draws, "resolution": args.resolution,
