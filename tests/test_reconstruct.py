@@ -111,8 +111,8 @@ def test_widening_keeps_what_the_nbrdf_gives_back(hidden):
     assert all(float(p.abs().sum()) > 0 for p in wide[0::2][:-1])  # new incoming weights are drawn, not 0
     coords = torch.randn(2, 300, 6, generator=generator)
     torch.testing.assert_close(nbrdf_forward(wide, coords), nbrdf_forward(params, coords), rtol=1e-5, atol=1e-5)
-    with pytest.raises(ValueError, match="can only be widened"):
-        widen_params(params, 4, generator)
+    narrow = widen_params(params, 4, generator)  # layers already wider are kept as they are
+    assert all(torch.equal(a, b) for a, b in zip(narrow, params))
 
 
 def test_a_wider_full_refinement_fits_further(model, material):
@@ -128,13 +128,20 @@ def test_a_wider_full_refinement_fits_further(model, material):
     assert np.isfinite(wide.nbrdf(*directions)).all()
 
 
-def test_a_width_needs_the_weight_stage_and_a_sane_size(model, material, tmp_path):
+def test_a_width_needs_the_weight_stage_and_a_sane_size(model, material):
     with pytest.raises(ValueError, match="width must be None or 1 to 1024 with weight_steps > 0"):
         RefineConfig(latent_steps=10, width=64)
     with pytest.raises(ValueError, match="width must be"):
         RefineConfig(weight_steps=10, width=100000)
-    with pytest.raises(ValueError, match="can only be widened"):
-        model.reconstruct(material.values, (material.wi, material.wo), refine=RefineConfig(weight_steps=2, width=1))
+    kept = model.reconstruct(material.values, (material.wi, material.wo), refine=RefineConfig(weight_steps=2, width=1))
+    assert kept.nbrdf.params[0].shape[1] == model.decode(kept.z).params[0].shape[1]  # never narrowed
+
+
+def test_full_refines_48_wide_by_default(model, material, tmp_path):
+    assert refine_config("full").width == 48 and refine_config("latent").width is None
+    result = model.reconstruct(material.values, (material.wi, material.wo),
+                               refine=dataclasses.replace(refine_config("full"), weight_steps=3))
+    assert all(p.shape[1] == 48 for p in result.nbrdf.params[:-2])
 
 
 def test_named_budgets_are_copies():
@@ -205,6 +212,8 @@ def test_the_command_widens_on_request_and_names_a_width_without_full(run_dir, t
     from frenbrdf.data.materials import load_material_file
 
     assert load_material_file(out / "material.pt").params[0].shape[1] == 40  # saved 40 wide, and it renders
+    assert _reconstruct(source, "--out", tmp_path / "default", "--model", run_dir, "--samples", 300) == 0
+    assert load_material_file(tmp_path / "default" / "material.pt").params[0].shape[1] == 48  # full's default
     with pytest.raises(SystemExit) as exit_info:
         _reconstruct(source, "--out", tmp_path / "latent", "--model", run_dir, "--refine", "latent", "--width", 40)
     assert exit_info.value.code == 2 and "width must be None" in capsys.readouterr().err

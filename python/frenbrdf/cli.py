@@ -376,9 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
                      "space, for editing), full (then the NBRDF's weights; the default: charts 8–8c)")
-    rec.add_argument("--width", type=int, metavar="N", help="with --refine full: widen the NBRDF to N hidden units "
-                     "per layer before refining its weights (more fidelity, more time: 64 takes about 1.75x the "
-                     "weight steps' time; default: the model's width)")
+    rec.add_argument("--width", type=int, metavar="N", help="with --refine full: widen the NBRDF to at least N hidden "
+                     "units per layer before refining its weights (default 48; 64: more fidelity, about 1.25x the "
+                     "time)")
     rec.add_argument("--seed", type=int, default=0, help="seeds the sampling and the refinement (default 0)")
     rec.add_argument("--json", action="store_true", help="print the report as JSON")
     rec.add_argument("--quiet", action="store_true", help="no progress bars")

@@ -67,8 +67,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     seed
         Seeds the MERL sampling and the refinement's mini-batches.
     width
-        ``refine="full"`` only: the hidden width of the refined NBRDF
-        (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the model's).
+        ``refine="full"`` only: the least hidden width of the refined NBRDF
+        (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the budget's, 48 for ``full``).
     overwrite
         Replace ``out_dir`` even when it holds files this function did not write (they are deleted).
 
@@ -77,7 +77,9 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     dict
         What ``reconstruction.json`` holds.
     """
-    config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress, width=width)  # checked first
+    config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress)
+    if width is not None:
+        config = dataclasses.replace(config, width=width)  # checked before anything is read or written
     out = check_out(source, out_dir, model, overwrite=overwrite)
     measurements = read_measurements(source, samples=samples, seed=seed)
     loaded = load_model(model)

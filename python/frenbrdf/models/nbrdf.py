@@ -238,7 +238,7 @@ def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Ten
 
 
 def widen_params(params: list[torch.Tensor], width: int, generator: torch.Generator) -> list[torch.Tensor]:
-    """The same NBRDFs with every hidden layer ``width`` wide, their output unchanged.
+    """The same NBRDFs with every hidden layer at least ``width`` wide (wider ones kept), their output unchanged.
 
     ``params`` as for :func:`nbrdf_forward`. A new unit's incoming weights are drawn at the scale of its layer's
     (from ``generator``), its bias is 0, and every weight *from* a new unit is 0: the old units and the output see
@@ -249,11 +249,8 @@ def widen_params(params: list[torch.Tensor], width: int, generator: torch.Genera
     for layer in range(n_layers):
         weight, bias = params[2 * layer], params[2 * layer + 1]
         batch, rows, columns = weight.shape
-        new_rows = width if layer < n_layers - 1 else rows
-        new_columns = width if layer > 0 else columns
-        if new_rows < rows or new_columns < columns:
-            raise ValueError(f"an NBRDF can only be widened: its hidden layers are up to {max(rows, columns)} wide, "
-                             f"the width asked is {width}")
+        new_rows = max(rows, width) if layer < n_layers - 1 else rows
+        new_columns = widened[-1].shape[1] if layer > 0 else columns  # the previous layer's new width
         grown = torch.zeros(batch, new_rows, new_columns, dtype=weight.dtype)
         grown[:, :rows, :columns] = weight
         grown[:, rows:, :] = torch.randn(batch, new_rows - rows, new_columns, generator=generator,

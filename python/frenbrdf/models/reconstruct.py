@@ -70,10 +70,10 @@ class RefineConfig:
     """Wall-clock budget of *each* refinement stage: a stage stops after this many seconds even if
     steps remain (None: no limit). A stage stopped by time is no longer deterministic."""
     width: int | None = None
-    """Hidden width of the NBRDF that stage 2 refines: the decoded NBRDF is first widened to it without changing its
-    output (:func:`frenbrdf.models.nbrdf.widen_params`), giving the weights more to fit with; the result is an NBRDF
-    of that width. None: the decoder's width (32 for the shipped model). Costs time: 48 about 1.3×, 64 about 1.75×
-    the weight steps' (docs/measurements.md, "What limits full")."""
+    """Least hidden width of the NBRDF that stage 2 refines: narrower layers of the decoded NBRDF are first widened to
+    it without changing its output (:func:`frenbrdf.models.nbrdf.widen_params`), giving the weights more to fit with;
+    the result is an NBRDF that wide. None: the decoder's widths (32 for the shipped model). Costs time: 48 about
+    1.2×, 64 about 1.45× the whole ``full`` (docs/measurements.md, "What limits full")."""
     seed: int = 0
     """Seeds the mini-batches (and a widened NBRDF's new weights)."""
     progress: bool = False
@@ -104,12 +104,13 @@ class RefineConfig:
 #: material, 4000 samples). Latent: 100 steps take 0.2–0.4 s and give +6–9 dB; 200 steps with a cosine schedule
 #: from 3e-2 (chart 8c) add 0.3–0.7 dB for 0.25 s more. Full: after 100 latent steps, 1000 steps on the NBRDF's
 #: weights at 3e-3 (chart 8c: +1.9 dB over 1e-3 on 7 RGL fits version 2 never saw, 47.3 against 45.4 dB),
-#: 2.0 s; a cosine schedule did not help there. Each was chosen by a rule fixed before measuring, on materials
-#: other than the four real measurements (docs/charts/README.md, chart 8c).
+#: 2.0 s; a cosine schedule did not help there. Full's weights refined in an NBRDF widened to 48 units: +2.7 dB
+#: [+1.4, +4.0] on those RGL fits, 1.25 → 1.47 s on 2 threads (docs/measurements.md, "What limits full"). Each
+#: was chosen by a rule fixed before measuring, on materials other than the four real measurements.
 BUDGETS = {
     "none": RefineConfig(),
     "latent": RefineConfig(latent_steps=200, latent_lr=3e-2, schedule="cosine"),
-    "full": RefineConfig(latent_steps=100, weight_steps=1000, weight_lr=3e-3),
+    "full": RefineConfig(latent_steps=100, weight_steps=1000, weight_lr=3e-3, width=48),
 }
 
 
