@@ -253,8 +253,9 @@ def widen_params(params: list[torch.Tensor], width: int, generator: torch.Genera
         new_columns = widened[-1].shape[1] if layer > 0 else columns  # the previous layer's new width
         grown = torch.zeros(batch, new_rows, new_columns, dtype=weight.dtype)
         grown[:, :rows, :columns] = weight
+        scale = weight.std() if weight.numel() > 1 else weight.abs().max()  # a single weight has no spread: its size
         grown[:, rows:, :] = torch.randn(batch, new_rows - rows, new_columns, generator=generator,
-                                         dtype=weight.dtype) * weight.std()
+                                         dtype=weight.dtype) * scale
         widened += [grown, torch.cat([bias, bias.new_zeros(batch, new_rows - rows)], dim=1)]
     return widened
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import time
 from collections.abc import Callable
 from contextlib import contextmanager
@@ -93,7 +94,8 @@ class RefineConfig:
             problems.append(f"batch must be ≥ 1, got {self.batch}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
-        if self.width is not None and not (1 <= int(self.width) <= MAX_WIDTH and self.weight_steps):
+        if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
+                                           and self.weight_steps):
             problems.append(f"width must be None or 1 to {MAX_WIDTH} with weight_steps > 0, got {self.width} with "
                             f"weight_steps {self.weight_steps}")
         if problems:
@@ -211,7 +213,7 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     if config.weight_steps:
         params = [p.detach().clone() for p in params]
         if config.width is not None:
-            params = widen_params(params, int(config.width), torch.Generator().manual_seed(config.seed))
+            params = widen_params(params, config.width, torch.Generator().manual_seed(config.seed))
         params = [p.requires_grad_(True) for p in params]
 
         def weight_objective(batch: _Samples) -> torch.Tensor:
