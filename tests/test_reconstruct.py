@@ -349,7 +349,7 @@ def test_full_limits_study_measures_every_variant_and_the_table(run_dir, toy_mat
     assert "table lookup" not in mixed[table.stem] and "table lookup" in mixed["flat_rgb"]
 
 
-def test_refine_timing_times_this_tree_against_a_commit(run_dir, tmp_path, capsys):
+def test_refine_timing_times_this_tree_against_a_commit(run_dir, toy_materials, tmp_path, capsys):
     import subprocess
 
     if subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True).returncode:
@@ -357,10 +357,11 @@ def test_refine_timing_times_this_tree_against_a_commit(run_dir, tmp_path, capsy
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
     study = bench_module("refine_timing")
-    assert study.main([str(measurement), "--model", str(run_dir), "--budget", "latent", "--samples", "200",
-                       "--repeats", "2", "--against", "HEAD"]) == 0
+    table = sorted(toy_materials.glob("*.binary"))[0]
+    assert study.main([str(measurement), str(table), "--model", str(run_dir), "--budget", "latent", "--samples",
+                       "200", "--repeats", "2", "--against", "HEAD"]) == 0
     summary = capsys.readouterr().out.split("best of 2:")[1]
-    assert "this tree  mean" in summary and "HEAD  mean" in summary
+    assert "this tree  mean" in summary and "HEAD  mean" in summary and table.stem in summary
     with pytest.raises(SystemExit, match="cannot read"):
         study.main([str(measurement), "--model", str(run_dir), "--against", "no-such-commit"])
 

@@ -87,12 +87,13 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], bud
                 runs = sorted({r["model"] for r in mine})
                 scored = [m for m in materials if any(r["material"] == m for r in mine)]
                 entry = {"runs": runs}
+                # Runs judged on other materials (folds) have no spread between them.
+                same_materials = len({frozenset(r["material"] for r in mine if r["model"] == run) for run in runs}) == 1
                 for key in METRICS:
                     per_run = [mean_of([r for r in mine if r["model"] == run], key) for run in runs]
                     entry[key] = float(np.mean(per_run))
-                    same_materials = len({frozenset(r["material"] for r in mine if r["model"] == run) for run in runs}) == 1
-                    entry[f"{key}_run_sd"] = (float(np.std(per_run, ddof=1)) if len(per_run) > 1 and same_materials
-                                              else None)  # runs judged on other materials (folds): no spread
+                    spread = len(per_run) > 1 and same_materials
+                    entry[f"{key}_run_sd"] = float(np.std(per_run, ddof=1)) if spread else None
                     if name != baseline:
                         base = [r for r in chosen if r["model"] == baseline]
                         differences = [mean_of([r for r in mine if r["material"] == m], key)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+from itertools import product
 from pathlib import Path
 
 import numpy as np
@@ -49,18 +50,15 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
     if table is not truth:  # a measurement: its table is a second, quantised truth; a MERL file is its own
         images[TABLE] = tonemap(render_linear(table, scene))
         rows[TABLE] = [image_metrics(images["truth"], images[TABLE], mask)]
-    for count in samples:
-        for steps in weight_steps:
-            for width in widths:
-                config = dataclasses.replace(refine_config("full"), weight_steps=steps, width=width)
-                for draw in draws:
-                    bins = sample_bins(table, np.random.default_rng(draw), count)
-                    result, image, _ = refined_reconstruction(model, table, bins, scene,
-                                                              dataclasses.replace(config, seed=draw))
-                    metrics = image_metrics(images["truth"], image, mask) | {"loss": result.losses["weights"],
-                                                                             "seconds": sum(result.timings.values())}
-                    rows.setdefault(variant_name(count, steps, width), []).append(metrics)
-                    images.setdefault(variant_name(count, steps, width), image)
+    for count, draw in product(samples, draws):
+        bins = sample_bins(table, np.random.default_rng(draw), count)
+        for steps, width in product(weight_steps, widths):
+            config = dataclasses.replace(refine_config("full"), weight_steps=steps, width=width, seed=draw)
+            result, image, _ = refined_reconstruction(model, table, bins, scene, config)
+            metrics = image_metrics(images["truth"], image, mask) | {"loss": result.losses["weights"],
+                                                                     "seconds": sum(result.timings.values())}
+            rows.setdefault(variant_name(count, steps, width), []).append(metrics)
+            images.setdefault(variant_name(count, steps, width), image)  # the first draw's
     return rows, images
 
 
@@ -102,19 +100,21 @@ def cell(metrics: list[dict] | None) -> str:
 
 def markdown(report: dict) -> str:
     materials = list(report["materials"])
-    lines = [f"Model `{report['model']}`, draws {report['draws']}, {report['resolution']}²; PSNR (dB) / ΔE, the mean over "
-             f"the draws; seconds of encoding and refinement ({report['threads']} threads), the mean over all.", "",
+    lines = [f"Model `{report['model']}`, draws {report['draws']}, {report['resolution']}²; PSNR (dB) / ΔE, the mean "
+             f"over the draws; seconds of encoding and refinement ({report['threads']} threads), the mean over all.",
+             "",
              "| variant | " + " | ".join(materials) + " | mean | seconds |", "|---|" + "---|" * (len(materials) + 2)]
     for variant, mean in report["mean"].items():
         cells = [cell(report["materials"][name].get(variant)) for name in materials]
         seconds = f"{mean['seconds']:.2f}" if "seconds" in mean else "–"
-        lines.append(f"| {variant} | " + " | ".join(cells) + f" | {mean['psnr']:.2f} / {mean['delta_e']:.2f} | {seconds} |")
+        overall = f"{mean['psnr']:.2f} / {mean['delta_e']:.2f}"
+        lines.append(f"| {variant} | " + " | ".join(cells) + f" | {overall} | {seconds} |")
     return "\n".join(lines) + "\n"
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("measurements", nargs="+", help=".bsdf files")
+    parser.add_argument("measurements", nargs="+", help=".bsdf files or MERL tables")
     parser.add_argument("--model", default="pretrained", help="'pretrained', a run folder, a checkpoint or a packed "
                         "model's folder")
     parser.add_argument("--samples", type=int, nargs="+", default=[4000, 40000])
@@ -123,7 +123,7 @@ def main(argv=None) -> int:
                         help="hidden widths of the refined NBRDF (RefineConfig.width); 0: the model's own")
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
     parser.add_argument("--resolution", type=int, default=256)
-    parser.add_argument("--out", required=True, help="folder for limits.json and limits.md")
+    parser.add_argument("--out", required=True, help="folder for limits.json, limits.md and limits.png")
     args = parser.parse_args(argv)
     model = load_model(args.model)
     scene = Scene(resolution=args.resolution)

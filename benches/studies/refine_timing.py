@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.models import reconstruct as this_tree
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.render.scoring import bin_samples, sample_bins
@@ -51,7 +51,8 @@ def main(argv=None) -> int:
     parser.add_argument("measurements", nargs="+", help=".bsdf files (or MERL tables)")
     parser.add_argument("--model", default="pretrained")
     parser.add_argument("--budget", default="full", choices=tuple(this_tree.BUDGETS))
-    parser.add_argument("--against", nargs="*", default=[], help="commits whose reconstruct.py to time beside this tree's")
+    parser.add_argument("--against", nargs="*", default=[],
+                        help="commits whose reconstruct.py to time beside this tree's")
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, help="torch threads (default: torch's)")
@@ -61,7 +62,7 @@ def main(argv=None) -> int:
     model = load_model(args.model)
     inputs = []
     for path in map(Path, args.measurements):
-        table = read_truth(path).table()
+        table = as_table(read_truth(path))
         inputs.append((path.stem, *bin_samples(table, sample_bins(table, np.random.default_rng(0), args.samples))))
     with tempfile.TemporaryDirectory() as folder:
         variants = {"this tree": this_tree, **{commit: module_at(commit, Path(folder)) for commit in args.against}}
@@ -76,8 +77,8 @@ def main(argv=None) -> int:
                     result = module.reconstruct(model, values, directions, refine=args.budget)
                     seconds = time.perf_counter() - start
                     best[label][name] = min(best[label].get(name, np.inf), seconds)
-                    print(f"{label:>12}  {name:<28} {seconds:6.3f} s  final loss {list(result.losses.values())[-1]:.5f}",
-                          flush=True)
+                    final_loss = list(result.losses.values())[-1]
+                    print(f"{label:>12}  {name:<28} {seconds:6.3f} s  final loss {final_loss:.5f}", flush=True)
     print(f"\n{args.budget}, {args.samples} samples, {torch.get_num_threads()} threads, best of {args.repeats}:")
     for label, seconds in best.items():
         print(f"{label:>12}  mean {np.mean(list(seconds.values())):.3f} s  "

@@ -193,9 +193,9 @@ class Model:
         """
         mapped, coords, _ = mapped_samples(self.mapping, values, directions)
         samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
-        if len(samples) <= ENCODE_CHUNK:
-            return self.network.encoder(samples[None])[0].numpy().astype(np.float64)
         encoder = self.network.encoder
+        if len(samples) <= ENCODE_CHUNK:
+            return encoder(samples[None])[0].numpy().astype(np.float64)
         members = encoder.members if isinstance(encoder, EncoderMean) else [encoder]
         return np.mean([encode_in_chunks(member, samples) for member in members], axis=0)
 
