@@ -66,7 +66,7 @@ for path in sys.argv[1:]:
     torch.save(checkpoint, path)
 PY
 for name in big-s0 big-s1 big-s3 control-gpu-s0; do
-    tar czf "$OUT/run-$name.tgz" -C "$WORK" --exclude last.pt --exclude best-psnr.pt "$name" "$name".*log
+    tar czf "$OUT/run-$name.tgz" -C "$WORK" --exclude last.pt --exclude best-psnr.pt "$name" $(cd "$WORK" && ls "$name".*log)
     [[ $name == big-* ]] && cp "$WORK/$name/last.pt" "$OUT/last-$name.pt"
 done
 ls -la "$OUT"
