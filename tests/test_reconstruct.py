@@ -384,6 +384,18 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
         study.main(["--models", str(run_dir), "--labels", "base", "--trained-on", "other=x", "--out", str(tmp_path)])
 
 
+def test_model_comparison_takes_a_baseline_of_several_runs(run_dir, toy_materials, tmp_path):
+    """A baseline labelled NAME/RUN is its runs' mean per material (it once compared with no rows: NaN)."""
+    table = sorted(toy_materials.glob("*.binary"))[0]
+    study = bench_module("compare_models")
+    assert study.main(["--models", str(run_dir), str(run_dir), str(run_dir), "--labels", "base/0", "base/1", "other/0",
+                       "--tables", str(table), "--samples", "300", "--resolution", "16", "--budgets", "none",
+                       "--out", str(tmp_path / "out")]) == 0
+    summary = json.loads((tmp_path / "out" / "compare.json").read_text())["summary"]["tables"]["none"]
+    assert summary["base"]["runs"] == ["base/0", "base/1"] and summary["base"]["psnr_run_sd"] == pytest.approx(0)
+    assert summary["other"]["psnr_change"]["mean"] == pytest.approx(0, abs=1e-9)
+
+
 @pytest.mark.slow  # trains, evaluates and packs: about 40 s on a shared 2-core machine
 def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
     config = tmp_path / "tiny.json"

@@ -95,7 +95,7 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], bud
                     spread = len(per_run) > 1 and same_materials
                     entry[f"{key}_run_sd"] = float(np.std(per_run, ddof=1)) if spread else None
                     if name != baseline:
-                        base = [r for r in chosen if r["model"] == baseline]
+                        base = [r for r in chosen if variant(r["model"]) == baseline]  # its runs' mean
                         differences = [mean_of([r for r in mine if r["material"] == m], key)
                                        - mean_of([r for r in base if r["material"] == m], key) for m in scored]
                         entry[f"{key}_change"] = paired_interval(differences)
@@ -156,13 +156,14 @@ def main(argv=None) -> int:
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
                          trained_on, args.budgets)
-    groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
-    summary = summarise(rows, variant(args.labels[0]), groups, args.budgets)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    save_json(out / "compare.json", {"run": run_metadata(), "models": dict(zip(args.labels, args.models)),
-                                     "trained_on": sorted(args.trained_on),
-                                   "draws": args.draws, "samples": args.samples, "summary": summary, "rows": rows})
+    report = {"run": run_metadata(), "models": dict(zip(args.labels, args.models)), "trained_on": sorted(args.trained_on),
+              "draws": args.draws, "samples": args.samples, "rows": rows}
+    save_json(out / "compare.json", report)  # the scores are kept whatever the summary does
+    groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
+    summary = summarise(rows, variant(args.labels[0]), groups, args.budgets)
+    save_json(out / "compare.json", report | {"summary": summary})
     write_text(out / "compare.md", markdown(summary))
     if measured:
         names = list(dict.fromkeys(map(variant, models)))
