@@ -10,7 +10,7 @@ M="local/folds/scratch-control local/folds/seed1-control local/folds/seed3-contr
    local/capacity/big-s0 local/capacity/big-s1 local/capacity/big-s3 local/capacity/control-gpu-s0"
 L="control/0 control/1 control/3 big/0 big/1 big/3 control-gpu/0"
 D=docs/results/capacity
-python benches/studies/compare_models.py --models $M --labels $L --tables $H --draws 0 --out $D/tables > $D/tables.log 2>&1 &
+python benches/studies/compare_models.py --models $M --labels $L --tables $H --draws 0 --out $D/tables > local/capacity/tables.log 2>&1 &
 python benches/studies/compare_models.py --models $M --labels $L --measurements ../shared/data/rgl-measured/*.bsdf \
-    --draws 0 1 2 --budgets none latent full --out $D/measured > $D/measured.log 2>&1 &
+    --draws 0 1 2 --budgets none latent full --out $D/measured > local/capacity/measured.log 2>&1 &
 wait
