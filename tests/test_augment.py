@@ -22,7 +22,7 @@ from frenbrdf.models.autoencoder import AutoEncoder
 from frenbrdf.models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.training import config_for, loss_terms, prepare
-from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, draw_gains
+from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, draw_gains, hue_turn
 from frenbrdf.training.config import AugmentConfig
 from frenbrdf.training.procedural import NodeTruth, bin_directions, draw_procedural
 
@@ -173,6 +173,40 @@ def test_gains_keep_the_albedo_at_most_one():
     assert ((small >= 0.5) & (small <= 2.0)).all()
 
 
+def test_a_hue_turn_keeps_greys_and_takes_red_to_green_in_a_third_of_a_turn():
+    np.testing.assert_allclose(hue_turn(0.0), torch.eye(3), atol=1e-7)
+    third = hue_turn(2 * np.pi / 3)
+    np.testing.assert_allclose(third @ torch.tensor([1.0, 0.0, 0.0]), [0.0, 1.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(hue_turn(1.234) @ torch.full((3,), 0.4), torch.full((3,), 0.4), atol=1e-6)
+    np.testing.assert_allclose(hue_turn(0.7) @ hue_turn(0.7).T, torch.eye(3), atol=1e-6)  # a rotation
+
+
+def test_turned_tables_change_hue_stay_physical_and_earlier_batches_are_unchanged(prepared):
+    _, data = prepared
+    # hue_turn 0 draws nothing more: the batches of runs from before it existed are drawn bit for bit.
+    plain = _drawer(prepared, gain=1.0, mix=0.0, procedural=0.0)[0]
+    turned_off = _drawer(prepared, gain=1.0, mix=0.0, procedural=0.0, hue_turn=0.0)[0]
+    for first, second in zip(plain.gained(0, 500, torch.Generator().manual_seed(4)),
+                             turned_off.gained(0, 500, torch.Generator().manual_seed(4))):
+        assert torch.equal(first, second)
+    drawer, _ = _drawer(prepared, gain=1.0, mix=0.0, procedural=0.0, hue_turn=1.0, gain_range=(1.0, 1.0))
+    # The most coloured training material (toy tables: a coloured Lambertian base under a white lobe).
+    chroma = [(lambda c: float((c.max() - c.min()) / c.max()))(drawer.reflectance(m, data.bank.valid_bins(m)).mean(0))
+              for m in range(data.n_train)]
+    material = int(np.argmax(chroma))
+    generator, hues = torch.Generator().manual_seed(5), []
+    for _ in range(12):
+        bins, values = drawer.gained(material, 4000, generator)
+        colours = data.mapping.inverse(values, drawer.reference[bins]).double()
+        own = drawer.reflectance(material, bins).double()
+        assert torch.isfinite(values).all() and colours.min() >= 0
+        # At the same bins a turn keeps the grey level (the sum of the channels), up to the clip at 0 and the
+        # albedo cap.
+        assert 0.3 < float(colours.sum() / own.sum()) < 1.5
+        hues.append(colours.sum(0) / colours.sum())
+    assert torch.stack(hues).std(0).max() > 0.02, hues  # the drawn angles give different hues
+
+
 @pytest.mark.parametrize("kind", ["diffuse", "metal"])
 def test_exact_node_truth_agrees_with_the_knn_truth_of_the_table(kind):
     material = synth.draw_material(np.random.default_rng(1), kind)
@@ -191,6 +225,8 @@ def test_augment_config_refuses_bad_values():
         AugmentConfig(mix=0.5, gain=0.5, procedural=0.5)
     with pytest.raises(ValueError, match="gain_range"):
         AugmentConfig(gain_range=(2.0, 1.0))
+    with pytest.raises(ValueError, match="hue_turn must lie"):
+        AugmentConfig(hue_turn=float("nan"))
     paper = AugmentConfig(mix=0.0, gain=0.0)
     assert not paper.active and dataclasses.replace(paper, procedural=0.1).active
     # The default is the 'augmented' preset; 'paper' switches every kind off.

@@ -8,6 +8,7 @@ materials of the batch (docs/data.md gives the physical argument for each):
   un-mapped to reflectance with f_ref at its bin, mixed, and mapped again;
 - a *gained* table g_c · f, the gains scaled so that the material's largest directional albedo
   (:func:`frenbrdf.data.folders.max_directional_albedo`, computed once in ``prepare``) stays ≤ 1;
+  some of them (``hue_turn``) with their colour first turned about the grey axis (:func:`hue_turn`);
 - a *procedural* material (:mod:`.procedural`), evaluated exactly at the sampled bins, with
   its L_fre truth evaluated exactly at the SHT nodes.
 
@@ -151,11 +152,34 @@ class BatchDrawer:
         return bins, self.data.mapping.forward(mix, self.reference[bins])
 
     def gained(self, a: int, n: int, generator: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
-        """Bins and mapped values of material ``a`` with per-channel gains (:func:`draw_gains`)."""
-        gains = draw_gains(self.data.albedo[a], self.augment.gain_range, generator)
+        """Bins and mapped values of material ``a`` in another colour: its hue turned (for a share
+        ``hue_turn`` of them), then per-channel gains (:func:`draw_gains`)."""
+        turn = self.draw_turn(generator)
+        # A turned colour's channel is at most the turn's |row| times the channels: so is its albedo.
+        albedo = self.data.albedo[a] if turn is None else turn.abs() @ self.data.albedo[a]
+        gains = draw_gains(albedo, self.augment.gain_range, generator)
         own = self.data.bank.valid_bins(a)
         bins = own[torch.randint(len(own), (n,), generator=generator)]
-        return bins, self.data.mapping.forward(gains * self.reflectance(a, bins), self.reference[bins])
+        colours = self.reflectance(a, bins)
+        if turn is not None:
+            colours = (colours @ turn.T).clamp_min(0)
+        return bins, self.data.mapping.forward(gains * colours, self.reference[bins])
+
+    def draw_turn(self, generator: torch.Generator) -> torch.Tensor | None:
+        """A hue turn for a gained table, or None; draws nothing when ``hue_turn`` is 0 (earlier runs' batches)."""
+        if self.augment.hue_turn == 0:
+            return None
+        chance, angle = torch.rand(2, generator=generator, dtype=torch.float64).tolist()
+        return hue_turn(2 * math.pi * angle) if chance < self.augment.hue_turn else None
+
+
+def hue_turn(angle: float) -> torch.Tensor:
+    """The ``(3, 3)`` rotation of linear RGB about the grey axis by ``angle`` (radians, Rodrigues' formula):
+    greys are kept, and a third of a turn takes red to green to blue."""
+    k = torch.full((3,), 1 / math.sqrt(3), dtype=torch.float64)
+    cross = torch.tensor([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]], dtype=torch.float64)
+    turn = math.cos(angle) * torch.eye(3, dtype=torch.float64) + math.sin(angle) * cross
+    return (turn + (1 - math.cos(angle)) * torch.outer(k, k)).float()
 
 
 def draw_gains(albedo: torch.Tensor, gain_range: tuple[float, float], generator: torch.Generator) -> torch.Tensor:

@@ -54,6 +54,10 @@ class AugmentConfig:
     gain_range: tuple[float, float] = (0.5, 2.0)
     """Each channel's gain is drawn log-uniform in this range, then all three are scaled down
     together where needed so that the material's albedo stays ≤ 1."""
+    hue_turn: float = 0.0
+    """Fraction of the gained tables whose colour is first turned about the grey axis by an angle drawn
+    uniformly (:func:`frenbrdf.training.augment.hue_turn`): a red car paint becomes a yellow or a blue one,
+    greys stay grey. Channels the turn takes below 0 are clipped to 0."""
     procedural: float = 0.0
     """Fraction of batch materials drawn afresh every step from the analytic families of
     :mod:`frenbrdf.data.synth` and evaluated exactly at the sampled bins."""
@@ -64,7 +68,7 @@ class AugmentConfig:
     def __post_init__(self):
         self.gain_range = tuple(float(g) for g in self.gain_range)
         problems = []
-        for name in ("mix", "gain", "procedural"):
+        for name in ("mix", "gain", "procedural", "hue_turn"):
             value = getattr(self, name)
             if not 0.0 <= value <= 1.0:
                 problems.append(f"{name} must lie in [0, 1], got {value}")
