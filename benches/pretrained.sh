@@ -6,9 +6,8 @@
 #
 #   bash benches/pretrained.sh [SHARED_DATA] [WORK]        # then: git diff python/frenbrdf/models/pretrained
 #
-# The shipped version 2 was trained by the same config on one NVIDIA H100 (`frenbrdf train --data
-# WORK/pack/data --config benches/pretrained.json --out WORK/pack/run`, 540 epochs, 323 s), then
-# packed here with --reuse --trained-on "one NVIDIA H100".
+# The shipped version 4 was trained by this config (the hue turn added: docs/results/hue-turn) on the
+# 2-core CPU, 475 epochs, 498 s, on these folders as built earlier (local/v2), then packed with --reuse.
 set -euo pipefail
 SHARED=${1:-../shared/data}
 WORK=${2:-pretrained-work}
