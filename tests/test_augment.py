@@ -227,6 +227,8 @@ def test_augment_config_refuses_bad_values():
         AugmentConfig(gain_range=(2.0, 1.0))
     with pytest.raises(ValueError, match="hue_turn must lie"):
         AugmentConfig(hue_turn=float("nan"))
+    with pytest.raises(ValueError, match="hue_turn 0.5 turns gained tables, but gain is 0"):
+        AugmentConfig(gain=0.0, hue_turn=0.5)
     paper = AugmentConfig(mix=0.0, gain=0.0)
     assert not paper.active and dataclasses.replace(paper, procedural=0.1).active
     # The default is the 'augmented' preset; 'paper' switches every kind off.

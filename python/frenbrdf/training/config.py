@@ -74,6 +74,8 @@ class AugmentConfig:
                 problems.append(f"{name} must lie in [0, 1], got {value}")
         if self.mix + self.gain + self.procedural > 1.0 + 1e-9:
             problems.append(f"mix + gain + procedural must be ≤ 1, got {self.mix + self.gain + self.procedural:g}")
+        if self.hue_turn > 0 and self.gain == 0:
+            problems.append(f"hue_turn {self.hue_turn:g} turns gained tables, but gain is 0: there are none")
         low_high = self.gain_range
         if len(low_high) != 2 or not (0 < low_high[0] <= low_high[1] and math.isfinite(low_high[1])):
             problems.append(f"gain_range must be two finite numbers 0 < low ≤ high, got {self.gain_range}")
