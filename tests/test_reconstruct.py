@@ -145,6 +145,19 @@ def test_full_refines_48_wide_by_default(model, material, tmp_path):
     assert all(p.shape[1] == 48 for p in result.nbrdf.params[:-2])
 
 
+@pytest.mark.parametrize("kind", ["per_tensor", "all"])
+def test_the_weight_decays_are_the_penalty_gradients(kind):
+    from frenbrdf.models.losses import LossConfig, weight_penalty
+    from frenbrdf.models.reconstruct import _weight_decays
+
+    generator = torch.Generator().manual_seed(0)
+    params = [torch.randn(1, *shape, generator=generator, requires_grad=True) for shape in [(32, 6), (32,), (3, 32), (3,)]]
+    loss = LossConfig(lambda_weights=0.01, weight_penalty=kind)
+    (loss.lambda_weights * weight_penalty(params, kind)).backward()
+    for param, decay in zip(params, _weight_decays(params, loss)):
+        torch.testing.assert_close(param.grad, decay * param.detach())
+
+
 def test_named_budgets_are_copies():
     config = refine_config("full")
     config.latent_steps = 1
