@@ -203,8 +203,9 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
             return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind)
 
         with _frozen(model.network):
-            _optimise("latent", [z], [2 * loss.lambda_latent / z.numel()], latent_objective, config.latent_steps,
-                      config.latent_lr, samples, config, result)
+            latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
+            _optimise("latent", [z], [latent_decay], latent_objective, config.latent_steps, config.latent_lr, samples,
+                      config, result)
         z = z.detach()
         with torch.no_grad():
             params = model.network.decoder(z)
@@ -238,9 +239,9 @@ def _loss_config(model) -> LossConfig:
 def _weight_decays(params: list[torch.Tensor], loss: LossConfig) -> list[float]:
     """Adam's weight decay per tensor whose step is that of λ1 · :func:`~frenbrdf.models.losses.weight_penalty`:
     its gradient is 2·λ1·p / n, n the tensor's size (``per_tensor``) or all tensors' sizes together (``all``)."""
-    sizes = [p.numel() for p in params] if loss.weight_penalty == "per_tensor" else [sum(p.numel() for p in params)] \
-        * len(params)
-    return [2 * loss.lambda_weights / size for size in sizes]
+    if loss.weight_penalty == "all":
+        return [2 * loss.lambda_weights / sum(p.numel() for p in params)] * len(params)
+    return [2 * loss.lambda_weights / p.numel() for p in params]
 
 
 def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
@@ -252,7 +253,7 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
     weight decay, ``decays`` per tensor (its gradient 2·λ·p / n is the decay times p), the same steps as
     differentiating it for ~30 fewer small ops a step (docs/performance.md)."""
     groups = [{"params": [p], "weight_decay": decay} for p, decay in zip(parameters, decays)]
-    optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel for all tensors (docs/performance.md)
+    optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel per group (docs/performance.md)
     scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, steps) if config.schedule == "cosine" else None
     generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
     start, taken = time.perf_counter(), 0
