@@ -158,6 +158,29 @@ def test_the_weight_decays_are_the_penalty_gradients(kind):
         torch.testing.assert_close(param.grad, decay * param.detach())
 
 
+def test_the_weight_stage_steps_as_with_its_penalty_differentiated(model, material, monkeypatch):
+    from frenbrdf.models.losses import reconstruction_loss, weight_penalty
+    from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
+
+    monkeypatch.setitem(model.loss, "lambda_weights", 10.0)  # the penalty dominates: its steps show
+    directions = (material.wi, material.wo)
+    result = reconstruct(model, material.values, directions, refine=RefineConfig(weight_steps=5, weight_lr=1e-2))
+    mapped, coords, cos_in = (torch.from_numpy(np.asarray(a, dtype=np.float32))[None]
+                              for a in mapped_samples(model.mapping, material.values, directions))
+    z = torch.from_numpy(model.encode(material.values, directions).astype(np.float32))[None]
+    with torch.no_grad():
+        params = [p.clone().requires_grad_(True) for p in model.network.decoder(z)]
+    optimizer = torch.optim.Adam(params, lr=1e-2)
+    for _ in range(5):  # 2000 samples: every step sees all of them, as the stage's do
+        objective = reconstruction_loss(nbrdf_forward(params, coords), mapped, cos_in, model.loss["kind"]) \
+            + 10.0 * weight_penalty(params, model.loss["weight_penalty"])
+        optimizer.zero_grad()
+        objective.backward()
+        optimizer.step()
+    torch.testing.assert_close(_params(result), torch.cat([p.detach().reshape(-1) for p in params]),
+                               rtol=1e-4, atol=1e-5)
+
+
 def test_named_budgets_are_copies():
     config = refine_config("full")
     config.latent_steps = 1
