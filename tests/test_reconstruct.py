@@ -407,10 +407,14 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
     measurement.write_bytes(tensor_file(flat_material()))
     tables = sorted(toy_materials.glob("*.binary"))[:2]
     study = bench_module("compare_models")
+    config = tmp_path / "config.json"  # the second table comes as a training config's held-out material
+    config.write_text(json.dumps({"holdout": [tables[1].stem]}))
     assert study.main(["--models", str(run_dir), str(run_dir), "--labels", "base", "same/0", "--measurements",
-                       str(measurement), "--tables", *map(str, tables), "--samples", "300", "--resolution", "16",
-                       "--trained-on", f"same/0={tables[0].stem}", "--out", str(tmp_path / "out")]) == 0
+                       str(measurement), "--tables", str(tables[0]), "--held-out", str(config), str(toy_materials),
+                       "--samples", "300", "--resolution", "16", "--trained-on", f"same/0={tables[0].stem}",
+                       "--out", str(tmp_path / "out")]) == 0
     report = json.loads((tmp_path / "out" / "compare.json").read_text())
+    assert {r["material"] for r in report["rows"]} == {"flat_rgb", tables[0].stem, tables[1].stem}
     assert not [r for r in report["rows"] if r["model"] == "same/0" and r["material"] == tables[0].stem]
     for budget in ("none", "latent"):  # the same model on the same samples: no change, and one table left out
         same = report["summary"]["tables"][budget]["same"]

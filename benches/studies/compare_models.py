@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import sys
 from collections import defaultdict
 from pathlib import Path
@@ -139,6 +140,8 @@ def main(argv=None) -> int:
     parser.add_argument("--labels", nargs="+", required=True, help="one per model; NAME/SEED groups runs")
     parser.add_argument("--measurements", nargs="*", default=[], help=".bsdf files")
     parser.add_argument("--tables", nargs="*", default=[], help="MERL files (e.g. a test split)")
+    parser.add_argument("--held-out", nargs=2, metavar=("CONFIG", "DIR"),
+                        help="also the tables a training config holds out (its `holdout`), as DIR/NAME.binary")
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
     parser.add_argument("--budgets", nargs="+", default=list(BUDGETS), choices=("none", "latent", "full"))
     parser.add_argument("--samples", type=int, default=4000)
@@ -154,6 +157,9 @@ def main(argv=None) -> int:
         parser.error("--trained-on takes LABEL=MATERIAL pairs with a LABEL of --labels")
     models = {label: load_model(spec) for label, spec in zip(args.labels, args.models)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
+    if args.held_out:
+        config, folder = map(Path, args.held_out)
+        tables += [folder / f"{name}.binary" for name in json.loads(config.read_text())["holdout"]]
     rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
                          trained_on, args.budgets)
     out = Path(args.out)

@@ -4,13 +4,12 @@
 # the two at once. Writes docs/results/capacity/{tables,measured}.
 set -eu
 export PYTHONPATH=$PWD/python OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
-H=$(python -c "import json; print(' '.join('local/v2/data/' + n + '.binary' for n in
-    json.load(open('docs/results/measured-training/config-scratch.json'))['holdout']))")
 M="local/folds/scratch-control local/folds/seed1-control local/folds/seed3-control
    local/capacity/big-s0 local/capacity/big-s1 local/capacity/big-s3 local/capacity/control-gpu-s0"
 L="control/0 control/1 control/3 big/0 big/1 big/3 control-gpu/0"
 D=docs/results/capacity
-python benches/studies/compare_models.py --models $M --labels $L --tables $H --draws 0 --out $D/tables > local/capacity/tables.log 2>&1 &
+python benches/studies/compare_models.py --models $M --labels $L \
+    --held-out docs/results/measured-training/config-scratch.json local/v2/data --draws 0 --out $D/tables > local/capacity/tables.log 2>&1 &
 python benches/studies/compare_models.py --models $M --labels $L --measurements ../shared/data/rgl-measured/*.bsdf \
     --draws 0 1 2 --budgets none latent full --out $D/measured > local/capacity/measured.log 2>&1 &
 wait

@@ -8,8 +8,8 @@ export PYTHONPATH=$PWD/python OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 D=docs/results/encoder-mean-v4
 python benches/encoder_mean.py --members local/mean-v4/plain-s{1,2,3,4,5,6} --work local/v2 --version 5 \
     --dest local/mean-v4/packed --card local/mean-v4/card.md > local/mean-v4/pack.log 2>&1
-H=$(python -c "import json; print(' '.join('local/v2/data/' + n + '.binary' for n in json.load(open('$D/config.json'))['holdout']))")
-python benches/studies/compare_models.py --models pretrained local/mean-v4/packed --labels v4 mean7 --tables $H \
+python benches/studies/compare_models.py --models pretrained local/mean-v4/packed --labels v4 mean7 \
+    --held-out $D/config.json local/v2/data \
     --draws 0 --budgets none latent --out $D/tables > local/mean-v4/tables.log 2>&1 &
 python benches/studies/compare_models.py --models pretrained local/mean-v4/packed --labels v4 mean7 \
     --measurements ../shared/data/rgl-measured/*.bsdf --draws 0 1 2 --budgets none latent full --out $D/measured \

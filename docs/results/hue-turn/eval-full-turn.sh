@@ -4,11 +4,10 @@
 set -eu
 export PYTHONPATH=$PWD/python OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 D=docs/results/hue-turn/full-turn
-H=$(python -c "import json; print(' '.join('local/v2/data/' + n + '.binary' for n in
-    json.load(open('docs/results/hue-turn/config.json'))['holdout']))")
 M="local/hue-turn/s0 local/hue-turn/s1 local/hue-turn/s3 local/hue-turn/full-s0 local/hue-turn/full-s1 local/hue-turn/full-s3"
 L="half/0 half/1 half/3 full/0 full/1 full/3"
-python benches/studies/compare_models.py --models $M --labels $L --tables $H --draws 0 --budgets none latent \
+python benches/studies/compare_models.py --models $M --labels $L \
+    --held-out docs/results/hue-turn/config.json local/v2/data --draws 0 --budgets none latent \
     --out $D/tables > local/hue-turn/full-tables.log 2>&1 &
 python benches/studies/compare_models.py --models $M --labels $L --measurements ../shared/data/rgl-measured/*.bsdf \
     --draws 0 1 2 --budgets none latent full --out $D/measured > local/hue-turn/full-measured.log 2>&1 &

@@ -7,12 +7,11 @@ set -eu
 export PYTHONPATH=$PWD/python OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 SEEDS=${SEEDS:-0 1}
 D=${OUT:-docs/results/hue-turn}
-H=$(python -c "import json; print(' '.join('local/v2/data/' + n + '.binary' for n in
-    json.load(open('docs/results/measured-training/config-scratch.json'))['holdout']))")
 M="local/folds/scratch-control local/folds/seed1-control local/folds/seed3-control"
 L="control/0 control/1 control/3"
 for seed in $SEEDS; do M="$M local/hue-turn/s$seed"; L="$L hue-turn/$seed"; done
-python benches/studies/compare_models.py --models $M --labels $L --tables $H --draws 0 --out $D/tables \
+python benches/studies/compare_models.py --models $M --labels $L \
+    --held-out docs/results/measured-training/config-scratch.json local/v2/data --draws 0 --out $D/tables \
     > local/hue-turn/tables.log 2>&1 &
 python benches/studies/compare_models.py --models $M --labels $L --measurements ../shared/data/rgl-measured/*.bsdf \
     --draws 0 1 2 --budgets none latent full --out $D/measured > local/hue-turn/measured.log 2>&1 &

@@ -4,9 +4,9 @@
 set -eu
 seed=$1
 export PYTHONPATH=$PWD/python OMP_NUM_THREADS=1
-H=$(python -c "import json;print(' '.join('local/v2/data/'+n+'.binary' for n in json.load(open('docs/results/encoder-refit/config-plain.json'))['holdout']))")
 M="local/folds/seed$seed-control local/folds/seed$seed-fold1"
 D=docs/results/measured-training/seeds/seed$seed
-python benches/studies/compare_models.py --models $M --labels control fold/1 --tables $H --draws 0 --out $D/tables
+python benches/studies/compare_models.py --models $M --labels control fold/1 \
+    --held-out docs/results/encoder-refit/config-plain.json local/v2/data --draws 0 --out $D/tables
 python benches/studies/compare_models.py --models $M --labels control fold/1 --measurements ../shared/data/rgl-measured/*.bsdf \
   --draws 0 1 2 --budgets none latent full --trained-on fold/1=acrylic_felt_green_rgb fold/1=vch_golden_yellow_rgb --out $D/held-out
