@@ -361,6 +361,25 @@ def test_real_measurement_study_runs_on_a_bsdf(run_dir, tmp_path):
     assert all(np.isfinite(row["psnr"]) and 0 < row["seconds"] < 60 for row in rows.values())
 
 
+def test_latent_reach_study_splits_the_error_at_the_published_fit(run_dir, tmp_path):
+    from .conftest import random_layers, write_keras_h5
+
+    measurement = tmp_path / "flat_rgb.bsdf"
+    measurement.write_bytes(tensor_file(flat_material()))
+    write_keras_h5(tmp_path / "flat_rgb.h5", random_layers([6, 8, 3], seed=1))
+    study = bench_module("latent_reach")
+    assert study.main([str(measurement), "--fits", str(tmp_path), "--model", str(run_dir), "--samples", "300",
+                       "--steps", "3", "--draws", "0", "1", "--resolution", "16", "--out", str(tmp_path / "out")]) == 0
+    rows = json.loads((tmp_path / "out" / "reach.json").read_text())["rows"]
+    assert [(row["material"], row["draw"]) for row in rows] == [("flat_rgb", 0), ("flat_rgb", 1)]
+    pairs = {f"{a} vs {b}" for a, b in study.PAIRS}
+    assert all(set(row["scores"]) == pairs for row in rows)
+    assert all(np.isfinite(m["psnr"]) and m["delta_e"] >= 0 for row in rows for m in row["scores"].values())
+    fixed = "fit vs measurement"  # no sampling in it: the same in every draw
+    assert rows[0]["scores"][fixed] == rows[1]["scores"][fixed]
+    assert "| mean |" in (tmp_path / "out" / "reach.md").read_text() and (tmp_path / "out" / "reach.png").exists()
+
+
 def test_full_limits_study_measures_every_variant_and_the_table(run_dir, toy_materials, tmp_path):
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
