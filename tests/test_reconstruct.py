@@ -431,7 +431,7 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
     assert study.main(["--models", str(run_dir), str(run_dir), "--labels", "base", "same/0", "--measurements",
                        str(measurement), "--tables", str(tables[0]), "--held-out", str(config), str(toy_materials),
                        "--samples", "300", "--resolution", "16", "--trained-on", f"same/0={tables[0].stem}",
-                       "--out", str(tmp_path / "out")]) == 0
+                       "--group", f"both={tables[0].stem},flat_rgb", "--out", str(tmp_path / "out")]) == 0
     report = json.loads((tmp_path / "out" / "compare.json").read_text())
     assert {r["material"] for r in report["rows"]} == {"flat_rgb", tables[0].stem, tables[1].stem}
     assert not [r for r in report["rows"] if r["model"] == "same/0" and r["material"] == tables[0].stem]
@@ -439,8 +439,13 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
         same = report["summary"]["tables"][budget]["same"]
         assert same["materials"] == 1 and same["psnr_change"]["mean"] == pytest.approx(0, abs=1e-9)
         assert report["summary"]["measured"][budget]["same"]["delta_e_change"]["mean"] == pytest.approx(0, abs=1e-9)
+    both = report["summary"]["both"]["none"]  # a group of a table and a measurement, summarised apart
+    assert both["base"]["materials"] == 2 and both["same"]["materials"] == 1  # same/0 trained on the table
     with pytest.raises(SystemExit):
         study.main(["--models", str(run_dir), "--labels", "base", "--trained-on", "other=x", "--out", str(tmp_path)])
+    with pytest.raises(SystemExit):  # a group's material that is not scored
+        study.main(["--models", str(run_dir), "--labels", "base", "--tables", str(tables[0]), "--group", "g=nothing",
+                    "--out", str(tmp_path)])
 
 
 def test_model_comparison_takes_a_baseline_of_several_runs(run_dir, toy_materials, tmp_path):

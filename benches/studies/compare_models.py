@@ -11,7 +11,7 @@ label ``NAME/RUN`` puts runs of one variant together: the report gives each vari
 runs, the spread between its runs, and the difference from the first model (the baseline) per
 material, with a 95 % t-interval over the materials. ``--trained-on LABEL=MATERIAL`` leaves out a
 material that model trained on (a fold of a cross-validation is then judged on its held-out materials
-only). Writes ``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth,
+only); ``--group NAME=MATERIAL,...`` summarises some of the scored materials apart as well. Writes ``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth,
 then each variant's first run that was scored on it, under the first of ``--budgets``).
 """
 
@@ -148,6 +148,8 @@ def main(argv=None) -> int:
     parser.add_argument("--resolution", type=int, default=256)
     parser.add_argument("--trained-on", nargs="*", default=[], metavar="LABEL=MATERIAL",
                         help="a material that model trained on: not scored for it")
+    parser.add_argument("--group", nargs="*", default=[], metavar="NAME=MATERIAL,...",
+                        help="also summarise these of the scored materials apart (e.g. the real ones of a test split)")
     parser.add_argument("--out", required=True, help="folder for compare.json, compare.md, compare.png")
     args = parser.parse_args(argv)
     if len(args.models) != len(args.labels):
@@ -155,11 +157,18 @@ def main(argv=None) -> int:
     trained_on = {tuple(pair.split("=", 1)) for pair in args.trained_on}
     if any(len(pair) != 2 or pair[0] not in args.labels for pair in trained_on):
         parser.error("--trained-on takes LABEL=MATERIAL pairs with a LABEL of --labels")
+    extra_groups = {name: members.split(",") for name, _, members in (g.partition("=") for g in args.group)}
+    if any(not name or not all(members) for name, members in extra_groups.items()):
+        parser.error("--group takes NAME=MATERIAL,MATERIAL,... with no empty name")
     models = {label: load_model(spec) for label, spec in zip(args.labels, args.models)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     if args.held_out:
         config, folder = map(Path, args.held_out)
         tables += [folder / f"{name}.binary" for name in json.loads(config.read_text())["holdout"]]
+    scored = {p.stem for p in measured + tables}
+    for name, members in extra_groups.items():
+        if missing := set(members) - scored:
+            parser.error(f"--group {name}: not among the scored materials: {sorted(missing)}")
     rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
                          trained_on, args.budgets)
     out = Path(args.out)
@@ -168,6 +177,7 @@ def main(argv=None) -> int:
               "draws": args.draws, "samples": args.samples, "rows": rows}
     save_json(out / "compare.json", report)  # the scores are kept whatever the summary does
     groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
+    groups |= extra_groups
     summary = summarise(rows, variant(args.labels[0]), groups, args.budgets)
     save_json(out / "compare.json", report | {"summary": summary})
     write_text(out / "compare.md", markdown(summary))
