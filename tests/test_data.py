@@ -82,6 +82,21 @@ def test_reference_is_the_median_over_valid_bins(toy_materials):
     assert per_channel.reference.shape == (3,)
 
 
+def test_the_reference_median_by_chunks_is_the_whole_median():
+    """from_tables takes the median a chunk of bins (or a channel) at a time to bound its memory: the same numbers,
+    with bins missing in some materials and in all of them, across chunk edges."""
+    rng = np.random.default_rng(3)
+    tables = rng.lognormal(size=(5, 3, N_BINS))
+    tables[:2, :, 1000:300_000] = np.nan  # missing in some materials, across the first chunk's edge
+    tables[:, :, -70_000:] = np.nan  # missing in all, across the last edge
+    per_bin = LogRelativeMapping.from_tables(tables, MappingConfig(reference="per_bin")).reference.reshape(3, -1)
+    np.testing.assert_array_equal(per_bin[:, :1000], np.median(tables[:, :, :1000], axis=0))
+    np.testing.assert_array_equal(per_bin[:, 1000:300_000], np.median(tables[2:, :, 1000:300_000], axis=0))
+    assert np.all(per_bin[:, -70_000:] == 0)
+    per_channel = LogRelativeMapping.from_tables(tables, MappingConfig(reference="per_channel")).reference
+    np.testing.assert_array_equal(per_channel, np.nanmedian(tables.transpose(1, 0, 2).reshape(3, -1), axis=1))
+
+
 def test_samples_never_touch_missing_bins(toy_materials):
     files = list_materials(toy_materials)[:3]
     tables = read_tables(files, progress=False)

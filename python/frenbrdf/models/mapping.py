@@ -45,6 +45,24 @@ class MappingConfig:
             raise ValueError(f"mapping.reference must be 'per_bin' or 'per_channel', got {self.reference!r}")
 
 
+#: Bins per chunk of :meth:`LogRelativeMapping.from_tables`' median.
+_MEDIAN_CHUNK = 1 << 16
+
+
+def _median_of_present(tables: np.ndarray) -> np.ndarray:
+    """The median over materials of ``tables`` ``(M, 3, B)`` (missing = NaN): bins missing in no material take
+    the plain median, bins missing in some the median of the others (slower), bins missing in all 0."""
+    missing = np.isnan(tables)
+    some, every = missing.any(axis=0), missing.all(axis=0)
+    reference = np.zeros(tables.shape[1:], dtype=np.float64)
+    complete = ~some
+    reference[complete] = np.median(tables[:, complete], axis=0)
+    partial = some & ~every
+    if partial.any():
+        reference[partial] = np.nanmedian(tables[:, partial], axis=0)
+    return reference
+
+
 class LogRelativeMapping:
     """Reflectance ↔ mapped values, relative to a reference BRDF.
 
@@ -78,18 +96,15 @@ class LogRelativeMapping:
     def from_tables(cls, tables: np.ndarray, config: MappingConfig) -> LogRelativeMapping:
         """The median of ``tables`` ``(M, 3, N_BINS)`` (missing = NaN) as reference."""
         if config.reference == "per_channel":
-            reference = np.nan_to_num(np.nanmedian(tables.transpose(1, 0, 2).reshape(3, -1), axis=1))
+            # One channel at a time (a median copies what it reads: all three at once would copy the bank twice).
+            reference = np.nan_to_num([np.nanmedian(tables[:, channel]) for channel in range(tables.shape[1])])
         else:
-            # Bins missing in no material take the plain median, bins missing in some the
-            # median of the others (slower), bins missing in all get f_ref = 0.
-            missing = np.isnan(tables)
-            some, every = missing.any(axis=0), missing.all(axis=0)
             reference = np.zeros(tables.shape[1:], dtype=np.float64)
-            complete = ~some
-            reference[complete] = np.median(tables[:, complete], axis=0)
-            partial = some & ~every
-            if partial.any():
-                reference[partial] = np.nanmedian(tables[:, partial], axis=0)
+            # A chunk of bins at a time: a median copies what it reads, and all bins at once would
+            # copy the whole bank (~35 MB per material in float64) once more, twice.
+            for start in range(0, tables.shape[-1], _MEDIAN_CHUNK):
+                part = tables[..., start:start + _MEDIAN_CHUNK]
+                reference[..., start:start + _MEDIAN_CHUNK] = _median_of_present(part)
             reference = reference.reshape(SHAPE)
         return cls(np.maximum(reference, 0.0), config.epsilon, FORM_OFFSETS[config.form])
 
