@@ -11,8 +11,9 @@ label ``NAME/RUN`` puts runs of one variant together: the report gives each vari
 runs, the spread between its runs, and the difference from the first model (the baseline) per
 material, with a 95 % t-interval over the materials. ``--trained-on LABEL=MATERIAL`` leaves out a
 material that model trained on (a fold of a cross-validation is then judged on its held-out materials
-only); ``--group NAME=MATERIAL,...`` summarises some of the scored materials apart as well. Writes ``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth,
-then each variant's first run that was scored on it, under the first of ``--budgets``).
+only); ``--group NAME=MATERIAL,...`` summarises some of the scored materials apart as well. Writes
+``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth, then each variant's
+first run that was scored on it, under the first of ``--budgets``).
 """
 
 from __future__ import annotations
