@@ -9,7 +9,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import frenbrdf
-from frenbrdf.data.folders import Split, list_materials, mapped_bank, read_tables, split_materials
+from frenbrdf.data.folders import (
+    Split,
+    files_mapping,
+    list_materials,
+    mapped_bank,
+    read_tables,
+    read_valid_table,
+    split_materials,
+)
 from frenbrdf.io.merl import N_BINS
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.models.nbrdf import bin_geometry
@@ -95,6 +103,23 @@ def test_the_reference_median_by_chunks_is_the_whole_median():
     assert np.all(per_bin[:, -70_000:] == 0)
     per_channel = LogRelativeMapping.from_tables(tables, MappingConfig(reference="per_channel")).reference
     np.testing.assert_array_equal(per_channel, np.nanmedian(tables.transpose(1, 0, 2).reshape(3, -1), axis=1))
+
+
+@pytest.mark.parametrize("reference", ["per_channel", "per_bin"])
+def test_training_reads_its_tables_one_at_a_time_with_the_same_numbers(toy_materials, reference):
+    """files_mapping and mapped_bank over tables read one at a time give what all the tables in memory give."""
+    files = list_materials(toy_materials)[:4]
+    tables = read_tables(files, progress=False)
+    config = MappingConfig(reference=reference)
+    mapping = files_mapping(files, config, progress=False)
+    np.testing.assert_array_equal(mapping.reference, LogRelativeMapping.from_tables(tables, config).reference)
+    names = [f.stem for f in files]
+    whole, streamed = mapped_bank(names, tables, mapping), mapped_bank(names, map(read_valid_table, files), mapping)
+    assert torch.equal(whole.mapped, streamed.mapped) and torch.equal(whole.valid, streamed.valid)
+    with pytest.raises(ValueError, match="3 tables for 4 names"):
+        mapped_bank(names, map(read_valid_table, files[:3]), mapping)
+    with pytest.raises(ValueError, match="more tables than the 3 names"):
+        mapped_bank(names[:3], map(read_valid_table, files), mapping)
 
 
 def test_samples_never_touch_missing_bins(toy_materials):

@@ -31,7 +31,7 @@ from tqdm.auto import tqdm
 
 from ..io.measured import SUFFIXES, read_table
 from ..io.merl import N_BINS
-from ..models.mapping import LogRelativeMapping
+from ..models.mapping import LogRelativeMapping, MappingConfig, channel_median
 from ..models.nbrdf import bin_geometry
 
 # --------------------------------------------------------------------------- files, split
@@ -193,25 +193,53 @@ class MaterialBank:
         return SampleBatch(geometry.half_diff[bins], self.mapped[rows, bins], geometry.cos_in[bins])
 
 
+def read_valid_table(path) -> np.ndarray:
+    """One MERL file (or measurement) → ``(3, N_BINS)`` float64 reflectance with missing bins as NaN."""
+    table = read_table(path).reshape(3, N_BINS)
+    table[:, np.any(table < 0, axis=0)] = np.nan
+    return table
+
+
 def read_tables(files, progress: bool = True) -> np.ndarray:
-    """MERL files → ``(M, 3, N_BINS)`` float64 reflectance with missing bins as NaN."""
+    """MERL files → ``(M, 3, N_BINS)`` float64 reflectance with missing bins as NaN (~35 MB a material)."""
     tables = np.empty((len(files), 3, N_BINS), dtype=np.float64)
     for i, path in enumerate(tqdm(files, desc="reading materials", disable=not progress, leave=False)):
-        table = read_table(path).reshape(3, N_BINS)
-        missing = np.any(table < 0, axis=0)
-        table[:, missing] = np.nan
-        tables[i] = table
+        tables[i] = read_valid_table(path)
     return tables
 
 
-def mapped_bank(names, tables: np.ndarray, mapping: LogRelativeMapping) -> MaterialBank:
-    """Maps reflectance tables ``(M, 3, N_BINS)`` (missing = NaN) into a :class:`MaterialBank`."""
+def files_mapping(files, config: MappingConfig, progress: bool = True) -> LogRelativeMapping:
+    """:meth:`LogRelativeMapping.from_tables` of MERL files, the same numbers. With a reference per channel
+    (the default) it holds one channel of all the tables at a time, a third of them (each file is read three
+    times); per bin, all of them."""
+    if config.reference != "per_channel":
+        return LogRelativeMapping.from_tables(read_tables(files, progress), config)
+    values = np.empty((len(files), N_BINS), dtype=np.float64)
+    medians = []
+    for channel in tqdm(range(3), desc="reference f_ref", disable=not progress, leave=False):
+        for i, path in enumerate(files):
+            values[i] = read_valid_table(path)[channel]
+        medians.append(channel_median(values))
+    return LogRelativeMapping.from_reference(np.array(medians), config)
+
+
+def mapped_bank(names, tables, mapping: LogRelativeMapping) -> MaterialBank:
+    """Maps reflectance tables into a :class:`MaterialBank`: one ``(3, N_BINS)`` table per name (missing = NaN),
+    as an ``(M, 3, N_BINS)`` array or any iterable of them (e.g. read one at a time, so that only the mapped
+    float32 bank is ever whole in memory)."""
     reference = mapping.reference_bins()
-    valid = ~np.any(np.isnan(tables), axis=1)
-    mapped = np.empty((len(tables), N_BINS, 3), dtype=np.float32)
+    valid = np.empty((len(names), N_BINS), dtype=bool)
+    mapped = np.empty((len(names), N_BINS, 3), dtype=np.float32)
+    count = 0
     for i, table in enumerate(tables):
+        if i >= len(names):
+            raise ValueError(f"more tables than the {len(names)} names")
+        valid[i] = ~np.any(np.isnan(table), axis=0)
         with np.errstate(invalid="ignore"):
             mapped[i] = np.nan_to_num(mapping.forward(table, reference)).T
+        count += 1
+    if count != len(names):
+        raise ValueError(f"{count} tables for {len(names)} names")
     return MaterialBank(names, torch.from_numpy(mapped), torch.from_numpy(valid))
 
 

@@ -49,6 +49,11 @@ class MappingConfig:
 _MEDIAN_CHUNK = 1 << 16
 
 
+def channel_median(values: np.ndarray) -> float:
+    """The median of one channel's values over all tables and bins (missing = NaN; 0 where all are missing)."""
+    return float(np.nan_to_num(np.nanmedian(values)))
+
+
 def _median_of_present(tables: np.ndarray) -> np.ndarray:
     """The median over materials of ``tables`` ``(M, 3, B)`` (missing = NaN): bins missing in no material take
     the plain median, bins missing in some the median of the others (slower), bins missing in all 0."""
@@ -97,7 +102,7 @@ class LogRelativeMapping:
         """The median of ``tables`` ``(M, 3, N_BINS)`` (missing = NaN) as reference."""
         if config.reference == "per_channel":
             # One channel at a time (a median copies what it reads: all three at once would copy the bank twice).
-            reference = np.nan_to_num([np.nanmedian(tables[:, channel]) for channel in range(tables.shape[1])])
+            reference = np.array([channel_median(tables[:, channel]) for channel in range(tables.shape[1])])
         else:
             reference = np.zeros(tables.shape[1:], dtype=np.float64)
             # A chunk of bins at a time: a median copies what it reads, and all bins at once would
@@ -106,6 +111,11 @@ class LogRelativeMapping:
                 part = tables[..., start:start + _MEDIAN_CHUNK]
                 reference[..., start:start + _MEDIAN_CHUNK] = _median_of_present(part)
             reference = reference.reshape(SHAPE)
+        return cls.from_reference(reference, config)
+
+    @classmethod
+    def from_reference(cls, reference: np.ndarray, config: MappingConfig) -> LogRelativeMapping:
+        """The mapping with this reference (a median of tables; negative values raised to 0) and ``config``'s ε and form."""
         return cls(np.maximum(reference, 0.0), config.epsilon, FORM_OFFSETS[config.form])
 
     @property

@@ -19,7 +19,7 @@ import torch
 import torch.distributed as dist
 from tqdm.auto import tqdm
 
-from ..data.folders import MaterialBank, Split, mapped_bank, max_directional_albedo, read_tables
+from ..data.folders import MaterialBank, Split, files_mapping, mapped_bank, max_directional_albedo, read_valid_table
 from ..models.losses import FrequencyTruth
 from ..models.mapping import LogRelativeMapping
 from .config import TrainConfig
@@ -109,10 +109,12 @@ def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distr
     if data_cache is not None and key in data_cache:
         mapping, bank = data_cache[key]
     else:
-        tables = read_tables([files[n] for n in names], progress=cfg.progress and ranks.main)
-        mapping = mapping or LogRelativeMapping.from_tables(tables[:len(split.train)], cfg.model.mapping)
+        # Read as needed, never all tables at once (~35 MB a material in float64): only the bank stays.
+        progress = cfg.progress and ranks.main
+        mapping = mapping or files_mapping([files[n] for n in split.train], cfg.model.mapping, progress)
+        tables = (read_valid_table(files[n]) for n in tqdm(names, desc="reading materials", disable=not progress,
+                                                            leave=False))
         bank = mapped_bank(names, tables, mapping)
-        del tables
         if data_cache is not None:
             data_cache.clear()  # one data set at a time: a bank holds ~17 MB per material
             data_cache[key] = mapping, bank
