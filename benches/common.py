@@ -215,6 +215,24 @@ def save_figure(figure, path: str | os.PathLike, dpi: int = 100) -> None:
     pyplot().close(figure)
 
 
+def render_sheet(rows: dict[str, dict[str, np.ndarray]], path: str | os.PathLike, *, columns=None, title=None,
+                 fontsize: int = 7) -> None:
+    """A PNG of renders: one row per material (``rows``: name → column → display image), one column per name of
+    ``columns`` (default: every column, in the order first met); a column a row lacks stays empty.
+    ``title(name, column)`` labels each image (default: the column)."""
+    plt = pyplot()
+    columns = columns or list(dict.fromkeys(column for images in rows.values() for column in images))
+    figure, axes = plt.subplots(len(rows), len(columns), figsize=(2 * len(columns), 2.1 * len(rows)), squeeze=False)
+    for row, (name, images) in zip(axes, rows.items()):
+        for axis, column in zip(row, columns):
+            if column in images:
+                axis.imshow(images[column])
+            axis.set_xticks([]), axis.set_yticks([])
+            axis.set_title(title(name, column) if title else column, fontsize=fontsize)
+        row[0].set_ylabel(name, fontsize=7)
+    save_figure(figure, path)
+
+
 def cpu_model() -> str:
     """The CPU's model name (``lscpu``), else what :mod:`platform` knows."""
     try:

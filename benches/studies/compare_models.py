@@ -37,7 +37,7 @@ from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sampl
 from frenbrdf.study.statistics import paired_interval
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from common import pyplot, run_metadata, save_figure  # noqa: E402
+from common import render_sheet, run_metadata  # noqa: E402
 
 BUDGETS = ("none", "latent")
 """The refinement budgets measured unless ``--budgets`` says others."""
@@ -184,18 +184,15 @@ def main(argv=None) -> int:
     write_text(out / "compare.md", markdown(summary))
     if measured:
         names = list(dict.fromkeys(map(variant, models)))
-        plt = pyplot()
-        figure, axes = plt.subplots(len(measured), len(names) + 1, figsize=(2 * len(names) + 2, 2 * len(measured)),
-                                    squeeze=False)
-        for row, path in zip(axes, measured):
-            shown = images[path.stem]  # the truth, then each variant's first run scored on this material
-            columns = ["truth"] + [next((label for label in shown if variant(label) == name), None) for name in names]
-            for axis, column, name in zip(row, columns, ["truth", *names]):
-                axis.imshow(shown[column] if column else np.zeros_like(shown["truth"]))
-                axis.set_xticks([]), axis.set_yticks([])
-                axis.set_title(name if column in ("truth", None) else f"{column}, {args.budgets[0]}", fontsize=7)
-            row[0].set_ylabel(path.stem, fontsize=7)
-        save_figure(figure, out / "compare.png")
+        sheet, labels = {}, {}
+        for path in measured:  # the truth, then each variant's first run scored on the material
+            shown = images[path.stem]
+            sheet[path.stem] = {"truth": shown["truth"]}
+            for name in names:
+                if label := next((label for label in shown if variant(label) == name), None):
+                    sheet[path.stem][name], labels[path.stem, name] = shown[label], label
+        render_sheet(sheet, out / "compare.png", columns=["truth", *names],
+                     title=lambda m, name: f"{labels[m, name]}, {args.budgets[0]}" if (m, name) in labels else name)
     print(markdown(summary))
     return 0
 

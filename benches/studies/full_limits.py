@@ -33,7 +33,7 @@ from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonema
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from common import pyplot, run_metadata, save_figure  # noqa: E402
+from common import render_sheet, run_metadata  # noqa: E402
 
 TABLE = "table lookup"
 
@@ -75,20 +75,12 @@ def variant_name(samples: int, steps: int, width: int | None = None) -> str:
 
 def draw_renders(grid: dict, results: dict, path: Path) -> None:
     """One row per measurement: the truth, then every column with its PSNR / ΔE in that draw."""
-    plt = pyplot()
-    columns = list(dict.fromkeys(column for images in grid.values() for column in images))
-    figure, axes = plt.subplots(len(grid), len(columns), figsize=(2 * len(columns), 2.1 * len(grid)), squeeze=False)
-    for row, (name, images) in zip(axes, grid.items()):
-        for axis, column in zip(row, columns):
-            if column in images:
-                axis.imshow(images[column])
-            axis.set_xticks([]), axis.set_yticks([])
-            metrics = results[name].get(column, [None])[0]
-            title = column.replace(" samples, ", " s., ").replace(" weight steps", " steps")
-            axis.set_title(title if not metrics else f"{title}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.2f}",
-                           fontsize=6)
-        row[0].set_ylabel(name, fontsize=7)
-    save_figure(figure, path)
+    def title(name, column):
+        metrics = results[name].get(column, [None])[0]
+        short = column.replace(" samples, ", " s., ").replace(" weight steps", " steps")
+        return short if not metrics else f"{short}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.2f}"
+
+    render_sheet(grid, path, title=title, fontsize=6)
 
 
 def cell(metrics: list[dict] | None) -> str:

@@ -31,20 +31,22 @@ from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonema
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from common import pyplot, run_metadata, save_figure  # noqa: E402
+from common import render_sheet, run_metadata  # noqa: E402
 
 PAIRS = (("fit", "measurement"), ("latent from the measurement", "measurement"),
          ("latent from the fit", "measurement"), ("latent from the fit", "fit"))
 
 
-def reach(path: Path, fit_path: Path, model, *, samples: int, steps: int, seed: int, scene: Scene) -> dict:
+def reach(path: Path, fit_path: Path, model, *, samples: int, steps: int, seed: int,
+          scene: Scene) -> tuple[dict, dict]:
     """PSNR and ΔE of each pair of :data:`PAIRS` for one measurement, and the four display images."""
     mask = material_mask(scene)
     truth = read_truth(path)
     layers = load_keras_nbrdf(fit_path)
     fit_table = nbrdf_merl_table(layers)  # the samples' source; the fit itself is rendered as the network
     config = RefineConfig(latent_steps=steps, latent_lr=3e-2, schedule="cosine", seed=seed, progress=False)
-    images = {"measurement": tonemap(render_linear(truth, scene)), "fit": tonemap(render_linear(keras_nbrdf(layers), scene))}
+    images = {"measurement": tonemap(render_linear(truth, scene)),
+              "fit": tonemap(render_linear(keras_nbrdf(layers), scene))}
     for name, table in (("measurement", truth.table()), ("fit", fit_table)):
         bins = sample_bins(table, np.random.default_rng(seed), samples)
         images[f"latent from the {name}"] = refined_reconstruction(model, table, bins, scene, config)[1]
@@ -64,14 +66,14 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     model, scene = load_model(args.model), Scene(resolution=args.resolution)
-    rows, grid = [], []
+    rows, grid = [], {}
     for path in tqdm([Path(p) for p in args.measurements], desc="measurements"):
         for draw in args.draws:
-            scores, images = reach(path, Path(args.fits) / f"{path.stem}.h5", model, samples=args.samples, steps=args.steps,
-                           seed=draw, scene=scene)
+            scores, images = reach(path, Path(args.fits) / f"{path.stem}.h5", model, samples=args.samples,
+                                   steps=args.steps, seed=draw, scene=scene)
             rows.append({"material": path.stem, "draw": draw, "scores": scores})
             if draw == args.draws[0]:
-                grid.append((path.stem, images))
+                grid[path.stem] = images
 
     pairs = [f"{a} vs {b}" for a, b in PAIRS]
     lines = [f"PSNR dB / ΔE, mean over draws {args.draws}; `latent`: {args.steps} steps on {args.samples} samples; "
@@ -86,16 +88,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "reach.md", "\n".join(lines) + "\n")
     save_json(out / "reach.json", {"run": run_metadata(), "model": args.model, "steps": args.steps, "rows": rows})
-    plt = pyplot()
-    columns = list(grid[0][1])
-    figure, axes = plt.subplots(len(grid), len(columns), figsize=(2 * len(columns), 2 * len(grid)), squeeze=False)
-    for row, (name, images) in zip(axes, grid):
-        for axis, column in zip(row, columns):
-            axis.imshow(images[column])
-            axis.set_xticks([]), axis.set_yticks([])
-            axis.set_title(column, fontsize=7)
-        row[0].set_ylabel(name, fontsize=7)
-    save_figure(figure, out / "reach.png")
+    render_sheet(grid, out / "reach.png")
     print("\n".join(lines))
     return 0
 

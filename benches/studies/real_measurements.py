@@ -34,7 +34,7 @@ from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonema
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from common import pyplot, run_metadata, save_figure  # noqa: E402
+from common import render_sheet, run_metadata  # noqa: E402
 
 COLUMNS = ("published fit", "fit-nbrdf", "encoder", "latent", "full")
 
@@ -92,12 +92,12 @@ def main(argv=None) -> int:
     scene = Scene(resolution=args.resolution)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    results, grid = {}, []
+    results, grid = {}, {}
     for index, path in enumerate(tqdm([Path(p) for p in args.measurements], desc="measurements")):
         rows, images = measure(path, model, Path(args.fits) if args.fits else None, samples=args.samples,
                                seed=args.seed, scene=scene, fit_epochs=args.fit_epochs, warm_up=index == 0)
         results[path.stem] = rows
-        grid.append((path.stem, images))
+        grid[path.stem] = images
     means = {column: {key: float(np.mean(values)) for key in ("psnr", "delta_e", "seconds")
                       if (values := [r[column][key] for r in results.values() if key in r.get(column, {})])}
              for column in COLUMNS}
@@ -105,18 +105,11 @@ def main(argv=None) -> int:
               "resolution": args.resolution, "materials": results, "mean": means}
     save_json(out / "real.json", report)
     write_text(out / "real.md", markdown(report))
-    plt = pyplot()
-    columns = ["truth", *COLUMNS]
-    figure, axes = plt.subplots(len(grid), len(columns), figsize=(2 * len(columns), 2 * len(grid)), squeeze=False)
-    for row, (name, images) in zip(axes, grid):
-        for axis, column in zip(row, columns):
-            axis.imshow(images.get(column, np.zeros_like(images["truth"])))
-            axis.set_xticks([]), axis.set_yticks([])
-            metrics = results[name].get(column)
-            label = column if not metrics else f"{column}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}"
-            axis.set_title(label, fontsize=7)
-        row[0].set_ylabel(name, fontsize=7)
-    save_figure(figure, out / "real.png")
+    def title(name, column):
+        metrics = results[name].get(column)
+        return column if not metrics else f"{column}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}"
+
+    render_sheet(grid, out / "real.png", columns=["truth", *COLUMNS], title=title)
     print(markdown(report))
     return 0
 
