@@ -7,6 +7,7 @@ pub mod error;
 pub mod knn;
 pub mod merl;
 pub mod parallel;
+pub mod refine;
 pub mod sht;
 
 #[cfg(feature = "python")]

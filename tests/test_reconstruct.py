@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -81,10 +82,11 @@ def test_refinement_is_deterministic_from_the_seed(model, material):
     assert not torch.equal(_params(run[0]), _params(other))
 
 
-def test_the_time_budget_stops_a_stage(model, material):
+@pytest.mark.parametrize("stage, steps", [("latent", "latent_steps"), ("weights", "weight_steps")])
+def test_the_time_budget_stops_a_stage(model, material, stage, steps):
     result = reconstruct(model, material.values, (material.wi, material.wo),
-                         refine=RefineConfig(latent_steps=10**6, seconds=0.2))
-    assert 0 < result.steps["latent"] < 10**6 and result.timings["latent"] < 5
+                         refine=RefineConfig(**{steps: 10**6}, seconds=0.2))
+    assert 0 < result.steps[stage] < 10**6 and result.timings[stage] < 5
 
 
 def test_inputs_are_checked_like_encode(model, material):
@@ -179,6 +181,59 @@ def test_the_weight_stage_steps_as_with_its_penalty_differentiated(model, materi
         optimizer.step()
     torch.testing.assert_close(_params(result), torch.cat([p.detach().reshape(-1) for p in params]),
                                rtol=1e-4, atol=1e-5)
+
+
+@pytest.mark.parametrize("kind", ["l1", "mse"])
+def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind):
+    from frenbrdf import _native
+    from frenbrdf.models.losses import reconstruction_loss
+    from frenbrdf.models.nbrdf import nbrdf_forward
+
+    generator = torch.Generator().manual_seed(0)
+    shapes = [(20, 6), (20,), (20, 20), (20,), (3, 20), (3,)]  # a width no vector length divides
+    params = [0.5 * torch.randn(1, *shape, generator=generator) for shape in shapes]
+    coords, values = torch.randn(1, 300, 6, generator=generator), torch.randn(1, 300, 3, generator=generator)
+    cos_in = torch.rand(1, 300, generator=generator)
+    rows = torch.randint(300, (8, 100), generator=generator)  # a whole block of samples and a part of one
+    rates, decays = np.linspace(1e-2, 1e-3, 8), [1e-3, 0.0, 1e-3, 0.0, 1e-3, 0.0]
+    fit = _native.WeightFit([p[0].numpy() for p in params], decays, coords[0].numpy(), values[0].numpy(),
+                            cos_in[0].numpy(), kind)
+    losses = fit.run(rates.astype(np.float32), rows.numpy())
+
+    reference = [p.clone().requires_grad_(True) for p in params]
+    optimizer = torch.optim.Adam([{"params": [p], "weight_decay": d} for p, d in zip(reference, decays)])
+    for batch, rate, loss in zip(rows, rates, losses):
+        value = reconstruction_loss(nbrdf_forward(reference, coords[:, batch]), values[:, batch], cos_in[:, batch], kind)
+        assert loss == pytest.approx(float(value.detach()), rel=1e-5)
+        for group in optimizer.param_groups:
+            group["lr"] = float(np.float32(rate))
+        optimizer.zero_grad()
+        value.backward()
+        optimizer.step()
+    for got, want in zip(fit.tensors(), reference):
+        np.testing.assert_allclose(got, want.detach().reshape(-1).numpy(), rtol=1e-4, atol=1e-6)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"coords": np.zeros((4, 5), np.float32)}, "coords must have shape (N, 6)"),
+    ({"values": np.full((4, 3), np.nan, np.float32)}, "values hold NaN or inf"),
+    ({"tensors": [np.zeros((6, 3), np.float32), np.zeros(6, np.float32)]}, "do not chain from 6 inputs"),
+    ({"decays": [0.0]}, "weight decays"),
+    ({"loss": "l3"}, "loss must be 'l1' or 'mse'"),
+])
+def test_the_native_weight_fit_names_what_does_not_fit(change, message):
+    from frenbrdf import _native
+
+    arguments = {"tensors": [np.zeros((3, 6), np.float32), np.zeros(3, np.float32)], "decays": [0.0, 0.0],
+                 "coords": np.zeros((4, 6), np.float32), "values": np.zeros((4, 3), np.float32),
+                 "cos_in": np.ones(4, np.float32), "loss": "l1"}
+    fit = _native.WeightFit(*arguments.values())
+    with pytest.raises(ValueError, match=re.escape(message)):
+        _native.WeightFit(*(arguments | change).values())
+    for rates, rows, error in [([0.0], None, "positive"), ([1e-3], [[4]], "out of range"),
+                               ([1e-3], [[-1]], "rows must lie")]:
+        with pytest.raises(ValueError, match=error):
+            fit.run(np.array(rates, np.float32), None if rows is None else np.array(rows, np.int64))
 
 
 def test_named_budgets_are_copies():

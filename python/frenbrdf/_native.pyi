@@ -12,6 +12,7 @@ FILE_BYTES: int
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
+F32 = npt.NDArray[np.float32]
 
 def num_threads() -> int: ...
 
@@ -95,3 +96,20 @@ class BsdfMeasurement:
     @property
     def fields(self) -> dict[str, tuple[str, tuple[int, ...]]]:
         """Every tensor of the file: ``{name: (numpy dtype name, shape)}``."""
+
+# frenbrdf.models.reconstruct's weight stage
+class WeightFit:
+    """Adam on one NBRDF's weights against a material's samples: forward, backward and update in one native loop."""
+
+    def __init__(self, tensors: list[F32], decays: list[float], coords: F32, values: F32, cos_in: F32,
+                 loss: str) -> None:
+        """``tensors``: each layer's weights ``(out, in)`` and biases ``(out,)``, 6 inputs to 3 outputs; ``decays``:
+        Adam's weight decay per tensor; ``coords`` ``(N, 6)``, mapped ``values`` ``(N, 3)``, ``cos_in`` ``(N,)``;
+        ``loss``: ``'l1'`` or ``'mse'``."""
+    def run(self, learning_rates: F32, rows: I64 | None = None) -> F64:
+        """One step per rate on the ``(steps, batch)`` rows (None: every sample); each step's loss before its
+        update, stopping after the first that is not finite."""
+    def tensors(self) -> list[F32]:
+        """Each tensor's values, flat, in the order given."""
+    def loss(self) -> float:
+        """The loss on every sample at the current weights."""

@@ -6,6 +6,7 @@ mod coords;
 mod errors;
 mod knn;
 mod merl;
+mod refine;
 mod sht;
 
 use numpy::ndarray::{Array, Dimension, ShapeBuilder};
@@ -25,6 +26,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     knn::register(m)?;
     sht::register(m)?;
     bsdf::register(m)?;
+    refine::register(m)?;
     Ok(())
 }
 

@@ -8,7 +8,9 @@
    trained) + λ2 · the latent penalty; the decoder stays fixed.
 2. **weights** — the decoded NBRDF's own weights optimised, starting from the decoder's
    output (a per-material fit that starts where the encoder left off), with the same
-   reconstruction loss + λ1 · the weight penalty.
+   reconstruction loss + λ1 · the weight penalty. Runs in the native core
+   (``frenbrdf._native.WeightFit``: forward, backward and Adam in one Rust loop, the steps
+   of ``torch.optim.Adam``), about twice as fast as PyTorch on these small networks.
 
 Named budgets (:data:`BUDGETS`): ``"none"`` (stage 0), ``"latent"`` (0 + 1), ``"full"``
 (0 + 1 + 2). Each stage is deterministic from :attr:`RefineConfig.seed` unless its
@@ -41,6 +43,7 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
+from .. import _native
 from .losses import LossConfig, reconstruction_loss
 from .nbrdf import MAX_WIDTH, NBRDF, mapped_samples, nbrdf_forward, widen_params
 
@@ -48,6 +51,8 @@ from .nbrdf import MAX_WIDTH, NBRDF, mapped_samples, nbrdf_forward, widen_params
 STAGES = ("encode", "latent", "weights")
 #: Learning-rate schedules of a refinement stage (:attr:`RefineConfig.schedule`).
 SCHEDULES = ("constant", "cosine")
+#: Weight steps per call of the native loop: how often stage 2 updates its progress bar and checks its seconds.
+NATIVE_STEPS = 50
 
 
 @dataclass
@@ -69,7 +74,8 @@ class RefineConfig:
     """Samples per step, drawn at random (from ``seed``) when there are more; all of them when fewer."""
     seconds: float | None = None
     """Wall-clock budget of *each* refinement stage: a stage stops after this many seconds even if
-    steps remain (None: no limit). A stage stopped by time is no longer deterministic."""
+    steps remain (None: no limit; stage 2 looks every :data:`NATIVE_STEPS` steps). A stage stopped by time is
+    no longer deterministic."""
     width: int | None = None
     """Least hidden width of the NBRDF that stage 2 refines: narrower layers of the decoded NBRDF are first widened to
     it without changing its output (:func:`frenbrdf.models.nbrdf.widen_params`), giving the weights more to fit with;
@@ -215,13 +221,7 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
         params = [p.detach().clone() for p in params]
         if config.width is not None:
             params = widen_params(params, config.width, torch.Generator().manual_seed(config.seed))
-        params = [p.requires_grad_(True) for p in params]
-
-        def weight_objective(batch: _Samples) -> torch.Tensor:
-            return reconstruction_loss(nbrdf_forward(params, batch.coords), batch.values, batch.cos_in, loss.kind)
-
-        _optimise("weights", params, _weight_decays(params, loss), weight_objective, config.weight_steps,
-                  config.weight_lr, samples, config, result)
+        params = _refine_weights(params, samples, loss, config, result)
         result.losses["weights"] = _sample_loss(params, samples, loss.kind)
 
     result.z = z[0].detach().numpy().astype(np.float64)
@@ -254,25 +254,65 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
     differentiating it for ~30 fewer small ops a step (docs/performance.md)."""
     groups = [{"params": [p], "weight_decay": decay} for p, decay in zip(parameters, decays)]
     optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel per group (docs/performance.md)
-    scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, steps) if config.schedule == "cosine" else None
+    rates = _learning_rates(lr, steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
     start, taken = time.perf_counter(), 0
-    for _ in tqdm(range(steps), desc=f"refine {stage}", disable=not config.progress, leave=False):
+    for rate in tqdm(rates, desc=f"refine {stage}", disable=not config.progress, leave=False):
         if config.seconds is not None and time.perf_counter() - start > config.seconds:
             break
         value = objective(samples.batch(config.batch, generator))
         if not torch.isfinite(value):  # finite at the start (checked), so the steps made it so
-            setting = "latent_lr" if stage == "latent" else "weight_lr"
-            raise ValueError(f"refinement ({stage}) diverged at step {taken} with {setting} {lr:g}: the loss is "
-                             f"{float(value)}; try a smaller {setting}")
+            raise _diverged(stage, taken, lr, float(value))
+        for group in optimizer.param_groups:
+            group["lr"] = float(rate)
         optimizer.zero_grad(set_to_none=True)
         value.backward()
         optimizer.step()
-        if scheduler is not None:
-            scheduler.step()
         taken += 1
     result.timings[stage] = time.perf_counter() - start
     result.steps[stage] = taken
+
+
+def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossConfig, config: RefineConfig,
+                    result: Reconstruction) -> list[torch.Tensor]:
+    """Stage 2 in the native loop (:class:`frenbrdf._native.WeightFit`): Adam's steps as :func:`_optimise` takes
+    them, with the penalties as weight decay, over :data:`NATIVE_STEPS` steps a call; the refined tensors."""
+    fit = _native.WeightFit([np.ascontiguousarray(p[0].numpy(), dtype=np.float32) for p in params],
+                            _weight_decays(params, loss), *(a[0].numpy() for a in (samples.coords, samples.values,
+                                                                                    samples.cos_in)), loss.kind)
+    rates = _learning_rates(config.weight_lr, config.weight_steps, config.schedule)
+    generator = torch.Generator().manual_seed(config.seed + STAGES.index("weights"))
+    start, taken = time.perf_counter(), 0
+    with tqdm(total=len(rates), desc="refine weights", disable=not config.progress, leave=False) as bar:
+        while taken < len(rates):
+            if config.seconds is not None and time.perf_counter() - start > config.seconds:
+                break
+            count = min(NATIVE_STEPS, len(rates) - taken)
+            rows = (None if len(samples) <= config.batch else
+                    torch.randint(len(samples), (count, config.batch), generator=generator).numpy())
+            losses = fit.run(rates[taken:taken + count].astype(np.float32), rows)
+            if not math.isfinite(losses[-1]):  # the native loop stops at the first loss that is not finite
+                raise _diverged("weights", taken + len(losses) - 1, config.weight_lr, float(losses[-1]))
+            taken += count
+            bar.update(count)
+    result.timings["weights"] = time.perf_counter() - start
+    result.steps["weights"] = taken
+    return [torch.from_numpy(t).reshape(p.shape) for t, p in zip(fit.tensors(), params)]
+
+
+def _learning_rates(lr: float, steps: int, schedule: str) -> np.ndarray:
+    """A stage's learning rate at each step: constant, or cosine from ``lr`` towards 0 (as torch's
+    CosineAnnealingLR over ``steps``)."""
+    if schedule == "cosine":
+        return lr * (1 + np.cos(np.pi * np.arange(steps) / steps)) / 2
+    return np.full(steps, float(lr))
+
+
+def _diverged(stage: str, step: int, lr: float, value: float) -> ValueError:
+    """The error of a stage whose loss stopped being finite (it was at the start, checked, so the steps made it so)."""
+    setting = "latent_lr" if stage == "latent" else "weight_lr"
+    return ValueError(f"refinement ({stage}) diverged at step {step} with {setting} {lr:g}: the loss is {value}; try a "
+                      f"smaller {setting}")
 
 
 @torch.no_grad()
