@@ -140,11 +140,11 @@ def test_a_width_needs_the_weight_stage_and_a_sane_size(model, material):
     assert kept.nbrdf.params[0].shape[1] == model.decode(kept.z).params[0].shape[1]  # never narrowed
 
 
-def test_full_refines_48_wide_by_default(model, material, tmp_path):
-    assert refine_config("full").width == 48 and refine_config("latent").width is None
+def test_full_refines_64_wide_by_default(model, material, tmp_path):
+    assert refine_config("full").width == 64 and refine_config("latent").width is None
     result = model.reconstruct(material.values, (material.wi, material.wo),
                                refine=dataclasses.replace(refine_config("full"), weight_steps=3))
-    assert all(p.shape[1] == 48 for p in result.nbrdf.params[:-2])
+    assert all(p.shape[1] == 64 for p in result.nbrdf.params[:-2])
 
 
 @pytest.mark.parametrize("kind", ["per_tensor", "all"])
@@ -305,7 +305,7 @@ def test_the_command_widens_on_request_and_names_a_width_without_full(run_dir, t
 
     assert load_material_file(out / "material.pt").params[0].shape[1] == 40  # saved 40 wide, and it renders
     assert _reconstruct(source, "--out", tmp_path / "default", "--model", run_dir, "--samples", 300) == 0
-    assert load_material_file(tmp_path / "default" / "material.pt").params[0].shape[1] == 48  # full's default
+    assert load_material_file(tmp_path / "default" / "material.pt").params[0].shape[1] == 64  # full's default
     with pytest.raises(SystemExit) as exit_info:
         _reconstruct(source, "--out", tmp_path / "latent", "--model", run_dir, "--refine", "latent", "--width", 40)
     assert exit_info.value.code == 2 and "width must be None" in capsys.readouterr().err
@@ -472,6 +472,9 @@ def test_refine_timing_times_this_tree_against_a_commit(run_dir, toy_materials, 
                        "200", "--repeats", "2", "--against", "HEAD"]) == 0
     summary = capsys.readouterr().out.split("best of 2:")[1]
     assert "this tree  mean" in summary and "HEAD  mean" in summary and table.stem in summary
+    assert study.main([str(table), "--model", str(run_dir), "--samples", "200", "--repeats", "1", "--against", "HEAD",
+                       "--width", "40", "--weight-steps", "3"]) == 0  # the same work where budgets differ
+    assert "full {'width': 40, 'weight_steps': 3}" in capsys.readouterr().out
     with pytest.raises(SystemExit, match="cannot read"):
         study.main([str(measurement), "--model", str(run_dir), "--against", "no-such-commit"])
 

@@ -377,7 +377,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
                      "space, for editing), full (then the NBRDF's weights; the default: charts 8–8c)")
     rec.add_argument("--width", type=int, metavar="N", help="with --refine full: widen the NBRDF to at least N hidden "
-                     "units per layer before refining its weights (default 48; 64: more fidelity, about 1.25x the "
+                     "units per layer before refining its weights (default 64; wider: more fidelity for more "
                      "time)")
     rec.add_argument("--seed", type=int, default=0, help="seeds the sampling and the refinement (default 0)")
     rec.add_argument("--json", action="store_true", help="print the report as JSON")

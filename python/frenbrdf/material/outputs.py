@@ -68,7 +68,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         Seeds the MERL sampling and the refinement's mini-batches.
     width
         ``refine="full"`` only: the least hidden width of the refined NBRDF
-        (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the budget's, 48 for ``full``).
+        (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the budget's, 64 for ``full``).
     overwrite
         Replace ``out_dir`` even when it holds files this function did not write (they are deleted).
 

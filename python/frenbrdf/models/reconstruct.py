@@ -110,15 +110,15 @@ class RefineConfig:
 
 #: The named budgets of ``refine=`` (docs/charts/README.md, charts 8, 8b and 8c; CPU seconds of one thread per
 #: material, 4000 samples). Latent: 100 steps take 0.2–0.4 s and give +6–9 dB; 200 steps with a cosine schedule
-#: from 3e-2 (chart 8c) add 0.3–0.7 dB for 0.25 s more. Full: after 100 latent steps, 1000 steps on the NBRDF's
-#: weights at 3e-3 (chart 8c: +1.9 dB over 1e-3 on 7 RGL fits version 2 never saw, 47.3 against 45.4 dB),
-#: 2.0 s; a cosine schedule did not help there. Full's weights refined in an NBRDF widened to 48 units: +2.7 dB
-#: [+1.4, +4.0] on those RGL fits, 1.25 → 1.47 s on 2 threads (docs/measurements.md, "What limits full"). Each
-#: was chosen by a rule fixed before measuring, on materials other than the four real measurements.
+#: from 3e-2 (chart 8c) add 0.3–0.7 dB for 0.25 s more. Full: after 100 latent steps, the NBRDF's weights at
+#: 3e-3 (chart 8c: +1.9 dB over 1e-3 on 7 RGL fits version 2 never saw); a cosine schedule did not help there.
+#: Since the weight stage runs natively, 1500 steps in an NBRDF widened to 64 units: +1.1 dB [+0.4, +1.8] over
+#: 48 units and 1000 steps on those RGL fits, 1.56 s on 2 threads (docs/measurements.md, "What limits full").
+#: Each was chosen by a rule fixed before measuring, on materials other than the four real measurements.
 BUDGETS = {
     "none": RefineConfig(),
     "latent": RefineConfig(latent_steps=200, latent_lr=3e-2, schedule="cosine"),
-    "full": RefineConfig(latent_steps=100, weight_steps=1000, weight_lr=3e-3, width=48),
+    "full": RefineConfig(latent_steps=100, weight_steps=1500, weight_lr=3e-3, width=64),
 }
 
 
