@@ -138,6 +138,35 @@ impl WeightFit {
         Ok(fit)
     }
 
+    /// A random NBRDF with the `hidden` widths and `samples` samples of a target it can learn (an affine
+    /// function of the coordinates), from a fixed generator seeded by `seed`: for tests and benches.
+    pub fn synthetic(hidden: &[usize], samples: usize, loss: Loss, seed: u64) -> Self {
+        let mut state = seed;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
+        };
+        let widths: Vec<usize> = [N_INPUTS].iter().chain(hidden).chain(&[N_OUTPUTS]).copied().collect();
+        let mut tensors = Vec::new();
+        for pair in widths.windows(2) {
+            let (inputs, outputs) = (pair[0], pair[1]);
+            tensors.push(((0..inputs * outputs).map(|_| next()).collect(), vec![outputs, inputs]));
+            tensors.push(((0..outputs).map(|_| 0.1 * next()).collect(), vec![outputs]));
+        }
+        let coords: Vec<f32> = (0..samples * N_INPUTS).map(|_| 2.0 * next()).collect();
+        let values: Vec<f32> = coords
+            .chunks_exact(N_INPUTS)
+            .flat_map(|c| [0.3 * c[0] + 0.1, -0.2 * c[1], 0.5 * c[2]])
+            .collect();
+        let cos_in: Vec<f32> = (0..samples).map(|_| next() + 0.5).collect();
+        let decays: Vec<f32> = (0..tensors.len())
+            .map(|i| if i % 2 == 0 { 1e-3 } else { 0.0 })
+            .collect();
+        Self::new(tensors, &decays, &coords, &values, &cos_in, loss).expect("a valid synthetic fit")
+    }
+
     /// Each tensor's values, in the order given to [`WeightFit::new`].
     pub fn tensors(&self) -> Vec<Vec<f32>> {
         self.layers
@@ -281,36 +310,9 @@ fn layout(tensors: &[(Vec<f32>, Vec<usize>)]) -> Result<Vec<Layer>> {
 pub(super) mod tests {
     use super::*;
 
-    /// A 6 → 5 → 4 → 3 NBRDF and `n` samples, from a simple generator.
+    /// A 6 → 5 → 4 → 3 NBRDF and `n` samples.
     pub(super) fn example(n: usize, loss: Loss) -> WeightFit {
-        let mut state = 12345u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
-        };
-        let mut tensors = Vec::new();
-        for (inputs, outputs) in [(6, 5), (5, 4), (4, 3)] {
-            tensors.push(((0..inputs * outputs).map(|_| next()).collect(), vec![outputs, inputs]));
-            tensors.push(((0..outputs).map(|_| 0.1 * next()).collect(), vec![outputs]));
-        }
-        let coords: Vec<f32> = (0..n * 6).map(|_| 2.0 * next()).collect();
-        // A target the network can learn: an affine function of the coordinates.
-        let values: Vec<f32> = coords
-            .chunks_exact(6)
-            .flat_map(|c| [0.3 * c[0] + 0.1, -0.2 * c[1], 0.5 * c[2]])
-            .collect();
-        let cos_in: Vec<f32> = (0..n).map(|_| next() + 0.5).collect();
-        WeightFit::new(
-            tensors,
-            &[1e-3, 0.0, 1e-3, 0.0, 1e-3, 0.0],
-            &coords,
-            &values,
-            &cos_in,
-            loss,
-        )
-        .unwrap()
+        WeightFit::synthetic(&[5, 4], n, loss, 12345)
     }
 
     #[test]
