@@ -18,7 +18,7 @@ struct WeightFit {
 }
 
 /// A C-contiguous array's values.
-fn values<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
+fn contiguous<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
     name: &str,
     array: &'a numpy::PyReadonlyArray<'_, T, D>,
 ) -> PyResult<&'a [T]> {
@@ -40,7 +40,7 @@ impl WeightFit {
         tensors: Vec<PyReadonlyArrayDyn<'_, f32>>,
         decays: Vec<f32>,
         coords: PyReadonlyArray2<'_, f32>,
-        values_: PyReadonlyArray2<'_, f32>,
+        values: PyReadonlyArray2<'_, f32>,
         cos_in: PyReadonlyArray1<'_, f32>,
         loss: &str,
     ) -> PyResult<Self> {
@@ -56,11 +56,11 @@ impl WeightFit {
         let mut owned = Vec::with_capacity(tensors.len());
         for (index, tensor) in tensors.iter().enumerate() {
             owned.push((
-                values(&format!("tensor {index}"), tensor)?.to_vec(),
+                contiguous(&format!("tensor {index}"), tensor)?.to_vec(),
                 tensor.shape().to_vec(),
             ));
         }
-        for (name, array) in [("coords", &coords), ("values", &values_)] {
+        for (name, array) in [("coords", &coords), ("values", &values)] {
             let width = if name == "coords" {
                 refine::N_INPUTS
             } else {
@@ -76,9 +76,9 @@ impl WeightFit {
         let inner = refine::WeightFit::new(
             owned,
             &decays,
-            values("coords", &coords)?,
-            values("values", &values_)?,
-            values("cos_in", &cos_in)?,
+            contiguous("coords", &coords)?,
+            contiguous("values", &values)?,
+            contiguous("cos_in", &cos_in)?,
             loss,
         )?;
         Ok(WeightFit { inner })
@@ -94,11 +94,11 @@ impl WeightFit {
         learning_rates: PyReadonlyArray1<'py, f32>,
         rows: Option<PyReadonlyArray2<'py, i64>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let rates = values("learning_rates", &learning_rates)?;
+        let rates = contiguous("learning_rates", &learning_rates)?;
         let (rows, batch) = match &rows {
             None => (None, 0),
             Some(array) => {
-                let indices = values("rows", array)?;
+                let indices = contiguous("rows", array)?;
                 let converted: Option<Vec<u32>> = indices.iter().map(|&i| u32::try_from(i).ok()).collect();
                 let converted = converted.ok_or_else(|| PyValueError::new_err("rows must lie in 0 to 2³² − 1"))?;
                 (Some(converted), array.shape()[1])
