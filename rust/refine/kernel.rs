@@ -129,12 +129,14 @@ fn part_gradient_inline<V: Lanes>(fit: &WeightFit, rows: &[u32], scale: f32, gra
             for (j, up) in upstream[..layer.outputs].iter().enumerate() {
                 add_sum::<V>(&mut partials[biases.start + j], up);
             }
-            let mut rows = partials[weights].chunks_exact_mut(layer.inputs).zip(&upstream);
-            for _ in 0..if V::PAIRS { layer.outputs / 2 } else { 0 } {
-                let ((first, up0), (second, up1)) = (rows.next().unwrap(), rows.next().unwrap());
+            // Each output unit's row of weight gradients, two units at a time where the registers allow.
+            let mut weight_rows = partials[weights].chunks_exact_mut(layer.inputs).zip(&upstream);
+            let pairs = if V::PAIRS { layer.outputs / 2 } else { 0 };
+            for _ in 0..pairs {
+                let ((first, up0), (second, up1)) = (weight_rows.next().unwrap(), weight_rows.next().unwrap());
                 add_products::<V, 2>([first, second], [up0, up1], inputs);
             }
-            for (row, up) in rows {
+            for (row, up) in weight_rows {
                 add_products::<V, 1>([row], [up], inputs);
             }
             if l == 0 {
