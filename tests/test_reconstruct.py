@@ -183,19 +183,19 @@ def test_the_weight_stage_steps_as_with_its_penalty_differentiated(model, materi
                                rtol=1e-4, atol=1e-5)
 
 
-@pytest.mark.parametrize("kind", ["l1", "mse"])
-def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind):
+@pytest.mark.parametrize("kind, hidden", [("l1", (20, 20)), ("mse", (20, 20)), ("l1", (7, 9, 5))])
+def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind, hidden):
     from frenbrdf import _native
     from frenbrdf.models.losses import reconstruction_loss
-    from frenbrdf.models.nbrdf import nbrdf_forward
+    from frenbrdf.models.nbrdf import NBRDFConfig, nbrdf_forward
 
     generator = torch.Generator().manual_seed(0)
-    shapes = [(20, 6), (20,), (20, 20), (20,), (3, 20), (3,)]  # a width no vector length divides
+    shapes = NBRDFConfig(hidden).shapes()  # widths no vector length divides; two and three hidden layers
     params = [0.5 * torch.randn(1, *shape, generator=generator) for shape in shapes]
     coords, values = torch.randn(1, 300, 6, generator=generator), torch.randn(1, 300, 3, generator=generator)
     cos_in = torch.rand(1, 300, generator=generator)
     rows = torch.randint(300, (8, 100), generator=generator)  # a whole block of samples and a part of one
-    rates, decays = np.linspace(1e-2, 1e-3, 8), [1e-3, 0.0, 1e-3, 0.0, 1e-3, 0.0]
+    rates, decays = np.linspace(1e-2, 1e-3, 8), [1e-3, 0.0] * (len(shapes) // 2)
     fit = _native.WeightFit([p[0].numpy() for p in params], decays, coords[0].numpy(), values[0].numpy(),
                             cos_in[0].numpy(), kind)
     losses = fit.run(rates.astype(np.float32), rows.numpy())
