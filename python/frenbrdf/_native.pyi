@@ -111,5 +111,3 @@ class WeightFit:
         update, stopping after the first that is not finite."""
     def tensors(self) -> list[F32]:
         """Each tensor's values, flat, in the order given."""
-    def loss(self) -> float:
-        """The loss on every sample at the current weights."""

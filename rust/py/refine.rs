@@ -60,12 +60,10 @@ impl WeightFit {
                 tensor.shape().to_vec(),
             ));
         }
-        for (name, array) in [("coords", &coords), ("values", &values)] {
-            let width = if name == "coords" {
-                refine::N_INPUTS
-            } else {
-                refine::N_OUTPUTS
-            };
+        for (name, array, width) in [
+            ("coords", &coords, refine::N_INPUTS),
+            ("values", &values, refine::N_OUTPUTS),
+        ] {
             if array.shape()[1] != width {
                 return Err(PyValueError::new_err(format!(
                     "{name} must have shape (N, {width}), got {:?}",
@@ -116,10 +114,5 @@ impl WeightFit {
             .into_iter()
             .map(|t| to_numpy(py, t.len(), t))
             .collect()
-    }
-
-    /// The loss on every sample at the current weights.
-    fn loss(&self, py: Python<'_>) -> f64 {
-        py.detach(|| self.inner.loss())
     }
 }

@@ -231,13 +231,12 @@ def mapped_bank(names, tables, mapping: LogRelativeMapping) -> MaterialBank:
     valid = np.empty((len(names), N_BINS), dtype=bool)
     mapped = np.empty((len(names), N_BINS, 3), dtype=np.float32)
     count = 0
-    for i, table in enumerate(tables):
-        if i >= len(names):
+    for count, table in enumerate(tables, start=1):
+        if count > len(names):
             raise ValueError(f"more tables than the {len(names)} names")
-        valid[i] = ~np.any(np.isnan(table), axis=0)
+        valid[count - 1] = ~np.any(np.isnan(table), axis=0)
         with np.errstate(invalid="ignore"):
-            mapped[i] = np.nan_to_num(mapping.forward(table, reference)).T
-        count += 1
+            mapped[count - 1] = np.nan_to_num(mapping.forward(table, reference)).T
     if count != len(names):
         raise ValueError(f"{count} tables for {len(names)} names")
     return MaterialBank(names, torch.from_numpy(mapped), torch.from_numpy(valid))
