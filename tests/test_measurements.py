@@ -178,3 +178,38 @@ def test_a_merl_file_is_sampled_or_taken_whole(tmp_path):
     np.testing.assert_allclose(looked_up, some.values, rtol=1e-12)
     whole = read_measurements(path, samples=None)
     assert len(whole) == int(frenbrdf.valid_mask(table).sum())
+
+
+def test_a_tables_samples_are_its_values_and_draw_nothing_more():
+    from frenbrdf.render.scoring import bin_directions, sample_bins, truth_samples
+
+    table = toy_table(np.random.default_rng(5))
+    rng = np.random.default_rng(6)
+    bins = sample_bins(table, rng, 400)
+    state = rng.bit_generator.state
+    values, (wi, wo) = truth_samples(table, bins, rng)
+    assert rng.bit_generator.state == state  # results measured on tables before both orders stay reproducible
+    np.testing.assert_array_equal(values, table.reshape(3, -1)[:, bins].T)
+    expected_wi, expected_wo = bin_directions(bins)
+    np.testing.assert_array_equal(wi, expected_wi)
+    np.testing.assert_array_equal(wo, expected_wo)
+
+
+def test_a_measurement_is_sampled_in_both_orders_of_each_pair():
+    """A table keeps one order of each pair; a measurement need not be reciprocal, so each bin's pair is evaluated
+    in an order drawn at random, and the values are the measurement's at the pair as returned."""
+    from frenbrdf.render.scoring import bin_directions, sample_bins, truth_samples
+
+    def lit_from_above(wi, wo):  # not reciprocal: brighter when the light is high
+        return np.stack([wi[:, 2], wo[:, 2], np.ones(len(wi))], axis=-1) * 0.3
+
+    bins = sample_bins(toy_table(np.random.default_rng(5)), np.random.default_rng(7), 2000)
+    values, (wi, wo) = truth_samples(lit_from_above, bins, np.random.default_rng(8))
+    bin_wi, bin_wo = bin_directions(bins)
+    as_given = np.all(wi == bin_wi, axis=1) & np.all(wo == bin_wo, axis=1)
+    reversed_ = np.all(wi == bin_wo, axis=1) & np.all(wo == bin_wi, axis=1)
+    assert np.all(as_given | reversed_)
+    assert 0.45 < np.mean(reversed_ & ~as_given) < 0.55  # each order with probability ½
+    np.testing.assert_array_equal(values, lit_from_above(wi, wo))
+    again = truth_samples(lit_from_above, bins, np.random.default_rng(8))
+    np.testing.assert_array_equal(again[0], values)

@@ -66,12 +66,12 @@ def decoded_nbrdf(run: str | os.PathLike, merl_file: str | os.PathLike, samples:
     """The NBRDF that a run's model decodes from ``samples`` random measured bins of a MERL file."""
     from frenbrdf import Model, read_merl
     from frenbrdf.render.renderer import Scene
-    from frenbrdf.render.scoring import reconstruct, sample_bins
+    from frenbrdf.render.scoring import reconstruct, sample_bins, truth_samples
 
     model = Model.load(run)
     table = read_merl(merl_file)
-    bins = sample_bins(table, np.random.default_rng(0), samples)
-    z, _ = reconstruct(model, table, bins, Scene(resolution=8))
+    rng = np.random.default_rng(0)
+    z, _ = reconstruct(model, truth_samples(table, sample_bins(table, rng, samples), rng), Scene(resolution=8))
     return model.decode(z)[0]
 
 

@@ -37,7 +37,7 @@ from tqdm.auto import tqdm
 
 from frenbrdf.io.merl import read_merl, valid_mask
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, reconstruct, sample_bins
+from frenbrdf.render.scoring import image_metrics, reconstruct, sample_bins, truth_samples
 from frenbrdf.study.evaluation import load_runs
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
@@ -94,12 +94,11 @@ def samples_chart(run_dirs, out_dir, *, data: str | None = None, counts=DEFAULT_
             valid_bins[material] = int(valid_mask(table).sum())
             for count in counts:
                 for seed in range(1 if count is None else seeds):
-                    if count is None:
-                        bins = np.flatnonzero(valid_mask(table))
-                    else:
-                        bins = sample_bins(table, np.random.default_rng([seed, count, index]), count)
+                    rng = np.random.default_rng([seed, count or 0, index])
+                    bins = np.flatnonzero(valid_mask(table)) if count is None else sample_bins(table, rng, count)
+                    drawn = truth_samples(table, bins, rng)
                     for method, model in runs.models.items():
-                        _, image = reconstruct(model, table, bins, scene)
+                        _, image = reconstruct(model, drawn, scene)
                         rows.append({"method": method, "samples": label(count), "seed": seed, "material": material,
                                      **image_metrics(truth, image, mask)})
                 bar.update()

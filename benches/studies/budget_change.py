@@ -26,7 +26,7 @@ from frenbrdf.io.atomic import save_json
 from frenbrdf.io.measured import read_truth
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 from frenbrdf.study.statistics import paired_interval
 
 #: The budgets before chart 8c (charts 8 and 8b): constant rates, 100 latent steps.
@@ -47,11 +47,12 @@ def main(argv=None) -> int:
         truth = read_truth(path)
         table, truth_image = truth.table(), tonemap(render_linear(truth, scene))
         for seed in args.seeds:
-            bins = sample_bins(table, np.random.default_rng(seed), args.samples)
+            rng = np.random.default_rng(seed)
+            samples = truth_samples(truth, sample_bins(table, rng, args.samples), rng)
             for budget in BEFORE:
                 metrics = {}
                 for label, config in (("before", BEFORE[budget]), ("after", BUDGETS[budget])):
-                    _, image, _ = refined_reconstruction(model, table, bins, scene, dataclasses.replace(config, seed=seed))
+                    _, image, _ = refined_reconstruction(model, samples, scene, dataclasses.replace(config, seed=seed))
                     metrics[label] = image_metrics(truth_image, image, mask)
                 pairs.append({"material": path.stem, "seed": seed, "budget": budget, **metrics})
                 print(path.stem, seed, budget, " ".join(f"{k} {m['psnr']:.2f} dB ΔE {m['delta_e']:.2f}"

@@ -33,7 +33,7 @@ from frenbrdf.io.measured import as_table, is_bsdf, read_truth
 from frenbrdf.models.autoencoder import Model, load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 from frenbrdf.study.statistics import paired_interval
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
@@ -55,13 +55,14 @@ def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples
         group = "measured" if is_bsdf(path) else "tables"
         images[path.stem]["truth"] = truth_image
         for draw in draws:
-            bins = sample_bins(table, np.random.default_rng(draw), samples)
+            rng = np.random.default_rng(draw)
+            drawn = truth_samples(truth, sample_bins(table, rng, samples), rng)
             for label, model in models.items():
                 if (label, path.stem) in trained_on:
                     continue
                 for budget in budgets:
                     config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
-                    _, image, _ = refined_reconstruction(model, table, bins, scene, config)
+                    _, image, _ = refined_reconstruction(model, drawn, scene, config)
                     metrics = image_metrics(truth_image, image, mask)
                     rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
                                  "budget": budget, **{key: metrics[key] for key in METRICS}})

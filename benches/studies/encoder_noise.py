@@ -19,7 +19,7 @@ from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 
 
 def main(argv=None) -> int:
@@ -35,15 +35,17 @@ def main(argv=None) -> int:
     for path in map(Path, args.measurements):
         truth = read_truth(path)
         truth_image = tonemap(render_linear(truth, scene))
-        sources = {"measurement": as_table(truth),
+        sources = {"measurement": truth,  # sampled itself, in both orders (truth_samples)
                    "fit": load_material_file(Path(args.fits) / f"{path.stem}.h5").merl_table()}
         for draw in args.draws:
-            bins = sample_bins(sources["measurement"], np.random.default_rng(draw), 4000)
+            rng = np.random.default_rng(draw)
+            bins = sample_bins(as_table(truth), rng, 4000)
             cells = []
-            for name, table in sources.items():
+            for name, source in sources.items():
+                drawn = truth_samples(source, bins, rng)
                 for budget in ("none", "latent"):
                     config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
-                    _, image, _ = refined_reconstruction(model, table, bins, scene, config)
+                    _, image, _ = refined_reconstruction(model, drawn, scene, config)
                     metrics = image_metrics(truth_image, image, mask)
                     cells.append(f"{name} {budget}: {metrics['psnr']:.1f} / {metrics['delta_e']:.2f}")
             print(path.stem, f"draw {draw}:", " | ".join(cells), flush=True)

@@ -30,7 +30,7 @@ from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -51,10 +51,11 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
         images[TABLE] = tonemap(render_linear(table, scene))
         rows[TABLE] = [image_metrics(images["truth"], images[TABLE], mask)]
     for count, draw in product(samples, draws):
-        bins = sample_bins(table, np.random.default_rng(draw), count)
+        rng = np.random.default_rng(draw)
+        drawn = truth_samples(truth, sample_bins(table, rng, count), rng)
         for steps, width in product(weight_steps, widths):
             config = dataclasses.replace(refine_config("full"), weight_steps=steps, width=width, seed=draw)
-            result, image, _ = refined_reconstruction(model, table, bins, scene, config)
+            result, image, _ = refined_reconstruction(model, drawn, scene, config)
             metrics = image_metrics(images["truth"], image, mask) | {"loss": result.losses["weights"],
                                                                      "seconds": sum(result.timings.values())}
             rows.setdefault(variant_name(count, steps, width), []).append(metrics)

@@ -28,7 +28,7 @@ from frenbrdf.io.measured import read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import RefineConfig
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -47,9 +47,10 @@ def reach(path: Path, fit_path: Path, model, *, samples: int, steps: int, seed: 
     config = RefineConfig(latent_steps=steps, latent_lr=3e-2, schedule="cosine", seed=seed, progress=False)
     images = {"measurement": tonemap(render_linear(truth, scene)),
               "fit": tonemap(render_linear(keras_nbrdf(layers), scene))}
-    for name, table in (("measurement", truth.table()), ("fit", fit_table)):
-        bins = sample_bins(table, np.random.default_rng(seed), samples)
-        images[f"latent from the {name}"] = refined_reconstruction(model, table, bins, scene, config)[1]
+    for name, source, table in (("measurement", truth, truth.table()), ("fit", fit_table, fit_table)):
+        rng = np.random.default_rng(seed)
+        drawn = truth_samples(source, sample_bins(table, rng, samples), rng)
+        images[f"latent from the {name}"] = refined_reconstruction(model, drawn, scene, config)[1]
     return {f"{a} vs {b}": image_metrics(images[b], images[a], mask) for a, b in PAIRS}, images
 
 

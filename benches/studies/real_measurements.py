@@ -4,11 +4,11 @@
         --fits ../shared/data/rgl-nbrdf --model pretrained --out docs/results/real
 
 For each RGL ``.bsdf`` measurement: the model encodes it from ``--samples`` random valid MERL bins
-(evaluated on the measurement itself), then refines on the same samples (``latent``: z only, the
+(evaluated on the measurement itself, each pair in a random order), then refines on the same samples (``latent``: z only, the
 latent space; ``full``: then the NBRDF's weights), and each result is rendered and compared with the
 render of the measurement itself (not of a quantised table). Beside them, the published per-material
 NBRDF fit of the same material (``--fits``: its Keras ``.h5``, fitted to 640k samples) and a
-``fit-nbrdf`` fit to the same samples as the model saw. Seconds: wall seconds of encoding and
+``fit-nbrdf`` fit to the same bins as the model saw (in the table's order of each pair: it fits a table). Seconds: wall seconds of encoding and
 refinement (not of rendering; after one untimed warm-up), or of the fit. Writes ``real.md`` (a table per material
 and the means), ``real.json`` and ``real.png`` (truth | fit | encoder | latent | full, per row).
 """
@@ -31,7 +31,7 @@ from frenbrdf.io.measured import read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import RefineConfig, refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -47,14 +47,17 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
     table = truth.table()
     truth_image = tonemap(render_linear(truth, scene))
     mask = material_mask(scene)
-    bins = sample_bins(table, np.random.default_rng(seed), samples)
+    rng = np.random.default_rng(seed)
+    bins = sample_bins(table, rng, samples)
+    drawn = truth_samples(truth, bins, rng)  # each pair in a random order: the measurement is not reciprocal
     if warm_up:
-        refined_reconstruction(model, table, bins[:100], Scene(resolution=8), RefineConfig(latent_steps=2, weight_steps=2))
+        refined_reconstruction(model, truth_samples(table, bins[:100], rng), Scene(resolution=8),
+                               RefineConfig(latent_steps=2, weight_steps=2))
     images, rows = {"truth": truth_image}, {}
     published = fits / f"{path.stem}.h5" if fits else None
     if published is not None and published.exists():
         images["published fit"] = tonemap(render_linear(load_material_file(published), scene))
-    if fit_epochs:  # fit-nbrdf on the very samples the model sees: a table holding only them (others missing)
+    if fit_epochs:  # fit-nbrdf on the model's bins: a table holding only them (others missing), in the table's order
         sparse = np.full_like(table, -1.0)
         flat, dense = sparse.reshape(3, -1), table.reshape(3, -1)
         flat[:, bins] = dense[:, bins]
@@ -64,7 +67,7 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
         images["fit-nbrdf"] = tonemap(render_linear(fitted, scene))
     for budget in ("none", "latent", "full"):
         config = dataclasses.replace(refine_config(budget), seed=seed, progress=False)
-        result, image, _ = refined_reconstruction(model, table, bins, scene, config)
+        result, image, _ = refined_reconstruction(model, drawn, scene, config)
         name = "encoder" if budget == "none" else budget
         rows[name] = {"seconds": sum(result.timings.values())}  # encoding and refinement, not the render
         images[name] = image

@@ -29,7 +29,7 @@ import torch
 from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.models import reconstruct as this_tree
 from frenbrdf.models.autoencoder import load_model
-from frenbrdf.render.scoring import bin_samples, sample_bins
+from frenbrdf.render.scoring import sample_bins, truth_samples
 
 MODULE = "python/frenbrdf/models/reconstruct.py"
 
@@ -69,8 +69,8 @@ def main(argv=None) -> int:
     model = load_model(args.model)
     inputs = []
     for path in map(Path, args.measurements):
-        table = as_table(read_truth(path))
-        inputs.append((path.stem, *bin_samples(table, sample_bins(table, np.random.default_rng(0), args.samples))))
+        truth, rng = read_truth(path), np.random.default_rng(0)
+        inputs.append((path.stem, *truth_samples(truth, sample_bins(as_table(truth), rng, args.samples), rng)))
     with tempfile.TemporaryDirectory() as folder:
         variants = {"this tree": this_tree, **{commit: module_at(commit, Path(folder)) for commit in args.against}}
         configs = {label: dataclasses.replace(module.refine_config(args.budget), **overrides)

@@ -116,23 +116,23 @@ def read_measurements(path: str | os.PathLike, *, samples: int | None = 4000, se
 
 def merl_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
     """A MERL file, or an RGL ``.bsdf`` measurement, sampled at ``samples`` random valid MERL bins (drawn from
-    ``seed``) or at all of them (None). A ``.bsdf`` is evaluated at each bin's directions, as the model's
-    training tables were sampled, and is itself kept as the truth to render."""
+    ``seed``) or at all of them (None). A ``.bsdf`` is evaluated itself at each bin's pair of directions, in an
+    order drawn from ``seed`` (:func:`frenbrdf.render.scoring.truth_samples`: a measurement is not reciprocal
+    near grazing, a table keeps only one order), and is itself kept as the truth to render."""
     from ..io.measured import as_table, is_bsdf, read_truth
-    from ..io.merl import N_BINS
-    from ..render.scoring import bin_directions, sample_bins, valid_bins
+    from ..render.scoring import sample_bins, truth_samples, valid_bins
 
     if samples is not None and samples < 1:
         raise ValueError(f"samples must be ≥ 1 or all, got {samples}")
     truth = read_truth(path)
     table = as_table(truth)
-    flat = table.reshape(3, N_BINS)
+    rng = np.random.default_rng(seed)
     try:  # more samples than the table holds: all of them (a count is capped at what the data hold)
-        bins = valid_bins(table) if samples is None else sample_bins(table, np.random.default_rng(seed), samples)
+        bins = valid_bins(table) if samples is None else sample_bins(table, rng, samples)
     except ValueError as error:
         raise ValueError(f"{path}: {error}") from None
-    wi, wo = bin_directions(bins)
-    return Measurements(flat[:, bins].T.copy(), wi, wo, str(path), "bsdf" if is_bsdf(path) else "merl", table, truth)
+    values, (wi, wo) = truth_samples(truth, bins, rng)
+    return Measurements(np.array(values), wi, wo, str(path), "bsdf" if is_bsdf(path) else "merl", table, truth)
 
 
 def _form(columns, where: str) -> str:

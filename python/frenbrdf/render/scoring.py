@@ -1,6 +1,7 @@
 """Scoring one model on materials: what every evaluation measures, in one place.
 
-Each material is encoded from N random valid bins of its table (:func:`sample_bins`), decoded
+Each material is encoded from N random valid bins of its table (:func:`sample_bins`; a measurement is evaluated
+at them itself, each pair in a random order, :func:`truth_samples`), decoded
 (or refined at test time, :func:`frenbrdf.models.reconstruct.reconstruct`), rendered and compared with
 the render of the true table (:func:`image_metrics`: RMSE, PSNR, SSIM and the colour difference ΔE
 over the lit material pixels, and PSNR and ΔE over its highlights, :func:`highlight_mask`), and its frequency
@@ -172,9 +173,23 @@ def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np
     return bins if samples >= len(bins) else rng.choice(bins, size=samples, replace=False)
 
 
-def bin_samples(table: np.ndarray, bins: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
-    """A table's reflectance at ``bins`` ``(N, 3)`` and the bins' directions ``(ω_i, ω_o)``: what an encoder takes."""
-    return table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins)
+def truth_samples(truth, bins: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The truth's reflectance at ``bins`` ``(N, 3)`` and the direction pairs ``(ω_i, ω_o)`` it was taken at: what
+    an encoder takes.
+
+    ``truth`` as :func:`frenbrdf.io.measured.read_truth` returns it. A MERL table gives its values at the bins'
+    directions and draws nothing from ``rng``. A measurement (a callable ``m(ω_i, ω_o)``, e.g.
+    :class:`frenbrdf.io.bsdf.MeasuredBSDF`) is evaluated at each bin's pair in an order drawn from ``rng``: as the
+    bin gives it or reversed (ω_i ↔ ω_o), each with probability ½. A table keeps one order of each pair, as
+    reciprocity allows; a real measurement is not reciprocal near grazing (docs/measurements.md, "The
+    measurements are not reciprocal"), so its other order is a measurement the table lost.
+    """
+    wi, wo = bin_directions(bins)
+    if isinstance(truth, np.ndarray):
+        return truth.reshape(3, N_BINS)[:, bins].T, (wi, wo)
+    reverse = rng.random(len(bins)) < 0.5
+    wi, wo = np.where(reverse[:, None], wo, wi), np.where(reverse[:, None], wi, wo)
+    return np.maximum(truth(wi, wo), 0.0), (wi, wo)
 
 
 def encode_and_render(model: Model, values: np.ndarray, directions, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -183,16 +198,18 @@ def encode_and_render(model: Model, values: np.ndarray, directions, scene: Scene
     return z, tonemap(render_linear(model.decode(z)[0], scene))
 
 
-def reconstruct(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Encodes a table from the samples at ``bins``, decodes and renders it: (z, display image)."""
-    return encode_and_render(model, *bin_samples(table, bins), scene)
+def reconstruct(model: Model, samples, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Encodes ``samples`` (values, (ω_i, ω_o)) as :func:`truth_samples` gives them, decodes and renders the result:
+    (z, display image)."""
+    return encode_and_render(model, *samples, scene)
 
 
-def refined_reconstruction(model: Model, table: np.ndarray, bins: np.ndarray, scene: Scene,
+def refined_reconstruction(model: Model, samples, scene: Scene,
                            config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
-    """Encodes a table from the samples at ``bins`` and refines on them (:func:`frenbrdf.models.reconstruct.reconstruct`),
-    renders the result: (reconstruction, display image, seconds of the refinement stages, beyond encoding)."""
-    result = refine_samples(model, *bin_samples(table, bins), refine=config)
+    """Encodes ``samples`` (as for :func:`reconstruct`) and refines on them
+    (:func:`frenbrdf.models.reconstruct.reconstruct`), renders the result: (reconstruction, display image, seconds
+    of the refinement stages, beyond encoding)."""
+    result = refine_samples(model, *samples, refine=config)
     seconds = sum(result.timings.get(stage, 0.0) for stage in STAGES if stage != "encode")
     return result, tonemap(render_linear(result.nbrdf, scene)), seconds
 
@@ -221,12 +238,12 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
         path = Path(path)
         truth = read_truth(path)
         table = as_table(truth)
-        bins = sample_bins(table, rng, samples)
+        measured = truth_samples(truth, sample_bins(table, rng, samples), rng)
         if refine == "none":
-            z, image = reconstruct(model, table, bins, scene)
+            z, image = reconstruct(model, measured, scene)
             decoded = z  # what L_fre measures: the latent, or the refined NBRDF itself
         else:
-            result, image, _ = refined_reconstruction(model, table, bins, scene, refinement)
+            result, image, _ = refined_reconstruction(model, measured, scene, refinement)
             z, decoded = result.z, (result.nbrdf if refinement.weight_steps else result.z)
         truth_linear = render_linear(truth, scene)
         metrics = image_metrics(tonemap(truth_linear), image, mask, highlight_mask(truth_linear, mask))
@@ -255,7 +272,7 @@ class ScoringSet:
             truth = read_truth(path)
             table = as_table(truth)
             linear = render_linear(truth, self.scene)
-            self.materials.append((bin_samples(table, sample_bins(table, rng, samples)), tonemap(linear),
+            self.materials.append((truth_samples(truth, sample_bins(table, rng, samples), rng), tonemap(linear),
                                    highlight_mask(linear, self.mask)))
 
     def mean_metrics(self, model: Model) -> dict[str, float]:

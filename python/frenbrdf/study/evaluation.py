@@ -1,7 +1,8 @@
 """Evaluation (docs/method.md §7): reconstruction and editing tables, histograms, render grids.
 
 - Reconstruction: each test material is encoded from N random valid bins (default 4000,
-  the same bins for every method), decoded, rendered and compared with the render of the
+  the same samples for every method; a measurement evaluated at them in a random order of each pair,
+  :func:`frenbrdf.render.scoring.truth_samples`), decoded, rendered and compared with the render of the
   true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the colour difference ΔE
   (CIEDE2000) over the lit material pixels (:func:`frenbrdf.render.material_mask`), PSNR and ΔE over
   the highlights (the 5 % brightest of those pixels in the truth's linear render,
@@ -46,7 +47,14 @@ from ..render.renderer import Scene, material_mask, render_linear, tonemap
 from ..render.scoring import (
     FrequencyMetric as FrequencyMetric,  # re-exported: frenbrdf.study.evaluation keeps its public names
 )
-from ..render.scoring import edit_metrics, highlight_mask, reconstruct, refined_reconstruction, sample_bins
+from ..render.scoring import (
+    edit_metrics,
+    highlight_mask,
+    reconstruct,
+    refined_reconstruction,
+    sample_bins,
+    truth_samples,
+)
 from ..render.scoring import image_metrics as image_metrics
 from ..render.scoring import reconstruction_rows as reconstruction_rows
 from ..training.run import Run
@@ -286,21 +294,21 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     for name in tqdm(names, desc="reconstruction", disable=not show):
         truth = read_truth(files[name])  # a .bsdf renders as measured, not through its table
         table = as_table(truth)
-        bins = sample_bins(table, rng, config.samples)
+        samples = truth_samples(truth, sample_bins(table, rng, config.samples), rng)
         edit_truth_linear[name] = render_linear(truth, edit_scene)
         truth_linear = render_linear(truth, scene)
         truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
         renders[name] = {"truth": truth_image}
         decoded = {}
         for method, model in models.items():
-            z, image = reconstruct(model, table, bins, scene)
+            z, image = reconstruct(model, samples, scene)
             latents[""][method][name] = z
             renders[name][method] = image
             metrics = image_metrics(truth_image, image, mask, highlight)
             metrics["lfre"] = frequency_metric(model, table, z)
             decoded[method] = model.decode(z)
             if refinement:
-                result, image, seconds = refined_reconstruction(model, table, bins, scene, refinement)
+                result, image, seconds = refined_reconstruction(model, samples, scene, refinement)
                 latents["refined_"][method][name] = result.z
                 renders[name][f"{method} refined"] = image
                 refined = image_metrics(truth_image, image, mask, highlight)
