@@ -2,7 +2,8 @@
 
 - an RGL ``.bsdf`` measurement → a MERL ``.binary`` table (evaluated at every bin's directions);
 - a ``.bsdf`` or a MERL table → a CSV or NPZ of samples at random valid MERL bins, the form
-  ``frenbrdf reconstruct`` reads (:mod:`frenbrdf.material.measurements`).
+  ``frenbrdf reconstruct`` reads (:mod:`frenbrdf.material.measurements`; a ``.bsdf`` is evaluated at each
+  bin's pair in a random order: a measurement need not be reciprocal, a table keeps one order).
 
 The output is checked before any work (its suffix, its folder; an existing file is replaced only
 when asked) and written atomically.
