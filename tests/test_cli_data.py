@@ -91,6 +91,25 @@ def test_fit_nbrdf_reproduces_a_material(tmp_path):
     assert np.array_equal(frenbrdf.valid_mask(fitted), valid)
 
 
+def test_fit_nbrdf_on_samples_is_the_fit_of_a_table_holding_them():
+    """fit_nbrdf_samples takes scattered samples (a measurement in both orders, which no table holds); on a table's
+    own bins, in the table's order, it takes the same steps as fit_nbrdf on a table holding only those bins."""
+    from frenbrdf.data.fitting import fit_nbrdf_samples
+    from frenbrdf.render.scoring import bin_directions, sample_bins
+
+    table = toy_table(np.random.default_rng(3))
+    bins = np.sort(sample_bins(table, np.random.default_rng(4), 1500))
+    sparse = np.full_like(table, -1.0)
+    sparse.reshape(3, -1)[:, bins] = table.reshape(3, -1)[:, bins]
+    config = FitConfig(epochs=2, hidden=(8, 8))
+    from_table = fit_nbrdf(sparse, config, progress=False)
+    from_samples = fit_nbrdf_samples(table.reshape(3, -1)[:, bins].T, bin_directions(bins), config, progress=False)
+    for a, b in zip(from_table.params, from_samples.params):
+        np.testing.assert_allclose(a.numpy(), b.numpy(), rtol=1e-4, atol=1e-6)
+    with pytest.raises(ValueError, match="finite"):
+        fit_nbrdf_samples(np.full((10, 3), np.nan), bin_directions(bins[:10]), config, progress=False)
+
+
 def test_fit_nbrdf_command_saves_a_loadable_nbrdf(tmp_path, capsys):
     path = tmp_path / "toy.binary"
     frenbrdf.write_merl(path, toy_table(np.random.default_rng(4)))

@@ -8,8 +8,9 @@ For each RGL ``.bsdf`` measurement: the model encodes it from ``--samples`` rand
 latent space; ``full``: then the NBRDF's weights), and each result is rendered and compared with the
 render of the measurement itself (not of a quantised table). Beside them, the published per-material
 NBRDF fit of the same material (``--fits``: its Keras ``.h5``, fitted to 640k samples) and a
-``fit-nbrdf`` fit to the same bins as the model saw (in the table's order of each pair: it fits a table). Seconds: wall seconds of encoding and
-refinement (not of rendering; after one untimed warm-up), or of the fit. Writes ``real.md`` (a table per material
+``fit-nbrdf`` fit to the same samples as the model saw (:func:`frenbrdf.data.fitting.fit_nbrdf_samples`).
+Seconds: wall seconds of encoding and refinement (not of rendering; after one untimed warm-up), or of the
+fit. Writes ``real.md`` (a table per material
 and the means), ``real.json`` and ``real.png`` (truth | fit | encoder | latent | full, per row).
 """
 
@@ -24,7 +25,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from frenbrdf.data.fitting import FitConfig, fit_nbrdf
+from frenbrdf.data.fitting import FitConfig, fit_nbrdf_samples
 from frenbrdf.data.materials import load_material_file
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.io.measured import read_truth
@@ -57,12 +58,9 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
     published = fits / f"{path.stem}.h5" if fits else None
     if published is not None and published.exists():
         images["published fit"] = tonemap(render_linear(load_material_file(published), scene))
-    if fit_epochs:  # fit-nbrdf on the model's bins: a table holding only them (others missing), in the table's order
-        sparse = np.full_like(table, -1.0)
-        flat, dense = sparse.reshape(3, -1), table.reshape(3, -1)
-        flat[:, bins] = dense[:, bins]
+    if fit_epochs:  # fit-nbrdf on the very samples the model sees
         start = time.perf_counter()
-        fitted = fit_nbrdf(sparse, FitConfig(epochs=fit_epochs, seed=seed), progress=False)
+        fitted = fit_nbrdf_samples(*drawn, FitConfig(epochs=fit_epochs, seed=seed), progress=False)
         rows["fit-nbrdf"] = {"seconds": time.perf_counter() - start}
         images["fit-nbrdf"] = tonemap(render_linear(fitted, scene))
     for budget in ("none", "latent", "full"):

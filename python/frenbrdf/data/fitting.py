@@ -19,7 +19,7 @@ from tqdm.auto import tqdm
 from ..io.atomic import atomic_path
 from ..io.merl import N_BINS, SHAPE
 from ..models.mapping import LogRelativeMapping
-from ..models.nbrdf import NBRDF, NBRDFConfig, bin_geometry, nbrdf_forward
+from ..models.nbrdf import NBRDF, NBRDFConfig, bin_geometry, mapped_samples, nbrdf_forward
 
 #: Sztrajman's output activation exp(x) − 1 as a mapping.
 EXP_MINUS_ONE = LogRelativeMapping(np.zeros(3), epsilon=1.0)
@@ -57,17 +57,29 @@ def fit_nbrdf(table, config: FitConfig = FitConfig(), progress: bool = True) -> 
     if len(bins) == 0:
         raise ValueError("table holds no valid bin")
     geometry = bin_geometry()
-    coords, cos_in = geometry.half_diff[bins], geometry.cos_in[bins].unsqueeze(-1)
-    values = torch.from_numpy(flat[:, bins].T.astype(np.float32))
-    target = torch.log1p(values * cos_in)
+    return _fit(geometry.half_diff[bins], geometry.cos_in[bins], flat[:, bins].T, config, progress)
 
+
+def fit_nbrdf_samples(values, directions, config: FitConfig = FitConfig(), progress: bool = True) -> NBRDF:
+    """Fits one NBRDF to scattered samples: reflectance ``(N, 3)`` at the pairs ``(wi, wo)``, as
+    :func:`frenbrdf.models.reconstruct.reconstruct` takes them (e.g. a measurement in both orders of each pair,
+    :func:`frenbrdf.render.scoring.truth_samples`, which a table cannot hold). ``epochs`` are passes over them."""
+    _, coords, cos_in = mapped_samples(EXP_MINUS_ONE, values, directions)  # checks them; the fit maps its own way
+    return _fit(torch.from_numpy(coords.astype(np.float32)), torch.from_numpy(cos_in.astype(np.float32)),
+                np.asarray(values, dtype=np.float64), config, progress)
+
+
+def _fit(coords: torch.Tensor, cos_in: torch.Tensor, values: np.ndarray, config: FitConfig, progress: bool) -> NBRDF:
+    """Adam on L1 of ln(1 + f cos θ_i) over samples: NBRDF inputs ``(N, 6)``, cos θ_i ``(N,)``, reflectance ``(N, 3)``."""
+    cos_in = cos_in.unsqueeze(-1)
+    target = torch.log1p(torch.from_numpy(values.astype(np.float32)) * cos_in)
     torch.manual_seed(config.seed)
     params = [torch.nn.Parameter(p) for p in _initial_params(NBRDFConfig(config.hidden))]
     optimizer = torch.optim.Adam(params, lr=config.lr)
     generator = torch.Generator().manual_seed(config.seed)
-    steps = (len(bins) + config.batch - 1) // config.batch
+    steps = (len(coords) + config.batch - 1) // config.batch
     for _ in tqdm(range(config.epochs), desc="fit NBRDF", disable=not progress, leave=False):
-        order = torch.randperm(len(bins), generator=generator)
+        order = torch.randperm(len(coords), generator=generator)
         for step in range(steps):
             rows = order[step * config.batch:(step + 1) * config.batch]
             predicted = torch.expm1(nbrdf_forward([p[None] for p in params], coords[rows][None]))[0].clamp_min(0)

@@ -173,7 +173,8 @@ def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np
     return bins if samples >= len(bins) else rng.choice(bins, size=samples, replace=False)
 
 
-def truth_samples(truth, bins: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+def truth_samples(truth, bins: np.ndarray,
+                  rng: np.random.Generator) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """The truth's reflectance at ``bins`` ``(N, 3)`` and the direction pairs ``(ω_i, ω_o)`` it was taken at: what
     an encoder takes.
 
