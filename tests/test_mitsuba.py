@@ -146,6 +146,19 @@ def test_nbrdf_eval_uses_the_training_convention_phi_h_zero(mi):
     assert_nbrdf_close(mitsuba_eval(mi, bsdf, wi, wo), expected, wi, wo)
 
 
+def test_an_ordered_nbrdf_takes_the_light_first(mi):
+    """Mitsuba's si.wi points to the camera and wo to the light; an ordered NBRDF (one that tells the two orders of a
+    pair apart, as a refined measurement may) is evaluated as f(light, camera), as the metric renderer does."""
+    ordered = tiny_nbrdf(seed=5)
+    ordered.ordered = True
+    bsdf = mi.load_dict(fm.bsdf_dict(ordered))
+    rng = np.random.default_rng(4)
+    camera, light = upper_hemisphere(rng, 20000), upper_hemisphere(rng, 20000)
+    expected = ordered(light, camera) * light[:, 2:3]
+    assert np.median(np.abs(ordered(camera, light) - ordered(light, camera))) > 0.01 * np.median(expected)  # it can fail
+    assert_nbrdf_close(mitsuba_eval(mi, bsdf, camera, light), expected, light, camera)
+
+
 def test_keras_h5_file_eval_equals_the_reference(mi, tmp_path):
     """A Keras .h5 read by the plugin (frenbrdf.data.materials) evaluates as its NBRDF (the reference forward pass)."""
     from frenbrdf.data.nbrdf_import import keras_nbrdf

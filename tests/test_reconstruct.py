@@ -560,3 +560,67 @@ def test_pretrained_model_ships_and_reconstructs(tmp_path):
         result = model.reconstruct(material.values, (material.wi, material.wo), refine=budget)
         metrics = image_metrics(truth, render(result.nbrdf, scene), material_mask(scene))
         assert metrics["psnr"] > least_psnr and metrics["delta_e"] < most_delta_e, (budget, metrics)
+
+
+def _lit_from_above(values, wi, wo):
+    """A non-reciprocal material: the toy's reflectance, brighter the higher the light (ω_i) stands."""
+    return values * (0.4 + 1.2 * wi[:, 2:3])
+
+
+def test_full_keeps_the_order_of_a_pair_where_the_samples_hold_both(model, material):
+    """A measurement need not be reciprocal; sampled in both orders, the weight stage fits an ordered NBRDF, which
+    gives each order back, and fits closer than a reciprocal one."""
+    from frenbrdf.models.nbrdf import pair_order
+
+    rng = np.random.default_rng(2)
+    reverse = rng.random(len(material.values)) < 0.5
+    wi = np.where(reverse[:, None], material.wo, material.wi)
+    wo = np.where(reverse[:, None], material.wi, material.wo)
+    assert 0 < np.mean(pair_order(wi, wo) < 0) < 1
+    values = _lit_from_above(material.values, wi, wo)
+    config = RefineConfig(latent_steps=5, weight_steps=200, weight_lr=3e-3)
+    ordered = model.reconstruct(values, (wi, wo), refine=config)
+    reciprocal = model.reconstruct(values, (wi, wo), refine=dataclasses.replace(config, keep_order=False))
+    assert ordered.nbrdf.ordered and not reciprocal.nbrdf.ordered
+    assert ordered.losses["latent"] == reciprocal.losses["latent"]  # the order enters at the weight stage only
+    assert ordered.losses["weights"] < 0.8 * reciprocal.losses["weights"]
+    # Each order comes back: f(ω_i, ω_o) and f(ω_o, ω_i) differ as the material's do.
+    forward, backward = ordered.nbrdf(wi, wo), ordered.nbrdf(wo, wi)
+    truth_ratio = _lit_from_above(np.ones_like(values), wi, wo) / _lit_from_above(np.ones_like(values), wo, wi)
+    assert np.corrcoef(np.log(forward.mean(-1) / backward.mean(-1)), np.log(truth_ratio[:, 0]))[0, 1] > 0.8
+    np.testing.assert_allclose(reciprocal.nbrdf(wi, wo), reciprocal.nbrdf(wo, wi), rtol=1e-5, atol=1e-7)
+
+
+def test_samples_in_one_order_keep_the_nbrdf_reciprocal(model, material):
+    result = model.reconstruct(material.values, (material.wi, material.wo),
+                               refine=RefineConfig(latent_steps=2, weight_steps=5))
+    assert not result.nbrdf.ordered  # a MERL table's samples: every pair in the table's order
+
+
+def test_an_ordered_nbrdf_saves_renders_and_writes_its_table_order(model, material, tmp_path):
+    from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
+    from frenbrdf.render import Scene, render_linear
+
+    rng = np.random.default_rng(3)
+    reverse = rng.random(len(material.values)) < 0.5
+    wi = np.where(reverse[:, None], material.wo, material.wi)
+    wo = np.where(reverse[:, None], material.wi, material.wo)
+    nbrdf = model.reconstruct(_lit_from_above(material.values, wi, wo), (wi, wo),
+                              refine=RefineConfig(latent_steps=2, weight_steps=100, weight_lr=3e-3)).nbrdf
+    assert nbrdf.ordered
+    save_nbrdf(tmp_path / "m.pt", nbrdf)
+    again = load_nbrdf(tmp_path / "m.pt")
+    assert again.ordered
+    np.testing.assert_array_equal(again(wi, wo), nbrdf(wi, wo))
+    # Its table holds each pair in the table's order; in_table_order is the reciprocal NBRDF that agrees there.
+    table_order = nbrdf.in_table_order()
+    assert not table_order.ordered
+    from frenbrdf.render.scoring import bin_directions
+    bins = np.flatnonzero(frenbrdf.valid_mask(material.table))[::997]
+    bin_wi, bin_wo = bin_directions(bins)
+    np.testing.assert_allclose(table_order(bin_wi, bin_wo), nbrdf(bin_wi, bin_wo), rtol=1e-5)
+    assert not np.allclose(nbrdf(bin_wo, bin_wi), nbrdf(bin_wi, bin_wo), rtol=1e-3)
+    np.testing.assert_allclose(nbrdf.merl_table().reshape(3, -1)[:, bins].T, nbrdf(bin_wi, bin_wo), rtol=1e-5)
+    # The metric renderer evaluates each light's pair in its own order.
+    scene = Scene(resolution=16)
+    assert not np.allclose(render_linear(nbrdf, scene), render_linear(table_order, scene))

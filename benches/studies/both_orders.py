@@ -9,7 +9,8 @@ measurement and draw, the same 4000 random valid bins are given to the shipped m
 table's values (one order, as every figure before this study) and with the measurement evaluated at
 each bin's pair in a random order (:func:`frenbrdf.render.scoring.truth_samples`, what every command now
 does); each budget (encoder, ``latent``, ``full``) is rendered and compared with the render of the
-measurement itself. Beside them, for scale, how far the measurement is from a reciprocal material: its
+measurement itself; ``full`` on both orders fits an ordered NBRDF (``RefineConfig.keep_order``), and once more a
+reciprocal one (keep_order False). Beside them, for scale, how far the measurement is from a reciprocal material: its
 symmetrised form ½(f(ω_i, ω_o) + f(ω_o, ω_i)) and its transpose f(ω_o, ω_i) (the order a renderer that
 takes ω_i towards the camera uses) rendered against it. Writes ``orders.json``, ``orders.md`` (means over
 the draws, the change with a 95 % interval over the material × draw pairs) and ``orders.png`` (draw 0).
@@ -38,6 +39,8 @@ from common import render_sheet, run_metadata  # noqa: E402
 
 BUDGETS = ("none", "latent", "full")
 ORDERS = ("one order", "both orders")
+#: ``full`` on samples in both orders fits an ordered NBRDF (``RefineConfig.keep_order``); this column keeps it reciprocal.
+RECIPROCAL = "full, both orders, reciprocal NBRDF"
 
 
 def measure(path: Path, model, scene: Scene, draws: list[int]) -> tuple[dict, dict]:
@@ -56,25 +59,30 @@ def measure(path: Path, model, scene: Scene, draws: list[int]) -> tuple[dict, di
         bins = sample_bins(table, rng, 4000)
         for order, source in zip(ORDERS, (table, truth)):
             drawn = truth_samples(source, bins, rng)
-            for budget in BUDGETS:
-                config = dataclasses.replace(refine_config(budget), seed=draw)
-                _, image, _ = refined_reconstruction(model, drawn, scene, config)
-                column = f"{budget}, {order}"
+            columns = [(f"{budget}, {order}", refine_config(budget)) for budget in BUDGETS]
+            if order == "both orders":
+                columns.append((RECIPROCAL, dataclasses.replace(refine_config("full"), keep_order=False)))
+            for column, config in columns:
+                _, image, _ = refined_reconstruction(model, drawn, scene, dataclasses.replace(config, seed=draw))
                 rows.setdefault(column, []).append(image_metrics(images["truth"], image, mask))
                 images.setdefault(column, image)
     return rows, images
 
 
+#: The comparisons of the summary: (label, from column, to column).
+CHANGES = [(budget, f"{budget}, one order", f"{budget}, both orders") for budget in BUDGETS] + [
+    ("full, reciprocal NBRDF", "full, one order", RECIPROCAL),
+    ("full: ordered against reciprocal NBRDF", RECIPROCAL, "full, both orders")]
+
+
 def summary(results: dict) -> dict:
-    """Per budget: each order's mean PSNR and ΔE, and the change from one order to both over the pairs."""
+    """Per comparison of :data:`CHANGES`: both columns' mean PSNR and ΔE, and the change over the pairs."""
     out = {}
-    for budget in BUDGETS:
-        pairs = {key: [(one[key], both[key]) for rows in results.values()
-                       for one, both in zip(rows[f"{budget}, one order"], rows[f"{budget}, both orders"])]
+    for label, before, after in CHANGES:
+        pairs = {key: [(a[key], b[key]) for rows in results.values() for a, b in zip(rows[before], rows[after])]
                  for key in ("psnr", "delta_e")}
-        out[budget] = {key: {"one order": float(np.mean([a for a, _ in values])),
-                             "both orders": float(np.mean([b for _, b in values])),
-                             "change": paired_interval([b - a for a, b in values])} for key, values in pairs.items()}
+        out[label] = {key: {"from": float(np.mean([a for a, _ in values])), "to": float(np.mean([b for _, b in values])),
+                            "change": paired_interval([b - a for a, b in values])} for key, values in pairs.items()}
     return out
 
 
@@ -89,14 +97,13 @@ def markdown(report: dict) -> str:
         cells = [f"{np.mean([m['psnr'] for m in rows[name]]):.2f} / {np.mean([m['delta_e'] for m in rows[name]]):.2f}"
                  for rows in report["materials"].values()]
         lines.append(f"| {name} | " + " | ".join(cells) + f" | {mean[name]:.2f} |")
-    lines += ["", "| budget | PSNR one → both order(s) | change (95 % interval) | ΔE one → both | change |",
-              "|---|---|---|---|---|"]
-    for budget, keys in report["summary"].items():
+    lines += ["", "| comparison | PSNR | change (95 % interval) | ΔE | change |", "|---|---|---|---|---|"]
+    for label, keys in report["summary"].items():
         cells = []
         for key in ("psnr", "delta_e"):
             s, c = keys[key], keys[key]["change"]
-            cells += [f"{s['one order']:.2f} → {s['both orders']:.2f}", f"{c['mean']:+.2f} [{c['low']:+.2f}, {c['high']:+.2f}]"]
-        lines.append(f"| {budget} | " + " | ".join(cells) + " |")
+            cells += [f"{s['from']:.2f} → {s['to']:.2f}", f"{c['mean']:+.2f} [{c['low']:+.2f}, {c['high']:+.2f}]"]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 

@@ -209,7 +209,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
     from .material.outputs import reconstruct_file
 
     report = reconstruct_file(args.input, args.out, model=args.model, samples=args.samples, refine=args.refine,
-                              seed=args.seed, progress=not args.quiet, overwrite=args.overwrite, width=args.width)
+                              seed=args.seed, progress=not args.quiet, overwrite=args.overwrite, width=args.width,
+                              reciprocal=args.reciprocal)
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -379,6 +380,9 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--width", type=int, metavar="N", help="with --refine full: widen the NBRDF to at least N hidden "
                      "units per layer before refining its weights (default 64; wider: more fidelity for more "
                      "time)")
+    rec.add_argument("--reciprocal", action="store_true", help="with --refine full: keep the NBRDF reciprocal even "
+                     "when the samples hold both orders of pairs (a .bsdf measurement does; by default the NBRDF then "
+                     "tells them apart, as the measurement does near grazing)")
     rec.add_argument("--seed", type=int, default=0, help="seeds the sampling and the refinement (default 0)")
     rec.add_argument("--json", action="store_true", help="print the report as JSON")
     rec.add_argument("--quiet", action="store_true", help="no progress bars")

@@ -97,11 +97,12 @@ def _initial_params(config: NBRDFConfig) -> list[torch.Tensor]:
 
 
 def save_nbrdf(path: str | os.PathLike, nbrdf: NBRDF) -> None:
-    """Saves one NBRDF (weights and mapping) atomically."""
+    """Saves one NBRDF (weights, mapping, and whether it is ordered) atomically."""
     with atomic_path(path) as temporary:
         torch.save({"params": [p[0] for p in nbrdf.params], # f_ref as float32, as run folders store it: a per-bin f_ref is then 17.5 MB, not 35
                     "reference": torch.from_numpy(nbrdf.mapping.reference.astype(np.float32)),
-                    "epsilon": nbrdf.mapping.epsilon, "offset": nbrdf.mapping.offset}, temporary)
+                    "epsilon": nbrdf.mapping.epsilon, "offset": nbrdf.mapping.offset, "ordered": nbrdf.ordered},
+                   temporary)
 
 
 def load_nbrdf(path: str | os.PathLike) -> NBRDF:
@@ -117,7 +118,10 @@ def load_nbrdf(path: str | os.PathLike) -> NBRDF:
         reference = state["reference"]
         if not isinstance(reference, torch.Tensor):
             raise ValueError(f"its reference is a {type(reference).__name__}, not a tensor")
-        return NBRDF(params, LogRelativeMapping(reference.numpy(), state["epsilon"], state.get("offset", 0.0)))
+        ordered = state.get("ordered", False)  # files written before ordered NBRDFs hold reciprocal ones
+        if not isinstance(ordered, bool):
+            raise ValueError(f"its 'ordered' flag is a {type(ordered).__name__}, not a bool")
+        return NBRDF(params, LogRelativeMapping(reference.numpy(), state["epsilon"], state.get("offset", 0.0)), ordered)
     except KeyError as error:
         raise ValueError(f"{path}: not a saved NBRDF (it lacks {error})") from None
     except ValueError as error:

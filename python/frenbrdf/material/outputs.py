@@ -48,7 +48,8 @@ FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.pn
 
 def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
                      samples: int | None = 4000, refine: str = "full", seed: int = 0, resolution: int = 256,
-                     progress: bool = True, overwrite: bool = False, width: int | None = None) -> dict:
+                     progress: bool = True, overwrite: bool = False, width: int | None = None,
+                     reciprocal: bool = False) -> dict:
     """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
 
     Parameters
@@ -69,6 +70,9 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     width
         ``refine="full"`` only: the least hidden width of the refined NBRDF
         (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the budget's, 64 for ``full``).
+    reciprocal
+        ``refine="full"``: keep the refined NBRDF reciprocal even when the samples hold both orders of pairs
+        (:attr:`frenbrdf.models.reconstruct.RefineConfig.keep_order` False).
     overwrite
         Replace ``out_dir`` even when it holds files this function did not write (they are deleted).
 
@@ -80,6 +84,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress)
     if width is not None:
         config = dataclasses.replace(config, width=width)  # checked before anything is read or written
+    if reciprocal:
+        config = dataclasses.replace(config, keep_order=False)
     out = check_out(source, out_dir, model, overwrite=overwrite)
     measurements = read_measurements(source, samples=samples, seed=seed)
     loaded = load_model(model)
@@ -89,7 +95,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     report = {"input": {"path": str(source), "kind": measurements.kind, "samples": len(measurements)},
               "model": {"path": str(model), "method": loaded.method, **({"version": loaded.card.get("version")}
                                                                           if loaded.card else {})},
-              "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary()}
+              "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary(),
+              "ordered": result.nbrdf.ordered}
     if measurements.truth is not None:
         images["truth"] = render(measurements.truth, scene)
         images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)

@@ -21,6 +21,9 @@ from .mapping import LogRelativeMapping
 
 #: The NBRDF input: H and D as Cartesian 3-vectors.
 N_INPUTS = 6
+#: The input that carries a pair's order in an ordered NBRDF (:attr:`NBRDF.ordered`): H_y, 0 for every pair otherwise
+#: (H is rotated onto the xz-plane), so no reciprocal NBRDF depends on its weights.
+ORDER_INPUT = 1
 #: The output: RGB.
 N_OUTPUTS = 3
 #: The widest hidden layer and the most hidden layers an NBRDF may have (Sztrajman's has 21, HyperBRDF's 60): a
@@ -124,26 +127,51 @@ def fold_difference(d: np.ndarray) -> np.ndarray:
     Swapping ω_i and ω_o turns D by π about H's pole, (x, y, z) → (−x, −y, z), and leaves a
     BRDF unchanged (reciprocity); MERL stores only φ_d ∈ [0, π) for that reason, so every
     training sample has D_y ≥ 0. Folding (x, y, z) → (−x, −y, z) where y < 0 (or y = 0 and
-    x < 0, φ_d = π) asks the network only about inputs it was trained on, and makes every
+    x < 0, φ_d = π; "0" within :data:`SEAM`) asks the network only about inputs it was trained on, and makes every
     decoded BRDF exactly reciprocal. The Dr.Jit kernel (:mod:`frenbrdf.render.mitsuba.kernels`)
     folds the same way.
     """
-    x, y = d[..., 0:1], d[..., 1:2]
-    flip = (y < 0) | ((y == 0) & (x < 0))
-    return np.where(flip, d * np.array([-1.0, -1.0, 1.0]), d)
+    return np.where(_order_of_difference(d)[..., None] < 0, d * np.array([-1.0, -1.0, 1.0]), d)
 
 
-def nbrdf_coordinates(wi, wo) -> np.ndarray:
+def nbrdf_coordinates(wi, wo, ordered: bool = False) -> np.ndarray:
     """The NBRDF input of direction pairs, each ``(..., 3)`` → ``(..., 6)``: (H, D) with φ_h = 0,
     D folded by reciprocity (:func:`fold_difference`).
 
     An isotropic BRDF does not depend on φ_h, and the networks only ever see H in the
     xz-plane (as at the MERL bins), so H is rotated about the normal onto it:
-    H = (sin θ_h, 0, cos θ_h). D is already expressed in H's frame.
+    H = (sin θ_h, 0, cos θ_h). D is already expressed in H's frame. ``ordered``: the input
+    :data:`ORDER_INPUT` carries the pair's order instead (:func:`pair_order`), for an ordered NBRDF.
     """
     h, d = half_diff_vectors(wi, wo)
     h_isotropic = np.stack([np.hypot(h[..., 0], h[..., 1]), np.zeros(h.shape[:-1]), h[..., 2]], axis=-1)
-    return np.concatenate([h_isotropic, fold_difference(d)], axis=-1)
+    coords = np.concatenate([h_isotropic, fold_difference(d)], axis=-1)
+    if ordered:
+        coords[..., ORDER_INPUT] = _order_of_difference(d)
+    return coords
+
+
+def pair_order(wi, wo) -> np.ndarray:
+    """+1 where the pair ``(ω_i, ω_o)`` is in the order a MERL table keeps (D_y ≥ 0, φ_d ∈ [0, π)), −1 where it
+    is the reverse of such a pair; ``(...)`` for directions ``(..., 3)``."""
+    return _order_of_difference(half_diff_vectors(wi, wo)[1])
+
+
+def holds_both_orders(wi, wo) -> bool:
+    """Whether some of the pairs are in a MERL table's order and some in the reverse (:func:`pair_order`)."""
+    order = pair_order(wi, wo)
+    return bool(np.any(order > 0) and np.any(order < 0))
+
+
+#: How near 0 a component of D counts as 0 when folding: on the seam φ_d ∈ {0, π} D_y's sign is rounding (a MERL
+#: bin at φ_d = 0 comes out of the trigonometry with D_y = ±1e-17), and there D_x decides, unless D is the pole
+#: (θ_d = 0: ω_i = ω_o, the pair is its own reverse).
+SEAM = 1e-9
+
+
+def _order_of_difference(d: np.ndarray) -> np.ndarray:
+    x, y = d[..., 0], d[..., 1]
+    return np.where((y < -SEAM) | ((np.abs(y) <= SEAM) & (x < -SEAM)), -1.0, 1.0)  # where fold_difference flips D
 
 
 def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -269,6 +297,11 @@ class NBRDF:
         Parameter tensors with a leading material axis B (see :func:`nbrdf_forward`).
     mapping
         The mapping from network outputs to reflectance.
+    ordered
+        Whether the network tells the two orders of a pair apart (input :data:`ORDER_INPUT` carries
+        :func:`pair_order`): a measurement need not be reciprocal, and ``reconstruct``'s weight stage fits one
+        whose samples hold both orders this way (:class:`frenbrdf.models.reconstruct.RefineConfig`,
+        ``keep_order``). False (every decoded and fitted NBRDF): reciprocal, exactly.
 
     Examples
     --------
@@ -277,10 +310,11 @@ class NBRDF:
     >>> nbrdf.to_merl("decoded.binary")                                # doctest: +SKIP
     """
 
-    def __init__(self, params: list[torch.Tensor], mapping: LogRelativeMapping):
+    def __init__(self, params: list[torch.Tensor], mapping: LogRelativeMapping, ordered: bool = False):
         check_params(params)
         self.params = [p.detach().cpu().to(torch.float32) for p in params]
         self.mapping = mapping
+        self.ordered = bool(ordered)
 
     def __len__(self) -> int:
         return self.params[0].shape[0]
@@ -290,7 +324,17 @@ class NBRDF:
             raise ValueError(f"this NBRDF holds {len(self)} materials; index one first, e.g. nbrdf[0]")
 
     def __getitem__(self, index: int) -> NBRDF:
-        return NBRDF([p[[index]] for p in self.params], self.mapping)
+        return NBRDF([p[[index]] for p in self.params], self.mapping, self.ordered)
+
+    def in_table_order(self) -> NBRDF:
+        """The reciprocal NBRDF that equals this one on every pair in the order a MERL table keeps (itself when it is
+        not ordered): the order input's weights, times +1, moved into the first layer's bias."""
+        if not self.ordered:
+            return self
+        weight, bias = self.params[0].clone(), self.params[1].clone()
+        bias += weight[:, :, ORDER_INPUT]
+        weight[:, :, ORDER_INPUT] = 0
+        return NBRDF([weight, bias, *self.params[2:]], self.mapping)
 
     @torch.inference_mode()
     def mapped(self, coords) -> np.ndarray:
@@ -309,7 +353,8 @@ class NBRDF:
         self._only()
         wi, wo = np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64)
         above = (wi[..., 2] > 0) & (wo[..., 2] > 0)
-        rgb = self._reflectance(nbrdf_coordinates(wi, wo), self.mapping.reference_at(wi, wo), above[..., None])
+        rgb = self._reflectance(nbrdf_coordinates(wi, wo, self.ordered), self.mapping.reference_at(wi, wo),
+                                above[..., None])
         return np.where(above[..., None], rgb, 0.0)
 
     def _reflectance(self, coords, reference, where=True) -> np.ndarray:
@@ -324,8 +369,11 @@ class NBRDF:
         return rgb
 
     def merl_table(self) -> np.ndarray:
-        """The material at every MERL bin, ``(3, 90, 90, 180)``, missing bins marked as MERL does."""
+        """The material at every MERL bin, ``(3, 90, 90, 180)``, missing bins marked as MERL does (an ordered NBRDF:
+        each pair in the table's order, the one order a table keeps)."""
         self._only()
+        if self.ordered:
+            return self.in_table_order().merl_table()
         above, _ = merl_bin_inputs()
         reference = self.mapping.reference_bins()[:, above.reshape(-1)].T
         return nbrdf_merl_table(lambda inputs: self._reflectance(inputs, reference))

@@ -8,7 +8,9 @@
    trained) + λ2 · the latent penalty; the decoder stays fixed.
 2. **weights** — the decoded NBRDF's own weights optimised, starting from the decoder's
    output (a per-material fit that starts where the encoder left off), with the same
-   reconstruction loss + λ1 · the weight penalty. Runs in the native core
+   reconstruction loss + λ1 · the weight penalty. Where the samples hold both orders of
+   pairs (a measurement, which need not be reciprocal), the NBRDF learns to tell them apart
+   (an ordered NBRDF, :attr:`RefineConfig.keep_order`). Runs in the native core
    (``frenbrdf._native.WeightFit``: forward, backward and Adam in one Rust loop, the steps
    of ``torch.optim.Adam``), about twice as fast as PyTorch on these small networks.
 
@@ -45,7 +47,16 @@ from tqdm.auto import tqdm
 
 from .. import _native
 from .losses import LossConfig, reconstruction_loss
-from .nbrdf import MAX_WIDTH, NBRDF, mapped_samples, nbrdf_forward, widen_params
+from .nbrdf import (
+    MAX_WIDTH,
+    NBRDF,
+    ORDER_INPUT,
+    holds_both_orders,
+    mapped_samples,
+    nbrdf_forward,
+    pair_order,
+    widen_params,
+)
 
 #: Stages of :func:`reconstruct`, in order.
 STAGES = ("encode", "latent", "weights")
@@ -81,6 +92,11 @@ class RefineConfig:
     it without changing its output (:func:`frenbrdf.models.nbrdf.widen_params`), giving the weights more to fit with;
     the result is an NBRDF that wide. None: the decoder's widths (32 for the shipped model). Costs time: 48 about
     1.2×, 64 about 1.45× the whole ``full`` (docs/measurements.md, "What limits full")."""
+    keep_order: bool = True
+    """Stage 2: where the samples hold pairs in both orders, (ω_i, ω_o) and its reverse kind (as a measurement
+    sampled by :func:`frenbrdf.render.scoring.truth_samples` does), refine an ordered NBRDF
+    (:attr:`frenbrdf.NBRDF.ordered`): one that may tell them apart, as a real measurement does near grazing.
+    False, or samples in one order only (a MERL table's): the NBRDF stays reciprocal."""
     seed: int = 0
     """Seeds the mini-batches (and a widened NBRDF's new weights)."""
     progress: bool = False
@@ -188,6 +204,7 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     config = refine_config(refine)
     loss = _loss_config(model)
     mapped, coords, cos_in = mapped_samples(model.mapping, values, directions)
+    wi, wo = (np.asarray(d, dtype=np.float64) for d in directions)  # checked by mapped_samples
     samples = _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in)))
     result = Reconstruction(np.zeros(0), None)
 
@@ -217,15 +234,19 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
             params = model.network.decoder(z)
         result.losses["latent"] = _sample_loss(params, samples, loss.kind)
 
+    ordered = bool(config.weight_steps and config.keep_order and holds_both_orders(wi, wo))
     if config.weight_steps:
         params = [p.detach().clone() for p in params]
         if config.width is not None:
             params = widen_params(params, config.width, torch.Generator().manual_seed(config.seed))
+        if ordered:  # the order enters where the input was 0 for every pair: its weights go first, the output stays
+            params[0][:, :, ORDER_INPUT] = 0
+            samples.coords[0, :, ORDER_INPUT] = torch.from_numpy(pair_order(wi, wo).astype(np.float32))
         params = _refine_weights(params, samples, loss, config, result)
         result.losses["weights"] = _sample_loss(params, samples, loss.kind)
 
     result.z = z[0].detach().numpy().astype(np.float64)
-    result.nbrdf = NBRDF([p.detach() for p in params], model.mapping)  # checked: finite weights
+    result.nbrdf = NBRDF([p.detach() for p in params], model.mapping, ordered)  # checked: finite weights
     result.nbrdf(*(np.asarray(d, dtype=np.float64) for d in directions))  # raises where its reflectance overflows
     return result
 

@@ -112,12 +112,12 @@ def _geometry(scene: Scene) -> _Geometry:
 
 
 @functools.lru_cache(maxsize=8)
-def _nbrdf_inputs(scene: Scene, mapping) -> tuple[np.ndarray, np.ndarray]:
-    """(H, D) and f_ref at the scene's pairs: the same for every NBRDF sharing a mapping."""
+def _nbrdf_inputs(scene: Scene, mapping, ordered: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(H, D) and f_ref at the scene's pairs: the same for every NBRDF sharing a mapping (and being ordered or not)."""
     from ..models.nbrdf import nbrdf_coordinates
 
     geometry = _geometry(scene)
-    return nbrdf_coordinates(geometry.wi, geometry.wo), mapping.reference_at(geometry.wi, geometry.wo)
+    return nbrdf_coordinates(geometry.wi, geometry.wo, ordered), mapping.reference_at(geometry.wi, geometry.wo)
 
 
 def _brdf_values(source, scene: Scene) -> np.ndarray:
@@ -126,7 +126,7 @@ def _brdf_values(source, scene: Scene) -> np.ndarray:
 
     geometry = _geometry(scene)
     if isinstance(source, NBRDF):
-        coords, reference = _nbrdf_inputs(scene, source.mapping)
+        coords, reference = _nbrdf_inputs(scene, source.mapping, source.ordered)
         return source.mapping.inverse(source.mapped(coords), reference)
     if isinstance(source, np.ndarray):
         if source.shape != SHAPE:

@@ -147,7 +147,7 @@ class FrequencyMetric:
     @torch.no_grad()
     def predicted_coefficients(self, model: Model, material: np.ndarray | NBRDF) -> np.ndarray:
         """The SH coefficients of a decoded latent or an NBRDF at the grid nodes, ``(S, 3, ncoeff)``."""
-        params = (material.params if isinstance(material, NBRDF)
+        params = (material.in_table_order().params if isinstance(material, NBRDF)  # the SHT grid's pairs: a table's
                   else model.network.decoder(torch.from_numpy(material[None].astype(np.float32))))
         return self.parts(model)[1].predicted_coefficients(params)[0].numpy()
 

@@ -85,6 +85,7 @@ class SpectrumAnalyser:
         if not callable(source):
             raise TypeError(f"cannot analyse a {type(source).__name__}: give a MERL table or a BRDF f(wi, wo)")
         if isinstance(source, NBRDF):  # as L_fre sees it: the network's own values, below the horizon too
+            source = source.in_table_order()  # the grid's pairs are in a table's order
             with np.errstate(over="ignore"):
                 reflectance = source.mapping.inverse(source.mapped(self.loss.node_coords.numpy()),
                                                      source.mapping.reference_at(self.wi, self.wo))

@@ -46,6 +46,12 @@ def bsdf_class(variant: str):
             self.m_components = [flags]
             self.m_flags = flags
 
+        def _brdf(self, wi, wo, active):
+            """f at a pair as Mitsuba passes it: ``si.wi`` towards the camera, ``wo`` towards the light. The order
+            matters only to an ordered NBRDF, which takes the light's direction first (as the metric renderer and
+            the measurements do)."""
+            return self.kernels(wo, wi, active) if self.material.ordered else self.kernels(wi, wo, active)
+
         def _pdf(self, wi, wo, active):
             pdf = self.mixture.cosine * mi.warp.square_to_cosine_hemisphere_pdf(wo)
             if self.mixture.lobes:
@@ -62,7 +68,7 @@ def bsdf_class(variant: str):
 
         def eval(self, ctx, si, wo, active=True):
             active, cos_o = self._active(ctx, si, wo, active)
-            return dr.select(active, self.kernels(si.wi, wo, active) * cos_o, 0.0)
+            return dr.select(active, self._brdf(si.wi, wo, active) * cos_o, 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
             active, _ = self._active(ctx, si, wo, active)
@@ -70,7 +76,7 @@ def bsdf_class(variant: str):
 
         def eval_pdf(self, ctx, si, wo, active=True):
             active, cos_o = self._active(ctx, si, wo, active)
-            value = dr.select(active, self.kernels(si.wi, wo, active) * cos_o, 0.0)
+            value = dr.select(active, self._brdf(si.wi, wo, active) * cos_o, 0.0)
             return value, self._pdf(si.wi, wo, active)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
@@ -86,7 +92,7 @@ def bsdf_class(variant: str):
             active &= cos_o > 0
             pdf = self._pdf(wi, wo, active)
             active &= pdf > 0
-            value = self.kernels(wi, wo, active) * cos_o
+            value = self._brdf(wi, wo, active) * cos_o
             bs = dr.zeros(mi.BSDFSample3f)
             bs.wo = wo
             bs.pdf = pdf

@@ -105,9 +105,11 @@ class Kernels:
         """The NBRDF's network at (H, D) with φ_h = 0: mapped RGB (three floats)."""
         dr = self.dr
         # The network was trained on H = (sin θ_h, 0, cos θ_h) and D_y ≥ 0: drop H's azimuth
-        # (isotropy) and fold D by reciprocity, as frenbrdf.models.nbrdf.nbrdf_coordinates does.
+        # (isotropy) and fold D by reciprocity, as frenbrdf.models.nbrdf.nbrdf_coordinates does. An ordered
+        # NBRDF reads the pair's order (+1 unfolded, −1 folded) in H_y's place, which is 0 otherwise.
         flip = (d.y < 0) | ((d.y == 0) & (d.x < 0))
-        x = [dr.sqrt(dr.fma(h.x, h.x, h.y * h.y)), None, h.z, dr.select(flip, -d.x, d.x), dr.abs(d.y), d.z]
+        order = dr.select(flip, -1.0, 1.0) if self.material.ordered else None
+        x = [dr.sqrt(dr.fma(h.x, h.x, h.y * h.y)), order, h.z, dr.select(flip, -d.x, d.x), dr.abs(d.y), d.z]
         last = len(self.layers) - 1
         for index, (weight, bias) in enumerate(self.layers):
             out = []

@@ -38,6 +38,9 @@ class Material:
     """MERL: the table ``(3, 90, 90, 180)`` in physical units, missing bins negative."""
     nbrdf: object = None
     """NBRDF: the :class:`frenbrdf.NBRDF` itself (numpy evaluation)."""
+    ordered: bool = False
+    """NBRDF: whether it tells the two orders of a pair apart (:attr:`frenbrdf.NBRDF.ordered`): then the plugin
+    evaluates it with the light's direction first, as the metric renderer does."""
 
     def brdf(self, wi, wo) -> np.ndarray:
         """Reference (numpy) evaluation: reflectance at direction pairs ``(..., 3)`` → ``(..., 3)``, ≥ 0."""
@@ -71,7 +74,7 @@ def material_from_nbrdf(nbrdf, name: str = "nbrdf") -> Material:
     layers = list(zip(params[0::2], params[1::2]))
     reference = np.asarray(nbrdf.mapping.reference, dtype=np.float64)
     return Material("nbrdf", name, layers=layers, epsilon=float(nbrdf.mapping.epsilon),
-                    offset=float(nbrdf.mapping.offset), reference=reference, nbrdf=nbrdf)
+                    offset=float(nbrdf.mapping.offset), reference=reference, nbrdf=nbrdf, ordered=nbrdf.ordered)
 
 
 def material_from_table(table, name: str = "merl") -> Material:
