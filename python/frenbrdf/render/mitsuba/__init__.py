@@ -40,7 +40,10 @@ as :func:`frenbrdf.models.nbrdf.nbrdf_coordinates`: the networks are trained wit
 φ_h = 0, and a half vector with another azimuth would ask them to extrapolate, to values
 up to 1e180 near grazing for the published fits) or, for a table,
 :func:`frenbrdf.merl_lookup_directions` clamped to ≥ 0. The surface is one-sided: zero
-when either direction is below the horizon.
+when either direction is below the horizon. An ordered NBRDF (:attr:`frenbrdf.NBRDF.ordered`, one that
+tells the two orders of a pair apart, as a refined real measurement may) is the exception: it is
+evaluated as ``f(wo, si.wi)``, the light's direction first, as the metric renderer and the
+measurements take it (``si.wi`` points to the camera).
 
 Evaluation is written in Dr.Jit and runs inside Mitsuba's kernels, never calling back
 into numpy or torch: the NBRDF's matrix products are unrolled over its layers (weights
