@@ -121,6 +121,17 @@ def nbrdf_merl_table(reflectance) -> np.ndarray:
     return table
 
 
+#: How near 0 a component of D counts as 0 when folding: on the seam φ_d ∈ {0, π} D_y's sign is rounding (a MERL
+#: bin at φ_d = 0 comes out of the trigonometry with D_y = ±1e-17), and there D_x decides, unless D is the pole
+#: (θ_d = 0: ω_i = ω_o, the pair is its own reverse).
+SEAM = 1e-9
+
+
+def _order_of_difference(d: np.ndarray) -> np.ndarray:
+    x, y = d[..., 0], d[..., 1]
+    return np.where((y < -SEAM) | ((np.abs(y) <= SEAM) & (x < -SEAM)), -1.0, 1.0)  # where fold_difference flips D
+
+
 def fold_difference(d: np.ndarray) -> np.ndarray:
     """D ``(..., 3)`` folded onto the half-space a MERL table covers (φ_d ∈ [0, π), D_y ≥ 0).
 
@@ -161,17 +172,6 @@ def holds_both_orders(wi, wo) -> bool:
     """Whether some of the pairs are in a MERL table's order and some in the reverse (:func:`pair_order`)."""
     order = pair_order(wi, wo)
     return bool(np.any(order > 0) and np.any(order < 0))
-
-
-#: How near 0 a component of D counts as 0 when folding: on the seam φ_d ∈ {0, π} D_y's sign is rounding (a MERL
-#: bin at φ_d = 0 comes out of the trigonometry with D_y = ±1e-17), and there D_x decides, unless D is the pole
-#: (θ_d = 0: ω_i = ω_o, the pair is its own reverse).
-SEAM = 1e-9
-
-
-def _order_of_difference(d: np.ndarray) -> np.ndarray:
-    x, y = d[..., 0], d[..., 1]
-    return np.where((y < -SEAM) | ((np.abs(y) <= SEAM) & (x < -SEAM)), -1.0, 1.0)  # where fold_difference flips D
 
 
 def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -6,6 +6,7 @@ import itertools
 
 import numpy as np
 
+from ...models.nbrdf import SEAM
 from .material import Material
 
 
@@ -107,7 +108,7 @@ class Kernels:
         # The network was trained on H = (sin θ_h, 0, cos θ_h) and D_y ≥ 0: drop H's azimuth
         # (isotropy) and fold D by reciprocity, as frenbrdf.models.nbrdf.nbrdf_coordinates does. An ordered
         # NBRDF reads the pair's order (+1 unfolded, −1 folded) in H_y's place, which is 0 otherwise.
-        flip = (d.y < 0) | ((d.y == 0) & (d.x < 0))
+        flip = (d.y < -SEAM) | ((dr.abs(d.y) <= SEAM) & (d.x < -SEAM))
         order = dr.select(flip, -1.0, 1.0) if self.material.ordered else None
         x = [dr.sqrt(dr.fma(h.x, h.x, h.y * h.y)), order, h.z, dr.select(flip, -d.x, d.x), dr.abs(d.y), d.z]
         last = len(self.layers) - 1
