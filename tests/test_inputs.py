@@ -226,10 +226,18 @@ def _poison_first_weight(checkpoint):
     checkpoint["model"][name] = checkpoint["model"][name] * np.nan
 
 
-def _saved_nbrdf(tmp_path, params, epsilon=0.002, name="m.pt"):
+def _saved_nbrdf(tmp_path, params, epsilon=0.002, name="m.pt", **extra):
     path = tmp_path / name
-    torch.save({"params": params, "reference": torch.zeros(3), "epsilon": epsilon, "offset": 0.0}, path)
+    torch.save({"params": params, "reference": torch.zeros(3), "epsilon": epsilon, "offset": 0.0, **extra}, path)
     return path
+
+
+def test_a_saved_nbrdfs_order_flag_must_be_a_bool(tmp_path):
+    good = [torch.zeros(8, 6), torch.zeros(8), torch.zeros(3, 8), torch.zeros(3)]
+    assert not load_nbrdf(_saved_nbrdf(tmp_path, good)).ordered  # files from before ordered NBRDFs
+    assert load_nbrdf(_saved_nbrdf(tmp_path, good, ordered=True)).ordered
+    with pytest.raises(ValueError, match="m.pt: not a valid saved NBRDF: its 'ordered' flag is a str"):
+        load_nbrdf(_saved_nbrdf(tmp_path, good, ordered="yes"))
 
 
 def test_saved_nbrdfs_of_wrong_shapes_or_widths_are_named(tmp_path, capsys):

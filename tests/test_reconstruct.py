@@ -591,6 +591,11 @@ def test_full_keeps_the_order_of_a_pair_where_the_samples_hold_both(model, mater
     np.testing.assert_allclose(reciprocal.nbrdf(wi, wo), reciprocal.nbrdf(wo, wi), rtol=1e-5, atol=1e-7)
 
 
+def test_keep_order_is_a_bool():
+    with pytest.raises(ValueError, match="keep_order must be True or False, got 'no'"):
+        RefineConfig(weight_steps=5, keep_order="no")
+
+
 def test_samples_in_one_order_keep_the_nbrdf_reciprocal(model, material):
     result = model.reconstruct(material.values, (material.wi, material.wo),
                                refine=RefineConfig(latent_steps=2, weight_steps=5))

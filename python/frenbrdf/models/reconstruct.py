@@ -120,6 +120,8 @@ class RefineConfig:
                                            and self.weight_steps):
             problems.append(f"width must be None or 1 to {MAX_WIDTH} with weight_steps > 0, got {self.width} with "
                             f"weight_steps {self.weight_steps}")
+        if not isinstance(self.keep_order, bool):
+            problems.append(f"keep_order must be True or False, got {self.keep_order!r}")
         if problems:
             raise ValueError("invalid refinement: " + "; ".join(problems))
 
