@@ -567,15 +567,19 @@ def _lit_from_above(values, wi, wo):
     return values * (0.4 + 1.2 * wi[:, 2:3])
 
 
+def _in_both_orders(material, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The material's pairs, each reversed with probability ½, as a measurement is sampled."""
+    reverse = np.random.default_rng(seed).random(len(material.values)) < 0.5
+    return (np.where(reverse[:, None], material.wo, material.wi),
+            np.where(reverse[:, None], material.wi, material.wo))
+
+
 def test_full_keeps_the_order_of_a_pair_where_the_samples_hold_both(model, material):
     """A measurement need not be reciprocal; sampled in both orders, the weight stage fits an ordered NBRDF, which
     gives each order back, and fits closer than a reciprocal one."""
     from frenbrdf.models.nbrdf import pair_order
 
-    rng = np.random.default_rng(2)
-    reverse = rng.random(len(material.values)) < 0.5
-    wi = np.where(reverse[:, None], material.wo, material.wi)
-    wo = np.where(reverse[:, None], material.wi, material.wo)
+    wi, wo = _in_both_orders(material, 2)
     assert 0 < np.mean(pair_order(wi, wo) < 0) < 1
     values = _lit_from_above(material.values, wi, wo)
     config = RefineConfig(latent_steps=5, weight_steps=200, weight_lr=3e-3)
@@ -605,11 +609,9 @@ def test_samples_in_one_order_keep_the_nbrdf_reciprocal(model, material):
 def test_an_ordered_nbrdf_saves_renders_and_writes_its_table_order(model, material, tmp_path):
     from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
     from frenbrdf.render import Scene, render_linear
+    from frenbrdf.render.scoring import bin_directions
 
-    rng = np.random.default_rng(3)
-    reverse = rng.random(len(material.values)) < 0.5
-    wi = np.where(reverse[:, None], material.wo, material.wi)
-    wo = np.where(reverse[:, None], material.wi, material.wo)
+    wi, wo = _in_both_orders(material, 3)
     nbrdf = model.reconstruct(_lit_from_above(material.values, wi, wo), (wi, wo),
                               refine=RefineConfig(latent_steps=2, weight_steps=100, weight_lr=3e-3)).nbrdf
     assert nbrdf.ordered
@@ -620,7 +622,6 @@ def test_an_ordered_nbrdf_saves_renders_and_writes_its_table_order(model, materi
     # Its table holds each pair in the table's order; in_table_order is the reciprocal NBRDF that agrees there.
     table_order = nbrdf.in_table_order()
     assert not table_order.ordered
-    from frenbrdf.render.scoring import bin_directions
     bins = np.flatnonzero(frenbrdf.valid_mask(material.table))[::997]
     bin_wi, bin_wo = bin_directions(bins)
     np.testing.assert_allclose(table_order(bin_wi, bin_wo), nbrdf(bin_wi, bin_wo), rtol=1e-5)

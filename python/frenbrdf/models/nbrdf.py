@@ -168,12 +168,6 @@ def pair_order(wi, wo) -> np.ndarray:
     return _order_of_difference(half_diff_vectors(wi, wo)[1])
 
 
-def holds_both_orders(wi, wo) -> bool:
-    """Whether some of the pairs are in a MERL table's order and some in the reverse (:func:`pair_order`)."""
-    order = pair_order(wi, wo)
-    return bool(np.any(order > 0) and np.any(order < 0))
-
-
 def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One material's samples checked and prepared for a model: what the encoder reads and the loss compares.
 

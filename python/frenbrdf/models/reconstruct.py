@@ -51,7 +51,6 @@ from .nbrdf import (
     MAX_WIDTH,
     NBRDF,
     ORDER_INPUT,
-    holds_both_orders,
     mapped_samples,
     nbrdf_forward,
     pair_order,
@@ -236,20 +235,21 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
             params = model.network.decoder(z)
         result.losses["latent"] = _sample_loss(params, samples, loss.kind)
 
-    ordered = bool(config.weight_steps and config.keep_order and holds_both_orders(wi, wo))
+    order = pair_order(wi, wo) if config.weight_steps and config.keep_order else None
+    ordered = order is not None and bool(np.ptp(order) > 0)  # pairs of both orders among the samples
     if config.weight_steps:
         params = [p.detach().clone() for p in params]
         if config.width is not None:
             params = widen_params(params, config.width, torch.Generator().manual_seed(config.seed))
         if ordered:  # the order enters where the input was 0 for every pair: its weights go first, the output stays
             params[0][:, :, ORDER_INPUT] = 0
-            samples.coords[0, :, ORDER_INPUT] = torch.from_numpy(pair_order(wi, wo).astype(np.float32))
+            samples.coords[0, :, ORDER_INPUT] = torch.from_numpy(order.astype(np.float32))
         params = _refine_weights(params, samples, loss, config, result)
         result.losses["weights"] = _sample_loss(params, samples, loss.kind)
 
     result.z = z[0].detach().numpy().astype(np.float64)
     result.nbrdf = NBRDF([p.detach() for p in params], model.mapping, ordered)  # checked: finite weights
-    result.nbrdf(*(np.asarray(d, dtype=np.float64) for d in directions))  # raises where its reflectance overflows
+    result.nbrdf(wi, wo)  # raises where its reflectance overflows
     return result
 
 
