@@ -1,12 +1,13 @@
 """Diagnostic: the weight stage's per-sample weight cos_i**p."""
-import sys, json, dataclasses, numpy as np, torch
+import sys, dataclasses, numpy as np
 from pathlib import Path
+from frenbrdf.io.atomic import save_json
 from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models import reconstruct as R
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
 
 POWER = [1.0]
 _orig = R._refine_weights
@@ -29,9 +30,9 @@ for f in files:
         for p in powers:
             POWER[0] = p
             config = dataclasses.replace(refine_config("full"), seed=draw)
-            result, image, _ = refined_reconstruction(model, table, bins, scene, config)
+            result, image, _ = refined_reconstruction(model, truth_samples(table, bins, None), scene, config)  # the table's order
             m = image_metrics(ti, image, mask)
             rows.setdefault(Path(f).stem, {}).setdefault(str(p), []).append(
                 {"psnr": m["psnr"], "delta_e": m["delta_e"], "s": sum(result.timings.values())})
             print(Path(f).stem, draw, p, round(m["psnr"], 2), round(m["delta_e"], 3), flush=True)
-json.dump(rows, open(out, "w"), indent=1)
+save_json(out, rows)  # atomically

@@ -5,12 +5,12 @@ in both orders: the 7 RGL fits version 4 never trained on, as their published NB
         ../shared/data/rgl-nbrdf/{cm_white,colodur_connemara_4c,paper_green,paper_red,ilm_l3_37_metallic,paper_blue,vch_frozen_amethyst}_rgb.h5
 """
 import dataclasses
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from frenbrdf.io.atomic import save_json
 from frenbrdf.data.materials import load_material_file
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
@@ -35,4 +35,4 @@ for f in files:
             rows.setdefault(Path(f).stem, {}).setdefault(name, []).append(
                 {"psnr": m["psnr"], "delta_e": m["delta_e"], "s": seconds})
             print(Path(f).stem, draw, name, round(m["psnr"], 2), round(m["delta_e"], 3), flush=True)
-Path(out).write_text(json.dumps(rows, indent=1))
+save_json(out, rows)  # atomically

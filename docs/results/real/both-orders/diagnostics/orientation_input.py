@@ -7,7 +7,6 @@ The refined NBRDF is then rendered with the same flag. Samples in both orders (t
         ../shared/data/rgl-measured/*.bsdf
 """
 import dataclasses
-import json
 import sys
 from pathlib import Path
 
@@ -17,6 +16,7 @@ import torch
 import frenbrdf.models.nbrdf as N
 import frenbrdf.models.reconstruct as R
 import frenbrdf.render.renderer as renderer
+from frenbrdf.io.atomic import save_json
 from frenbrdf.io.measured import read_truth
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
@@ -34,7 +34,7 @@ def orientation(wi, wo):
     return np.where((y < 0) | ((y == 0) & (x < 0)), -1.0, 1.0)
 
 
-def flagged_coordinates(wi, wo):
+def flagged_coordinates(wi, wo, ordered=False):
     coords = original_coordinates(wi, wo)
     coords[..., 1] = orientation(wi, wo)
     return coords
@@ -76,12 +76,12 @@ def main():
         for draw in (0, 1, 2):
             rng = np.random.default_rng(draw)
             drawn = truth_samples(truth, sample_bins(table, rng, 4000), rng)
-            config = dataclasses.replace(refine_config("full"), seed=draw)
+            config = dataclasses.replace(refine_config("full"), seed=draw, keep_order=False)  # the patch orders
             for name, flag in (("reciprocal", False), ("order input", True)):
                 m = image_metrics(truth_image, run(model, drawn, scene, config, flag), mask)
                 rows.setdefault(Path(f).stem, {}).setdefault(name, []).append({"psnr": m["psnr"], "delta_e": m["delta_e"], "s": 0})
                 print(Path(f).stem, draw, name, round(m["psnr"], 2), round(m["delta_e"], 3), flush=True)
-    Path(out).write_text(json.dumps(rows, indent=1))
+    save_json(out, rows)  # atomically
 
 
 if __name__ == "__main__":

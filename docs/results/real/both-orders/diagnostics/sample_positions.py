@@ -1,8 +1,9 @@
 """Diagnostic: full from 4000 samples at the bins (the table's values), at random points inside each bin
 (jitter), or at the bins in a random order of each pair (swap, the forerunner of truth_samples); values of
 jitter and swap from the .bsdf itself."""
-import sys, json, dataclasses, numpy as np
+import sys, dataclasses, numpy as np
 from pathlib import Path
+from frenbrdf.io.atomic import save_json
 from frenbrdf.io.measured import as_table, read_truth
 from frenbrdf.io.merl import SHAPE, merl_bin_to_angles
 from frenbrdf.numerics.coords import rusinkiewicz_to_directions
@@ -46,9 +47,10 @@ for f in sys.argv[3:]:
                 values, dirs = np.maximum(truth(wi, wo), 0), (wi, wo)
             else:
                 values, dirs = jittered(table, truth, rng, 4000)
-            result = reconstruct(model, values, dirs, refine=dataclasses.replace(refine_config("full"), seed=draw))
+            result = reconstruct(model, values, dirs, refine=dataclasses.replace(refine_config("full"), seed=draw,
+                                                                                       keep_order=False))  # as when run
             image = tonemap(render_linear(result.nbrdf, scene))
             m = image_metrics(ti, image, mask)
             rows.setdefault(Path(f).stem, {}).setdefault(mode, []).append({"psnr": m["psnr"], "delta_e": m["delta_e"], "s": sum(result.timings.values())})
             print(Path(f).stem, draw, mode, round(m["psnr"], 2), round(m["delta_e"], 3), flush=True)
-json.dump(rows, open(out, "w"), indent=1)
+save_json(out, rows)  # atomically
