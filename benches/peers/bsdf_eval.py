@@ -5,11 +5,12 @@
 
 1. The same ``--n`` random direction pairs (float32-rounded, so both see identical inputs)
    evaluated by ``frenbrdf._native.BsdfMeasurement.eval`` (one batched call, rayon) and by
-   Mitsuba's ``measured`` BSDF in the ``scalar_rgb`` variant (its JIT variants crash on these
-   files), one ``eval`` call per pair from a Python loop, as Mitsuba's scalar variant
-   allows. Mitsuba's values (f·cos θ_o) are divided by cos θ_o and checked against ours
-   before anything is timed. The ratio therefore includes Python's per-call overhead on
-   Mitsuba's side: it is what evaluating these files from Python costs with each.
+   Mitsuba's ``measured`` BSDF twice: in ``llvm_ad_rgb``, one vectorised ``eval`` over all
+   pairs (its kernel compiled in the warm-up), and in ``scalar_rgb``, one ``eval`` call per
+   pair from a Python loop. (Mitsuba 3.9 evaluates these files in its JIT variants; earlier
+   versions crashed on them, mitsuba3#664.) Mitsuba's values (f·cos θ_o) are divided by
+   cos θ_o and checked against ours before anything is timed. The scalar ratio includes
+   Python's per-call overhead on Mitsuba's side.
 2. One MERL table's 1,458,000 bins (90 θ_h × 90 θ_d × 180 φ_d, each at its bin position
    ``frenbrdf._native.merl_bin_to_angles``, φ_h = 0) converted to direction pairs and
    evaluated in one call (goal: well under a second on 2 cores). Pairs with a direction
@@ -30,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from frenbrdf import _native
+from frenbrdf.render.mitsuba.variants import _import_mitsuba
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
 from common import cpu_model, median_seconds  # noqa: E402
@@ -60,9 +62,8 @@ def merl_bin_directions() -> tuple[np.ndarray, np.ndarray]:
 
 
 def mitsuba_eval(path: Path, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, float]:
-    """Mitsuba's f (its eval over cos θ_o) at the pairs, and the loop's time."""
-    import mitsuba as mi
-
+    """Mitsuba's f (its eval over cos θ_o) at the pairs in ``scalar_rgb``, and the loop's time."""
+    mi, _ = _import_mitsuba()
     mi.set_variant("scalar_rgb")
     bsdf = mi.load_dict({"type": "measured", "filename": str(path)})
     ctx, si = mi.BSDFContext(), mi.SurfaceInteraction3f()
@@ -78,6 +79,31 @@ def mitsuba_eval(path: Path, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray
     start = time.perf_counter()
     loop()
     return np.maximum(out / wo[:, 2:], 0.0), time.perf_counter() - start
+
+
+def mitsuba_llvm_eval(path: Path, wi: np.ndarray, wo: np.ndarray, repeats: int) -> tuple[np.ndarray, float] | None:
+    """Mitsuba's f at the pairs in ``llvm_ad_rgb`` (one vectorised call), and its median time; None where the
+    LLVM backend does not work here."""
+    from frenbrdf.render.mitsuba import llvm_available
+
+    if not llvm_available():
+        return None
+    mi, dr = _import_mitsuba()
+    mi.set_variant("llvm_ad_rgb")
+    bsdf = mi.load_dict({"type": "measured", "filename": str(path)})
+    ctx = mi.BSDFContext()
+    si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
+    si.wi = mi.Vector3f(np.ascontiguousarray(wi.T, dtype=np.float32))
+    directions = mi.Vector3f(np.ascontiguousarray(wo.T, dtype=np.float32))
+
+    def evaluate():
+        value = bsdf.eval(ctx, si, directions)
+        dr.eval(value)
+        dr.sync_thread()  # the LLVM backend launches kernels asynchronously
+        return value
+
+    out = np.array(evaluate()).T
+    return np.maximum(out / wo[:, 2:], 0.0), median_seconds(evaluate, repeats)
 
 
 def main() -> None:
@@ -97,6 +123,9 @@ def main() -> None:
     scale = reference.max()
     np.testing.assert_allclose(ours, reference, rtol=2e-4, atol=2e-6 * scale)
     error = np.abs(ours - reference)
+    llvm = mitsuba_llvm_eval(args.file, wi, wo, args.repeats)
+    if llvm is not None:
+        np.testing.assert_allclose(ours, llvm[0], rtol=2e-4, atol=2e-6 * scale)
 
     ours_s = median_seconds(lambda: measurement.eval(wi, wo), args.repeats)
     big_wi, big_wo = direction_pairs(1_000_000, seed=1)
@@ -116,6 +145,8 @@ def main() -> None:
         "ours_evals_per_s_1M_batch": 1e6 / ours_big_s,
         "mitsuba_scalar_rgb_evals_per_s": args.n / mitsuba_s,
         "ratio_ours_over_mitsuba": mitsuba_s / ours_s,
+        "mitsuba_llvm_ad_rgb_evals_per_s": None if llvm is None else args.n / llvm[1],
+        "ratio_ours_over_mitsuba_llvm": None if llvm is None else llvm[1] / ours_s,
         "merl_table_bins": len(merl_wi),
         "merl_table_fraction_above_horizon": above,
         "merl_table_s": merl_s,
@@ -125,7 +156,12 @@ def main() -> None:
     print(f"ours:    {results['ours_evals_per_s']:,.0f} evaluations/s ({args.n} pairs), "
           f"{results['ours_evals_per_s_1M_batch']:,.0f}/s (1,000,000 pairs)")
     print(f"Mitsuba: {results['mitsuba_scalar_rgb_evals_per_s']:,.0f} evaluations/s (scalar_rgb, one call per pair)")
-    print(f"ratio ours / Mitsuba: {results['ratio_ours_over_mitsuba']:.1f}×")
+    print(f"ratio ours / Mitsuba scalar_rgb: {results['ratio_ours_over_mitsuba']:.1f}×")
+    if llvm is None:
+        print("Mitsuba llvm_ad_rgb: not usable here (no libLLVM that works)")
+    else:
+        print(f"Mitsuba: {results['mitsuba_llvm_ad_rgb_evals_per_s']:,.0f} evaluations/s (llvm_ad_rgb, one "
+              f"vectorised call); ratio ours / Mitsuba llvm_ad_rgb: {results['ratio_ours_over_mitsuba_llvm']:.2f}×")
     print(f"one MERL table ({len(merl_wi):,} bins, {above:.0%} with both directions above the horizon): "
           f"{merl_s:.3f} s")
     if args.json:

@@ -20,7 +20,7 @@ from frenbrdf.io.measured import read_table, read_truth
 from frenbrdf.material.measurements import read_measurements
 from frenbrdf.render import Scene, material_mask, render_linear
 
-from ..conftest import tiny, unit_vectors
+from ..conftest import mitsuba_jit, tiny, unit_vectors
 from .test_bsdf_native import rgl_file
 
 PAPER = "paper_white_rgb"
@@ -124,6 +124,40 @@ def test_render_a_bsdf_on_the_metric_renderer(tmp_path, capsys):
     out = tmp_path / "paper.png"
     assert cli.main(["render", str(rgl_file(PAPER)), "--out", str(out), "--resolution", "32"]) == 0
     assert out.stat().st_size > 0
+
+
+def test_mitsuba_evaluates_a_bsdf_as_measured_with_the_light_first(paper):
+    """The plugin takes a .bsdf as it is, never through its table, and in the measurement's order: si.wi points to
+    the camera, wo to the light, and a measurement is f(light, camera) (they differ near grazing, test below)."""
+    from frenbrdf.render import mitsuba as fm
+
+    from ..test_mitsuba import mitsuba_eval, upper_hemisphere
+
+    mi = mitsuba_jit()
+    bsdf = mi.load_dict(fm.bsdf_dict(rgl_file(PAPER)))
+    assert "measured 'paper_white_rgb'" in str(bsdf)
+    rng = np.random.default_rng(5)
+    camera, light = upper_hemisphere(rng, 20000), upper_hemisphere(rng, 20000)
+    expected, transposed = (paper(light, camera) * light[:, 2:], paper(camera, light) * light[:, 2:])
+    got = mitsuba_eval(mi, bsdf, camera, light)
+    # Mitsuba's `measured` (float32) agrees with the Rust core as tests/io/test_bsdf_native.py measures.
+    np.testing.assert_allclose(got, expected, rtol=2e-4, atol=2e-6 * expected.max())
+    assert np.abs(got - transposed).max() > 100 * np.abs(got - expected).max()
+    # In memory too, and a table is no longer what is evaluated.
+    in_memory = mi.load_dict(fm.bsdf_dict(paper))
+    np.testing.assert_allclose(mitsuba_eval(mi, in_memory, camera[:100], light[:100]), got[:100], rtol=1e-5)
+
+
+def test_render_a_bsdf_in_mitsuba(tmp_path, capsys):
+    from frenbrdf.render import mitsuba as fm
+
+    mitsuba_jit()
+    out = tmp_path / "paper.png"
+    assert cli.main(["render", str(rgl_file(PAPER)), "--mitsuba", "--out", str(out), "--resolution", "16",
+                     "--spp", "4"]) == 0
+    assert out.stat().st_size > 0 and "wrote" in capsys.readouterr().out
+    image = fm.render_material(rgl_file(PAPER), spp=16, resolution=16)
+    assert np.all(np.isfinite(image)) and image[8, 8].min() > 0.1  # a white paper, lit
 
 
 def test_folders_may_mix_merl_files_and_measurements(tmp_path, toy_materials, capsys):

@@ -18,10 +18,10 @@ The plugin
 ----------
 ``{"type": "frenbrdf", ...}`` takes
 
-- ``filename``: a MERL ``.binary`` file, an NBRDF saved by
+- ``filename``: a MERL ``.binary`` file, an RGL ``.bsdf`` measurement, an NBRDF saved by
   :func:`frenbrdf.data.fitting.save_nbrdf`, or a published Keras NBRDF ``.h5``; or
 - ``material``: a handle from :func:`material_handle` for a material held in memory (an
-  :class:`frenbrdf.NBRDF`, a MERL table array): Mitsuba's properties hold only numbers,
+  :class:`frenbrdf.NBRDF`, a MERL table array, a :func:`frenbrdf.read_bsdf` measurement): Mitsuba's properties hold only numbers,
   strings and Mitsuba objects, so Python objects travel by name (a handle keeps its
   material in memory until :func:`release_handle`);
 - ``lookup`` (MERL only): ``"trilinear"`` (default) or ``"nearest"``, as in
@@ -43,7 +43,9 @@ up to 1e180 near grazing for the published fits) or, for a table,
 when either direction is below the horizon. An ordered NBRDF (:attr:`frenbrdf.NBRDF.ordered`, one that
 tells the two orders of a pair apart, as a refined real measurement may) is the exception: it is
 evaluated as ``f(wo, si.wi)``, the light's direction first, as the metric renderer and the
-measurements take it (``si.wi`` points to the camera).
+measurements take it (``si.wi`` points to the camera). So is a ``.bsdf`` measurement, which is not
+reciprocal near grazing: it is evaluated as it is, never through a quantised table, by Mitsuba's own
+``measured`` BSDF (which alone would take ``si.wi`` first) at the pair in that order.
 
 Evaluation is written in Dr.Jit and runs inside Mitsuba's kernels, never calling back
 into numpy or torch: the NBRDF's matrix products are unrolled over its layers (weights
@@ -85,6 +87,7 @@ from .material import (
     Material,
     bsdf_dict,
     load_material,
+    material_from_measurement,
     material_from_nbrdf,
     material_from_table,
     material_handle,
@@ -107,7 +110,7 @@ from .variants import (
 __all__ = [
     "ALPHA_GRID", "COSINE_ONLY", "FALLBACK_VARIANT", "LIBLLVM_VARIABLE", "LLVM_PACKAGE", "MIN_COSINE_WEIGHT",
     "PLUGIN_NAME", "PREFERRED_VARIANT", "Lobe", "Material", "SamplingMixture", "_HANDLES", "bsdf_dict",
-    "environment_bitmap", "fit_sampling", "llvm_available", "load_material", "material_from_nbrdf",
-    "material_from_table", "material_handle", "packaged_libllvm", "register", "release_handle", "render_material",
+    "environment_bitmap", "fit_sampling", "llvm_available", "load_material",
+    "material_from_measurement", "material_from_nbrdf", "material_from_table", "material_handle", "packaged_libllvm", "register", "release_handle", "render_material",
     "save_png", "scene_dict", "set_variant", "tonemap", "use_packaged_llvm",
 ]

@@ -19,7 +19,7 @@ def bsdf_class(variant: str):
         raise RuntimeError(f"the Mitsuba variant is {mi.variant()!r}, expected {variant!r}")
 
     class FreNBRDFBSDF(mi.BSDF):
-        """A MERL table or NBRDF as a Mitsuba BSDF (see :mod:`frenbrdf.render.mitsuba`)."""
+        """A MERL table, measurement or NBRDF as a Mitsuba BSDF (see :mod:`frenbrdf.render.mitsuba`)."""
 
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
@@ -28,8 +28,8 @@ def bsdf_class(variant: str):
             lookup = str(props.get("lookup", "trilinear"))
             sampling = str(props.get("sampling", "fitted"))
             if (filename is None) == (handle is None):
-                raise ValueError("the frenbrdf BSDF needs exactly one of 'filename' (a MERL file, saved NBRDF or "
-                                 "Keras .h5) and 'material' (a handle from frenbrdf.render.mitsuba.material_handle)")
+                raise ValueError("the frenbrdf BSDF needs exactly one of 'filename' (a MERL file, RGL .bsdf, saved "
+                                 "NBRDF or Keras .h5) and 'material' (a handle from frenbrdf.render.mitsuba.material_handle)")
             if handle is not None and handle not in _HANDLES:
                 raise ValueError(f"unknown material handle {handle!r}: create it with "
                                  "frenbrdf.render.mitsuba.material_handle() in this process")
@@ -48,8 +48,8 @@ def bsdf_class(variant: str):
 
         def _brdf(self, wi, wo, active):
             """f at a pair as Mitsuba passes it: ``si.wi`` towards the camera, ``wo`` towards the light. The order
-            matters only to an ordered NBRDF, which takes the light's direction first (as the metric renderer and
-            the measurements do)."""
+            matters only to an ordered NBRDF or a measurement, which take the light's direction first (as the
+            metric renderer does)."""
             return self.kernels(wo, wi, active) if self.material.ordered else self.kernels(wi, wo, active)
 
         def _pdf(self, wi, wo, active):

@@ -23,7 +23,7 @@ class Material:
     """
 
     kind: str
-    """``"nbrdf"`` or ``"merl"``."""
+    """``"nbrdf"``, ``"merl"`` or ``"measured"`` (an RGL ``.bsdf`` measurement)."""
     name: str
     """For messages and the plugin's ``to_string``."""
     layers: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
@@ -38,14 +38,18 @@ class Material:
     """MERL: the table ``(3, 90, 90, 180)`` in physical units, missing bins negative."""
     nbrdf: object = None
     """NBRDF: the :class:`frenbrdf.NBRDF` itself (numpy evaluation)."""
+    measurement: object = None
+    """Measured: the :class:`frenbrdf.io.bsdf.MeasuredBSDF` (numpy evaluation, by the Rust core)."""
     ordered: bool = False
-    """NBRDF: whether it tells the two orders of a pair apart (:attr:`frenbrdf.NBRDF.ordered`): then the plugin
-    evaluates it with the light's direction first, as the metric renderer does."""
+    """Whether it tells the two orders of a pair apart (an ordered NBRDF, :attr:`frenbrdf.NBRDF.ordered`, or a
+    measurement): then the plugin evaluates it with the light's direction first, as the metric renderer does."""
 
     def brdf(self, wi, wo) -> np.ndarray:
         """Reference (numpy) evaluation: reflectance at direction pairs ``(..., 3)`` → ``(..., 3)``, ≥ 0."""
         if self.kind == "nbrdf":
             return self.nbrdf(wi, wo)
+        if self.kind == "measured":
+            return self.measurement(wi, wo)
         from ...io.merl import merl_lookup_directions
 
         return np.maximum(merl_lookup_directions(self.table, wi, wo, method="trilinear"), 0.0)
@@ -89,14 +93,24 @@ def material_from_table(table, name: str = "merl") -> Material:
     return Material("merl", name, table=table)
 
 
+def material_from_measurement(measurement, name: str | None = None) -> Material:
+    """A :class:`Material` for a measurement read by :func:`frenbrdf.read_bsdf`, evaluated as it is (never
+    through a quantised table) and light first: the measurements are not reciprocal near grazing."""
+    from ...io.bsdf import MeasuredBSDF
+
+    if not isinstance(measurement, MeasuredBSDF):
+        raise TypeError(f"expected a MeasuredBSDF (frenbrdf.read_bsdf), got {type(measurement).__name__}")
+    return Material("measured", name or measurement.name, measurement=measurement, ordered=True)
+
+
 def load_material(material) -> Material:
     """Any supported material → :class:`Material`.
 
     Parameters
     ----------
     material
-        A :class:`frenbrdf.NBRDF` (one material); a MERL table array; a path to a MERL
-        ``.binary`` file, to an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`, or
+        A :class:`frenbrdf.NBRDF` (one material); a MERL table array; a measurement
+        (:func:`frenbrdf.read_bsdf`); a path to a MERL ``.binary`` file, to an RGL ``.bsdf``, to an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`, or
         to a published Keras NBRDF ``.h5`` (see :mod:`frenbrdf.data.nbrdf_import`); a
         :func:`material_handle`; or a :class:`Material`.
 
@@ -109,20 +123,23 @@ def load_material(material) -> Material:
     TypeError
         Anything else.
     """
+    from ...io.bsdf import MeasuredBSDF
     from ...models.nbrdf import NBRDF
 
     if isinstance(material, Material):
         return material
     if isinstance(material, NBRDF):
         return material_from_nbrdf(material)
+    if isinstance(material, MeasuredBSDF):
+        return material_from_measurement(material)
     if isinstance(material, np.ndarray):
         return material_from_table(material)
     if isinstance(material, str) and material in _HANDLES:
         return _HANDLES[material]
     if isinstance(material, (str, os.PathLike)):
         return _load_file(Path(material))
-    raise TypeError(f"cannot render a {type(material).__name__}: pass an NBRDF, a MERL table, or a path to a "
-                    "MERL file, a saved NBRDF or a Keras NBRDF .h5")
+    raise TypeError(f"cannot render a {type(material).__name__}: pass an NBRDF, a MERL table, a measurement, or a "
+                    "path to a MERL file, an RGL .bsdf, a saved NBRDF or a Keras NBRDF .h5")
 
 
 def _load_file(path: Path) -> Material:
@@ -130,8 +147,8 @@ def _load_file(path: Path) -> Material:
     from ...io.bsdf import MeasuredBSDF
 
     loaded = load_material_file(path)
-    if isinstance(loaded, MeasuredBSDF):  # the plugin looks measurements up in their table at the MERL bins
-        loaded = loaded.table()
+    if isinstance(loaded, MeasuredBSDF):
+        return material_from_measurement(loaded, name=path.stem)
     if isinstance(loaded, np.ndarray):
         return material_from_table(loaded, name=path.stem)
     return material_from_nbrdf(loaded, name=path.stem)
