@@ -21,9 +21,9 @@ The plugin
 - ``filename``: a MERL ``.binary`` file, an RGL ``.bsdf`` measurement, an NBRDF saved by
   :func:`frenbrdf.data.fitting.save_nbrdf`, or a published Keras NBRDF ``.h5``; or
 - ``material``: a handle from :func:`material_handle` for a material held in memory (an
-  :class:`frenbrdf.NBRDF`, a MERL table array, a :func:`frenbrdf.read_bsdf` measurement): Mitsuba's properties hold only numbers,
-  strings and Mitsuba objects, so Python objects travel by name (a handle keeps its
-  material in memory until :func:`release_handle`);
+  :class:`frenbrdf.NBRDF`, a MERL table array, a :func:`frenbrdf.read_bsdf` measurement):
+  Mitsuba's properties hold only numbers, strings and Mitsuba objects, so Python objects travel
+  by name (a handle keeps its material in memory until :func:`release_handle`);
 - ``lookup`` (MERL only): ``"trilinear"`` (default) or ``"nearest"``, as in
   :func:`frenbrdf.merl_lookup`;
 - ``sampling``: ``"fitted"`` (default) or ``"cosine"`` (cosine-weighted hemisphere only,
@@ -110,7 +110,7 @@ from .variants import (
 __all__ = [
     "ALPHA_GRID", "COSINE_ONLY", "FALLBACK_VARIANT", "LIBLLVM_VARIABLE", "LLVM_PACKAGE", "MIN_COSINE_WEIGHT",
     "PLUGIN_NAME", "PREFERRED_VARIANT", "Lobe", "Material", "SamplingMixture", "_HANDLES", "bsdf_dict",
-    "environment_bitmap", "fit_sampling", "llvm_available", "load_material",
-    "material_from_measurement", "material_from_nbrdf", "material_from_table", "material_handle", "packaged_libllvm", "register", "release_handle", "render_material",
-    "save_png", "scene_dict", "set_variant", "tonemap", "use_packaged_llvm",
+    "environment_bitmap", "fit_sampling", "llvm_available", "load_material", "material_from_measurement",
+    "material_from_nbrdf", "material_from_table", "material_handle", "packaged_libllvm", "register",
+    "release_handle", "render_material", "save_png", "scene_dict", "set_variant", "tonemap", "use_packaged_llvm",
 ]

@@ -29,7 +29,8 @@ def bsdf_class(variant: str):
             sampling = str(props.get("sampling", "fitted"))
             if (filename is None) == (handle is None):
                 raise ValueError("the frenbrdf BSDF needs exactly one of 'filename' (a MERL file, RGL .bsdf, saved "
-                                 "NBRDF or Keras .h5) and 'material' (a handle from frenbrdf.render.mitsuba.material_handle)")
+                                 "NBRDF or Keras .h5) and 'material' (a handle from "
+                                 "frenbrdf.render.mitsuba.material_handle)")
             if handle is not None and handle not in _HANDLES:
                 raise ValueError(f"unknown material handle {handle!r}: create it with "
                                  "frenbrdf.render.mitsuba.material_handle() in this process")

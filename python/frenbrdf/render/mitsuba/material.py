@@ -110,9 +110,10 @@ def load_material(material) -> Material:
     ----------
     material
         A :class:`frenbrdf.NBRDF` (one material); a MERL table array; a measurement
-        (:func:`frenbrdf.read_bsdf`); a path to a MERL ``.binary`` file, to an RGL ``.bsdf``, to an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`, or
-        to a published Keras NBRDF ``.h5`` (see :mod:`frenbrdf.data.nbrdf_import`); a
-        :func:`material_handle`; or a :class:`Material`.
+        (:func:`frenbrdf.read_bsdf`); a path to a MERL ``.binary`` file, to an RGL ``.bsdf``,
+        to an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`, or to a published Keras
+        NBRDF ``.h5`` (see :mod:`frenbrdf.data.nbrdf_import`); a :func:`material_handle`; or a
+        :class:`Material`.
 
     Raises
     ------
