@@ -381,6 +381,20 @@ def test_what_is_not_a_regular_file_is_refused_by_every_reader(tmp_path):
     assert stat.S_ISFIFO(fifo.stat().st_mode)
 
 
+def test_a_link_loop_anywhere_on_the_command_line_is_an_error_not_a_traceback(tmp_path, merl_file, capsys):
+    from frenbrdf import cli
+
+    for name in ("lo", "lo.png"):
+        (tmp_path / name).symlink_to(tmp_path / name)
+    for argv in (["reconstruct", str(merl_file), "--out", str(tmp_path / "lo"), "--refine", "none", "--quiet"],
+                 ["render", str(merl_file), "--out", str(tmp_path / "lo.png"), "--resolution", "16"],
+                 ["train", "--data", str(tmp_path / "lo"), "--out", str(tmp_path / "run")]):
+        with pytest.raises(SystemExit) as exit_:
+            cli.main(argv)
+        message = capsys.readouterr().err
+        assert exit_.value.code == 2 and ("Symlink loop" in message or "loop of symbolic links" in message), message
+
+
 # --------------------------------------------------------------------------- 13–15: no silent wrong answers
 
 

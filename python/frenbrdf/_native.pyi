@@ -9,6 +9,7 @@ import numpy.typing as npt
 __version__: str
 CHANNEL_SCALES: tuple[float, float, float]
 FILE_BYTES: int
+BSDF_HORIZON: float
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]

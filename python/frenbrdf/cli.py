@@ -142,7 +142,7 @@ def _render(args: argparse.Namespace) -> int:
     from .io.paths import check_output_file, input_file
 
     input_file(args.material, "material file")
-    check_output_file(args.out, (".png",))
+    check_output_file(args.out, (".png",), overwrite=args.overwrite)
     if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.data.materials
         from .render.mitsuba import render_material
 
@@ -345,6 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--resolution", type=int, default=256)
     render.add_argument("--mitsuba", action="store_true", help="path-trace with Mitsuba 3 instead")
     render.add_argument("--spp", type=int, default=64, help="samples per pixel (--mitsuba)")
+    render.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     render.set_defaults(run=_render)
 
     select = commands.add_parser("select", help="the smallest NBRDF/latent configuration (chart 3) whose "
@@ -434,6 +435,10 @@ def main(argv: list[str] | None = None) -> int:
         return args.run(args)
     except (ValueError, OSError, TrainingDiverged) as error:  # bad input: a clear message, not a traceback
         parser.exit(2, f"frenbrdf {args.command}: error: {error}\n")
+    except RuntimeError as error:
+        if not str(error).startswith("Symlink loop"):  # pathlib raises this for a link loop before Python 3.13
+            raise
+        parser.exit(2, f"frenbrdf {args.command}: error: {error} (a link that leads back to itself)\n")
 
 
 if __name__ == "__main__":

@@ -24,6 +24,11 @@ use crate::coords::{self, Vec3};
 use crate::error::{invalid_argument, Result};
 use crate::parallel;
 
+/// A direction whose z (unit length) is at most this counts as at the horizon, where the BRDF is 0. The tabulated
+/// f·cos θ_o does not vanish at the horizon, so f = (f·cos θ_o) / cos θ_o grows as 1/cos θ_o there; without the
+/// tolerance a pair that lies on the horizon but for rounding (MERL bins with z = 1e-16) would be worth 1e14/sr.
+pub const HORIZON: f64 = 1e-9;
+
 /// Elevation of a unit vector, 2·asin(|v − z|/2): exact near the pole, unlike acos(v_z).
 #[inline]
 fn elevation(v: Vec3) -> f64 {
@@ -44,10 +49,10 @@ fn phi_to_unit(phi: f64) -> f64 {
 impl MeasuredBsdf {
     /// The BRDF at one pair of directions (local frame, z the normal; normalised here):
     /// RGB reflectance in 1/sr, not multiplied by cos θ_o, 0 when either direction is at
-    /// or below the horizon.
+    /// or below the horizon (z ≤ [`HORIZON`]).
     pub fn eval_pair(&self, wi: Vec3, wo: Vec3) -> [f64; 3] {
         let (mut wi, mut wo) = (coords::normalize(wi), coords::normalize(wo));
-        if !(wi[2] > 0.0 && wo[2] > 0.0) {
+        if !(wi[2] > HORIZON && wo[2] > HORIZON) {
             return [0.0; 3];
         }
         if self.reduction >= 2 {
@@ -153,6 +158,12 @@ mod tests {
             assert_eq!(bsdf.eval_pair(wi, [wo[0], wo[1], -wo[2]]), [0.0; 3]);
         }
         assert_eq!(bsdf.eval_pair([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), [0.0; 3]);
+        // On the horizon but for rounding: 0, not the table's value over 1e-16.
+        let grazing = [(1.0f64 - 1e-32).sqrt(), 0.0, 1e-16];
+        assert_eq!(bsdf.eval_pair([0.0, 0.0, 1.0], grazing), [0.0; 3]);
+        assert_eq!(bsdf.eval_pair(grazing, [0.0, 0.0, 1.0]), [0.0; 3]);
+        let above = bsdf.eval_pair([0.0, 0.0, 1.0], [(1.0f64 - 1e-12).sqrt(), 0.0, 1e-6]);
+        assert!(above[0] > 0.0 && above[0].is_finite(), "{above:?}");
     }
 
     #[test]

@@ -23,6 +23,7 @@ use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 
 use crate::error::Result;
+pub use eval::HORIZON;
 use tensor_file::{Dtype, Field, TensorFile};
 use warp::{Interpolant, Marginal2D, ParamAxes};
 

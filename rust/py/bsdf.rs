@@ -9,6 +9,7 @@ use crate::bsdf::MeasuredBsdf;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<BsdfMeasurement>()?;
+    m.add("BSDF_HORIZON", crate::bsdf::HORIZON)?;
     Ok(())
 }
 

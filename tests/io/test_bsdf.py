@@ -17,7 +17,7 @@ import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data.folders import list_materials
 from frenbrdf.io.measured import read_table, read_truth
-from frenbrdf.material.measurements import read_measurements
+from frenbrdf.material.measurements import MAX_REFLECTANCE, read_measurements
 from frenbrdf.render import Scene, material_mask, render_linear
 
 from ..conftest import mitsuba_jit, tiny, unit_vectors
@@ -44,6 +44,16 @@ def test_a_measurement_is_callable_like_an_nbrdf(paper):
     assert paper.name == PAPER and "paper" in paper.description.lower() and paper.isotropic
     with pytest.raises(ValueError, match="wi and wo must have the same shape"):
         paper(wi, wo[:10])
+
+
+def test_a_pair_on_the_horizon_but_for_rounding_is_on_it(paper):
+    """The files tabulate f·cos θ_o, which does not vanish at the horizon: f grows as 1/cos θ_o there. Two MERL bins
+    lie on the horizon but for rounding (z = 1e-16) and were worth 1e14/sr, which `--samples all` then refused."""
+    wi = np.array([[0.0, 0.0, 1.0]] * 4)
+    wo = np.array([[1.0, 0.0, z] for z in (0.0, 1e-16, frenbrdf.io.bsdf.HORIZON, 1e-3)])
+    values = paper(wi, wo / np.linalg.norm(wo, axis=1, keepdims=True))
+    assert np.all(values[:3] == 0) and np.all(np.isfinite(values[3])) and values[3].min() > 0
+    assert paper.table().max() < MAX_REFLECTANCE  # every bin a model and `reconstruct` take
 
 
 def test_its_table_holds_the_measurement_at_each_bin_and_marks_the_rest_missing(paper):
@@ -118,6 +128,16 @@ def test_the_shipped_encoder_loses_no_measurements_hue(tmp_path, name):
     assert cli.main(["reconstruct", str(rgl_file(name)), "--out", str(out), "--refine", "none", "--quiet",
                      "--samples", "4000"]) == 0
     assert json.loads((out / "reconstruction.json").read_text())["metrics"]["delta_e"] <= 6
+
+
+def test_render_replaces_a_file_only_when_asked(tmp_path, capsys):
+    out = tmp_path / "mine.png"
+    out.write_bytes(b"a user's own picture")
+    with pytest.raises(SystemExit):
+        cli.main(["render", str(rgl_file(PAPER)), "--out", str(out), "--resolution", "16"])
+    assert "exists; pass --overwrite" in capsys.readouterr().err and out.read_bytes() == b"a user's own picture"
+    assert cli.main(["render", str(rgl_file(PAPER)), "--out", str(out), "--resolution", "16", "--overwrite"]) == 0
+    assert out.read_bytes() != b"a user's own picture"
 
 
 def test_render_a_bsdf_on_the_metric_renderer(tmp_path, capsys):

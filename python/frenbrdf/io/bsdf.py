@@ -23,12 +23,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .._native import BsdfMeasurement
+from .._native import BSDF_HORIZON, BsdfMeasurement
 from ..numerics._arrays import rows
 from .paths import input_file
 
 #: The suffix of the files :func:`read_bsdf` reads.
 SUFFIX = ".bsdf"
+#: A direction whose z (unit length) is at most this lies at the horizon, where a measurement is 0: pairs on the
+#: horizon but for rounding (MERL bins with z = 1e-16) would otherwise be worth 1e14/sr.
+HORIZON = BSDF_HORIZON
 
 
 class MeasuredBSDF:
@@ -36,7 +39,10 @@ class MeasuredBSDF:
 
     Call it as ``m(wi, wo)`` with unit directions ``(..., 3)`` in the local shading frame
     (z = the normal): it returns ``(..., 3)`` RGB reflectance in 1/sr, not multiplied by
-    cos θ, with negative measured values clamped to 0 and 0 below the horizon.
+    cos θ, with negative measured values clamped to 0 and 0 at and below the horizon (z ≤
+    :data:`HORIZON`). The files tabulate f · cos θ_o, which does not vanish at the horizon: f
+    grows as 1/cos θ_o over the last degree or so (from about 89.4°), as Mitsuba's values over
+    cos θ_o do.
     """
 
     def __init__(self, native: BsdfMeasurement):

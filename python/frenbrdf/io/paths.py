@@ -196,9 +196,11 @@ def _check_writable(folder: Path, option: str) -> None:
         raise PermissionError(errno.EACCES, f"{option}: cannot write in this folder", str(folder))
 
 
-def check_output_file(path: str | os.PathLike, suffixes: tuple[str, ...], option: str = "--out") -> Path:
+def check_output_file(path: str | os.PathLike, suffixes: tuple[str, ...], option: str = "--out", *,
+                      overwrite: bool = True) -> Path:
     """Checks a file to be written, before any work: its suffix is one of ``suffixes`` (writers pick the
-    format from it), it is not a folder, and its folder exists (or can be created) and is writable."""
+    format from it), it is not a folder, its folder exists (or can be created) and is writable, and, unless
+    ``overwrite``, no file is there already (a command replaces a user's file only when asked)."""
     text = os.fspath(path)
     path = Path(text)
     if not text.strip() or text.endswith(os.sep) or path.is_dir():
@@ -209,6 +211,8 @@ def check_output_file(path: str | os.PathLike, suffixes: tuple[str, ...], option
     if not parent.is_dir():
         raise ValueError(f"{option} {text}: {parent} is not a folder")
     _check_writable(parent, option)
+    if not overwrite and (path.exists() or path.is_symlink()):
+        raise FileExistsError(f"{option} {text} exists; pass --overwrite to replace it")
     return path
 
 

@@ -54,9 +54,12 @@ class Scene:
     """Radiance multiplier before clamping."""
 
     def __post_init__(self):
-        if not 8 <= self.resolution <= MAX_RESOLUTION or self.environment_samples < 0 or not self.exposure > 0:
-            raise ValueError(f"invalid scene {self}: resolution in 8 … {MAX_RESOLUTION}, environment_samples ≥ 0, "
-                             "exposure > 0")
+        problems = [f"{name} must be {rule}, got {value}" for name, value, ok, rule in (
+            ("resolution", self.resolution, 8 <= self.resolution <= MAX_RESOLUTION, f"in 8 … {MAX_RESOLUTION}"),
+            ("environment_samples", self.environment_samples, self.environment_samples >= 0, "≥ 0"),
+            ("exposure", self.exposure, self.exposure > 0, "> 0")) if not ok]
+        if problems:
+            raise ValueError("invalid scene: " + "; ".join(problems))
         if len(self.light_directions) != len(self.light_colors):
             raise ValueError("one colour per light direction")
 

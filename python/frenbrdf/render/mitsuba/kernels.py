@@ -7,6 +7,7 @@ import itertools
 
 import numpy as np
 
+from ...io.bsdf import HORIZON
 from ...models.nbrdf import SEAM
 from .material import Material
 
@@ -138,7 +139,8 @@ class Kernels:
         si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
         si.wi = wi
         projected = self.measured.eval(mi.BSDFContext(), si, wo, active)
-        return dr.select(active & (wo.z > 0), dr.maximum(projected, 0.0) / dr.maximum(wo.z, 1e-30), 0.0)
+        above = (wi.z > HORIZON) & (wo.z > HORIZON)  # as the Rust reader: on the horizon but for rounding is on it
+        return dr.select(active & above, dr.maximum(projected, 0.0) / dr.maximum(wo.z, HORIZON), 0.0)
 
     def __call__(self, wi, wo, active):
         """Reflectance f(wi, wo) ≥ 0, RGB; meaningful where ``active``."""

@@ -7,7 +7,7 @@ import os
 import numpy as np
 
 from ..lighting import FILL_LIGHT, KEY_LIGHT, environment_radiance
-from ..renderer import save_png, tonemap  # one tone mapping for both renderers
+from ..renderer import MAX_RESOLUTION, save_png, tonemap  # one tone mapping for both renderers
 from .bsdf import register
 from .material import _HANDLES, bsdf_dict, material_handle, release_handle
 from .variants import _import_mitsuba
@@ -45,15 +45,15 @@ def scene_dict(bsdf: dict, *, resolution: int = 256, spp: int = 64, scene: str =
     mi, _ = _import_mitsuba()
     if scene != "sphere":
         raise ValueError(f"unknown scene {scene!r}; available: 'sphere'")
-    if resolution < 1 or spp < 1:
-        raise ValueError(f"resolution and spp must be ≥ 1, got {resolution} and {spp}")
+    if not 1 <= resolution <= MAX_RESOLUTION or spp < 1:
+        raise ValueError(f"resolution must be in 1 … {MAX_RESOLUTION} and spp ≥ 1, got {resolution} and {spp}")
     lights = {"key": KEY_LIGHT, "fill": FILL_LIGHT}  # those of the metric renderer (frenbrdf.render.lighting)
     emitters = {name: {"type": "directional", "direction": [-c for c in towards],
                        "irradiance": {"type": "rgb", "value": list(colour)}}
                 for name, (towards, colour) in lights.items()}
     return {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": 3},
+        "integrator": {"type": "path", "max_depth": 3},  # Mitsuba splits a large render into passes itself
         "sensor": {
             "type": "perspective",
             "fov": 30.0,
