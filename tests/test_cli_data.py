@@ -122,3 +122,20 @@ def test_fit_nbrdf_command_saves_a_loadable_nbrdf(tmp_path, capsys):
     with pytest.raises(ValueError, match="not a (readable )?saved NBRDF"):
         (tmp_path / "bad.pt").write_bytes(b"junk")
         load_nbrdf(tmp_path / "bad.pt")
+
+
+def test_fit_nbrdf_replaces_a_fit_only_when_asked_and_checks_before_any_work(tmp_path, capsys):
+    path, fits = tmp_path / "toy.binary", tmp_path / "fits"
+    frenbrdf.write_merl(path, toy_table(np.random.default_rng(4)))
+    command = ["fit-nbrdf", str(path), "--out", str(fits), "--epochs", "1", "--hidden", "8,8", "--quiet"]
+    assert cli.main(command) == 0
+    before = (fits / "toy.pt").read_bytes()
+    for argv, message in ((command, "exists; pass --overwrite"),
+                          ([*command[:-1], "--hidden", "abc"], "--hidden takes hidden widths"),
+                          (["fit-nbrdf", str(tmp_path / "missing.binary"), "--out", str(tmp_path / "new")],
+                           "missing.binary")):
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        assert message in capsys.readouterr().err
+    assert (fits / "toy.pt").read_bytes() == before and not (tmp_path / "new").exists()  # nothing made or lost
+    assert cli.main([*command, "--overwrite", "--seed", "1"]) == 0 and (fits / "toy.pt").read_bytes() != before

@@ -110,11 +110,26 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
 
     from .data.fitting import FitConfig, fit_nbrdf, save_nbrdf
     from .io.measured import read_table
+    from .io.paths import check_output_file, input_file
 
-    config = FitConfig(hidden=tuple(int(h) for h in args.hidden.split(",")), epochs=args.epochs, seed=args.seed)
+    try:
+        hidden = tuple(int(h) for h in args.hidden.split(","))
+    except ValueError:
+        raise ValueError(f"--hidden takes hidden widths separated by commas, e.g. 21,21; got {args.hidden!r}") from None
+    config = FitConfig(hidden=hidden, epochs=args.epochs, seed=args.seed)
+    # Every input and output checked before any work: no fit is lost to a later clash, no file replaced unasked.
+    materials = [input_file(path, "material file") for path in args.materials]
+    stems = [path.stem for path in materials]
+    if len(set(stems)) < len(stems):
+        raise ValueError(f"two inputs share a name and would write the same {args.out}/<name>.pt: "
+                         f"{sorted({stem for stem in stems if stems.count(stem) > 1})}")
     out = Path(args.out)
+    for stem in stems:
+        check_output_file(out / f"{stem}.pt", (".pt",), overwrite=args.overwrite)
+        if args.merl:
+            check_output_file(out / f"{stem}.binary", (".binary",), overwrite=args.overwrite)
     out.mkdir(parents=True, exist_ok=True)
-    for path in map(Path, args.materials):
+    for path in materials:
         nbrdf = fit_nbrdf(read_table(path), config, progress=not args.quiet)
         save_nbrdf(out / f"{path.stem}.pt", nbrdf)
         if args.merl:
@@ -311,6 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--seed", type=int, default=0)
     fit.add_argument("--merl", action="store_true", help="also write each fit as a MERL file")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    fit.add_argument("--overwrite", action="store_true", help="replace fits already in --out")
     fit.set_defaults(run=_fit_nbrdf)
 
     evaluate = commands.add_parser("evaluate", help="reconstruction and editing tables and figures for runs")

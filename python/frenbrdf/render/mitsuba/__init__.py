@@ -1,10 +1,10 @@
-"""Render MERL tables and NBRDFs in Mitsuba 3: a BSDF plugin evaluated in Dr.Jit.
+"""Render MERL tables, measurements and NBRDFs in Mitsuba 3: a BSDF plugin evaluated in Dr.Jit.
 
 :func:`register` adds a BSDF plugin named ``"frenbrdf"`` to Mitsuba, so any Mitsuba 3
-scene can use a measured MERL table or a neural BRDF::
+scene can use a measured MERL table, an RGL ``.bsdf`` or a neural BRDF::
 
+    from frenbrdf import mitsuba as fm   # before mitsuba: it may point Dr.Jit at a libLLVM first
     import mitsuba as mi
-    from frenbrdf import mitsuba as fm
 
     fm.set_variant()                     # llvm_ad_rgb, or scalar_rgb with a warning
     fm.register()

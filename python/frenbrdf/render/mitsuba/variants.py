@@ -127,7 +127,8 @@ def _llvm_hint() -> str:
         return f"pip install {LLVM_PACKAGE} (Linux x86-64) or apt-get install -y libllvm19"
     if os.environ.get(LIBLLVM_VARIABLE) == packaged:
         return f"{LLVM_PACKAGE}'s {packaged} does not work here either"
-    return f"try {LLVM_PACKAGE}'s: {LIBLLVM_VARIABLE}={packaged}, set before drjit is imported"
+    return (f"{LLVM_PACKAGE}'s works where the system's does not: import frenbrdf.render.mitsuba before mitsuba and "
+            f"drjit (it then points Dr.Jit at it), or set {LIBLLVM_VARIABLE}={packaged} before drjit is imported")
 
 
 def set_variant(variant: str | None = None) -> str:
