@@ -67,6 +67,11 @@ def test_reconstruct_never_touches_a_folder_it_did_not_write(run_dir, csv_input,
     for out in (csv_input.parent, tmp_path.parent):
         assert _reconstruct(csv_input, out, run_dir, "--overwrite") == 2
         assert "is the folder of the input" in capsys.readouterr().err
+    # A result folder of this command with a file of the user's beside it: the message names that file.
+    assert _reconstruct(csv_input, tmp_path / "result", run_dir) == 0
+    (tmp_path / "result" / "notes.txt").write_text("mine")
+    assert _reconstruct(csv_input, tmp_path / "result", run_dir) == 2
+    assert "holds files this command does not write: notes.txt" in capsys.readouterr().err
     assert _reconstruct(csv_input, "", run_dir) == 2
     assert "--out is empty" in capsys.readouterr().err
     assert csv_input.exists()
@@ -379,6 +384,20 @@ def test_what_is_not_a_regular_file_is_refused_by_every_reader(tmp_path):
     with pytest.raises(ValueError, match="a loop of symbolic links"):
         read_measurements(loop)
     assert stat.S_ISFIFO(fifo.stat().st_mode)
+
+
+def test_options_out_of_range_are_named(merl_file, tmp_path, capsys):
+    from frenbrdf import cli
+
+    for argv, message in ((["reconstruct", str(merl_file), "--out", str(tmp_path / "r"), "--seed", "-1"],
+                           "argument --seed: a seed is a whole number ≥ 0, got '-1'"),
+                          (["convert", str(merl_file), str(tmp_path / "s.csv"), "--samples", "10"],
+                           "argument --samples: expected a number ≥ 50")):
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        assert message in capsys.readouterr().err
+    # A folder that does not exist yet is made for the output.
+    assert cli.main(["convert", str(merl_file), str(tmp_path / "new" / "s.csv"), "--samples", "60"]) == 0
 
 
 def test_a_link_loop_anywhere_on_the_command_line_is_an_error_not_a_traceback(tmp_path, merl_file, capsys):

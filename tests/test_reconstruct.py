@@ -308,8 +308,11 @@ def test_the_command_widens_on_request_and_names_a_width_without_full(run_dir, t
     assert load_material_file(tmp_path / "default" / "material.pt").params[0].shape[1] == 64  # full's default
     with pytest.raises(SystemExit) as exit_info:
         _reconstruct(source, "--out", tmp_path / "latent", "--model", run_dir, "--refine", "latent", "--width", 40)
-    assert exit_info.value.code == 2 and "width must be None" in capsys.readouterr().err
+    assert exit_info.value.code == 2 and "--width sets the NBRDF that --refine full fits" in capsys.readouterr().err
     assert not (tmp_path / "latent").exists()
+    with pytest.raises(SystemExit):
+        _reconstruct(source, "--out", tmp_path / "none", "--model", run_dir, "--refine", "none", "--reciprocal")
+    assert "--reciprocal sets the NBRDF" in capsys.readouterr().err and not (tmp_path / "none").exists()
 
 
 def test_a_failure_while_writing_leaves_no_output(run_dir, toy_materials, tmp_path, monkeypatch):

@@ -223,6 +223,9 @@ def _demo(args: argparse.Namespace) -> int:
 def _reconstruct(args: argparse.Namespace) -> int:
     from .material.outputs import reconstruct_file
 
+    if (args.width is not None or args.reciprocal) and args.refine != "full":
+        raise ValueError(f"{'--width' if args.width is not None else '--reciprocal'} sets the NBRDF that "
+                         f"--refine full fits; with --refine {args.refine} there is none")
     report = reconstruct_file(args.input, args.out, model=args.model, samples=args.samples, refine=args.refine,
                               seed=args.seed, progress=not args.quiet, overwrite=args.overwrite, width=args.width,
                               reciprocal=args.reciprocal)
@@ -232,7 +235,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
         metrics = report.get("metrics")
         quality = f"; render PSNR {metrics['psnr']:.2f} dB, ΔE {metrics['delta_e']:.2f}" if metrics else ""
         print(f"reconstructed {args.input} from {report['input']['samples']} samples "
-              f"({sum(report['timings_s'].values()):.1f} s){quality}; wrote {args.out}/")
+              f"({sum(report['timings_s'].values()):.1f} s){quality}; wrote {os.path.join(args.out, '')}")
     return 0
 
 
@@ -243,11 +246,19 @@ def _convert(args: argparse.Namespace) -> int:
     return 0
 
 
+def _seed(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"a seed is a whole number ≥ 0, got {text!r}")
+    return int(text)
+
+
 def _sample_count(text: str) -> int | None:
+    from .material.measurements import MIN_SAMPLES
+
     if text == "all":
         return None
-    if not text.isdigit() or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive number or 'all', got {text!r}")
+    if not text.isdigit() or int(text) < MIN_SAMPLES:  # as many as a file of samples must hold
+        raise argparse.ArgumentTypeError(f"expected a number ≥ {MIN_SAMPLES} or 'all', got {text!r}")
     return int(text)
 
 
@@ -265,7 +276,7 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("out_dir", help="folder to write: a new or empty one, or an earlier bank, which is replaced "
                        "whole")
     synth.add_argument("--n", type=int, default=100, help="number of materials (default 100)")
-    synth.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    synth.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
     synth.add_argument("--mix", choices=tuple(MIXES), default="default",
                        help="default: paints, plastics, metals, fabrics, clear coats; features: what real "
                             "measurements show beyond those (car-paint flakes, retro-reflection, thin films, "
@@ -285,11 +296,11 @@ def build_parser() -> argparse.ArgumentParser:
     train = commands.add_parser("train", help="train FreNBRDF or a baseline on a folder of MERL files and .bsdf "
                                 "measurements")
     train.add_argument("--method", choices=method_names(), help="default: frenbrdf")
-    train.add_argument("--data", help="folder of MERL files")
+    train.add_argument("--data", help="folder of MERL .binary files and .bsdf measurements")
     train.add_argument("--out", help="run folder (created)")
     train.add_argument("--config", help="JSON file with any TrainConfig keys, over the method's preset")
     train.add_argument("--epochs", type=int)
-    train.add_argument("--seed", type=int)
+    train.add_argument("--seed", type=_seed)
     train.add_argument("--seeds", type=int, nargs="+", metavar="S",
                        help="train once per seed (each its own split and initialisation) into OUT/seed-S")
     train.add_argument("--training", choices=sorted(TRAINING),
@@ -323,7 +334,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--out", required=True, help="folder for the fitted NBRDFs (<name>.pt)")
     fit.add_argument("--hidden", default="21,21", help="hidden widths (default 21,21)")
     fit.add_argument("--epochs", type=int, default=10)
-    fit.add_argument("--seed", type=int, default=0)
+    fit.add_argument("--seed", type=_seed, default=0)
     fit.add_argument("--merl", action="store_true", help="also write each fit as a MERL file")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")
     fit.add_argument("--overwrite", action="store_true", help="replace fits already in --out")
@@ -341,7 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
                           help="evaluate every material of --data DIR that no run trained or validated on "
                           "(out-of-distribution), not the runs' test split")
     evaluate.add_argument("--max-materials", type=int, default=0, metavar="N",
-                          help="evaluate only the first N materials by name (default: all)")
+                          help="evaluate only the first N materials by name (default and 0: all)")
     evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")
     evaluate.add_argument("--edits", type=int, default=2000, help="interpolations for editing (default 2000)")
     evaluate.add_argument("--resolution", type=int, default=256, help="render size of the reconstruction table")
@@ -400,7 +411,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--reciprocal", action="store_true", help="with --refine full: keep the NBRDF reciprocal even "
                      "when the samples hold both orders of pairs (a .bsdf measurement does; by default the NBRDF then "
                      "tells them apart, as the measurement does near grazing)")
-    rec.add_argument("--seed", type=int, default=0, help="seeds the sampling and the refinement (default 0)")
+    rec.add_argument("--seed", type=_seed, default=0, help="seeds the sampling and the refinement (default 0)")
     rec.add_argument("--json", action="store_true", help="print the report as JSON")
     rec.add_argument("--quiet", action="store_true", help="no progress bars")
     rec.set_defaults(run=_reconstruct)
@@ -411,7 +422,7 @@ def build_parser() -> argparse.ArgumentParser:
     convert.add_argument("output", help="a .binary (MERL table), .csv or .npz (samples) file to write")
     convert.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
                          help="CSV/NPZ output: random valid MERL bins to sample (default 4000), or all")
-    convert.add_argument("--seed", type=int, default=0, help="seeds the sampling (default 0)")
+    convert.add_argument("--seed", type=_seed, default=0, help="seeds the sampling (default 0)")
     convert.add_argument("--overwrite", action="store_true", help="replace the output file if it exists")
     convert.set_defaults(run=_convert)
 

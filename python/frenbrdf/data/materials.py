@@ -66,5 +66,5 @@ def load_material_file(path: str | os.PathLike):
     try:
         return load_nbrdf(path)
     except ValueError as error:
-        raise ValueError(f"{path}: neither a MERL file ({FILE_BYTES} bytes) nor a saved NBRDF ({error}); "
-                         f"expected {SUPPORTED}") from None
+        raise ValueError(f"{path}: neither a MERL file (those hold {FILE_BYTES} bytes, this one "
+                         f"{path.stat().st_size}) nor a saved NBRDF ({error}); expected {SUPPORTED}") from None

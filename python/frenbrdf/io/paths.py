@@ -179,8 +179,12 @@ def check_output_folder(out: str | os.PathLike, *, written_by: str, owned: tuple
         present = {entry.name for entry in out.iterdir() if not entry.name.startswith(".")}
         ours = written_by in present and (owned is None or present <= set(owned) | {written_by})
         if present and not ours and not overwrite:
-            mine = f"{written_by} and only its files: {', '.join(sorted(owned))}" if owned else written_by
-            raise ValueError(f"{option} {out} is not empty and was not written by this command (no {mine}); "
+            if written_by not in present:
+                why = f"no {written_by}"
+            else:
+                others = sorted(present - set(owned) - {written_by})
+                why = f"it holds files this command does not write: {', '.join(others)}"
+            raise ValueError(f"{option} {out} is not empty and was not written by this command ({why}); "
                              "choose another folder, or pass --overwrite to replace it")
         _check_writable(out, option)
     else:

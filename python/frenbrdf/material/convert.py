@@ -53,6 +53,7 @@ def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int 
         raise ValueError(f"output {dest} is the input; name another file")
     if dest.exists() and not overwrite:
         raise FileExistsError(f"output {dest} exists; pass --overwrite to replace it")
+    dest.parent.mkdir(parents=True, exist_ok=True)  # a folder that can be created (checked above)
     if dest.suffix.lower() == ".binary":
         write_merl(dest, read_table(source))
         return dest
