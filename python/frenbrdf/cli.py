@@ -301,7 +301,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--config", help="JSON file with any TrainConfig keys, over the method's preset")
     train.add_argument("--epochs", type=int)
     train.add_argument("--seed", type=_seed)
-    train.add_argument("--seeds", type=int, nargs="+", metavar="S",
+    train.add_argument("--seeds", type=_seed, nargs="+", metavar="S",
                        help="train once per seed (each its own split and initialisation) into OUT/seed-S")
     train.add_argument("--training", choices=sorted(TRAINING),
                        help="a training length of frenbrdf.presets over the method's preset (default: the full one)")
