@@ -129,7 +129,7 @@ def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
     assert "Recon highlight PSNR" in table and "Edit highlight PSNR" in table
     assert all(np.isfinite(summary["highlight_psnr"]) for summary in report["summary"].values())
     assert json.loads((tmp_path / "eval" / "evaluation.json").read_text())["summary"] == report["summary"]
-    assert "Evaluation set: the test split of the training data" in table
+    assert "Evaluation set: the runs' test split, read from" in table
 
 
 def test_every_table_reports_colour_difference(tiny_runs, tmp_path):

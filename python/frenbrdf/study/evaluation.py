@@ -127,7 +127,7 @@ class EvaluationSet:
     def describe(self) -> str:
         """What was evaluated, in words."""
         if not self.out_of_distribution:
-            return f"the test split of the training data ({self.data})"
+            return f"the runs' test split, read from {self.data}"
         which = (f"all {len(self.names)}" if len(self.names) == self.available
                  else f"the first {len(self.names)} (by name) of the {self.available}")
         return f"{which} material{'s' * (self.available != 1)} of {self.data} that no run saw (out-of-distribution)"
