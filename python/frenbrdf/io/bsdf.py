@@ -41,8 +41,7 @@ class MeasuredBSDF:
     (z = the normal): it returns ``(..., 3)`` RGB reflectance in 1/sr, not multiplied by
     cos θ, with negative measured values clamped to 0 and 0 at and below the horizon (z ≤
     :data:`HORIZON`). The files tabulate f · cos θ_o, which does not vanish at the horizon: f
-    grows as 1/cos θ_o over the last degree or so (from about 89.4°), as Mitsuba's values over
-    cos θ_o do.
+    grows as 1/cos θ_o over the last degree or two, as Mitsuba's values over cos θ_o do.
     """
 
     def __init__(self, native: BsdfMeasurement):
