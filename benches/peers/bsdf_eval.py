@@ -7,8 +7,8 @@
    evaluated by ``frenbrdf._native.BsdfMeasurement.eval`` (one batched call, rayon) and by
    Mitsuba's ``measured`` BSDF twice: in ``llvm_ad_rgb``, one vectorised ``eval`` over all
    pairs (its kernel compiled in the warm-up), and in ``scalar_rgb``, one ``eval`` call per
-   pair from a Python loop. (Mitsuba 3.9 evaluates these files in its JIT variants; earlier
-   versions crashed on them, mitsuba3#664.) Mitsuba's values (f·cos θ_o) are divided by
+   pair from a Python loop. (Mitsuba 3.9.1 evaluates these files in its JIT variants;
+   mitsuba3#664 reported them crashing in 3.2.) Mitsuba's values (f·cos θ_o) are divided by
    cos θ_o and checked against ours before anything is timed. The scalar ratio includes
    Python's per-call overhead on Mitsuba's side.
 2. One MERL table's 1,458,000 bins (90 θ_h × 90 θ_d × 180 φ_d, each at its bin position
