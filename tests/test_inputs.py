@@ -398,6 +398,18 @@ def test_options_out_of_range_are_named(merl_file, tmp_path, capsys):
         assert message in capsys.readouterr().err
     # A folder that does not exist yet is made for the output.
     assert cli.main(["convert", str(merl_file), str(tmp_path / "new" / "s.csv"), "--samples", "60"]) == 0
+    # An option where it does not apply is named, not ignored.
+    samples_csv = tmp_path / "new" / "s.csv"
+    for argv, message in ((["reconstruct", str(samples_csv), "--out", str(tmp_path / "r"), "--samples", "100"],
+                           "--samples picks samples from a MERL file or a .bsdf"),
+                          (["convert", str(merl_file), str(tmp_path / "t.binary"), "--samples", "100"],
+                           "a .binary output is the whole table"),
+                          (["render", str(merl_file), "--out", str(tmp_path / "x.png"), "--spp", "4"],
+                           "--spp sets a --mitsuba render's samples per pixel")):
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "r").exists() and not (tmp_path / "t.binary").exists()
 
 
 def test_a_link_loop_anywhere_on_the_command_line_is_an_error_not_a_traceback(tmp_path, merl_file, capsys):

@@ -156,12 +156,15 @@ def _evaluate(args: argparse.Namespace) -> int:
 def _render(args: argparse.Namespace) -> int:
     from .io.paths import check_output_file, input_file
 
+    if args.spp is not None and not args.mitsuba:
+        raise ValueError("--spp sets a --mitsuba render's samples per pixel; the metric renderer has none")
     input_file(args.material, "material file")
     check_output_file(args.out, (".png",), overwrite=args.overwrite)
     if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.data.materials
         from .render.mitsuba import render_material
 
-        render_material(args.material, out_path=args.out, spp=args.spp, resolution=args.resolution)
+        render_material(args.material, out_path=args.out, spp=64 if args.spp is None else args.spp,
+                        resolution=args.resolution)
     else:
         from .data.materials import load_material_file
         from .render.renderer import Scene, render, save_png
@@ -223,10 +226,14 @@ def _demo(args: argparse.Namespace) -> int:
 def _reconstruct(args: argparse.Namespace) -> int:
     from .material.outputs import reconstruct_file
 
+    samples = getattr(args, "samples", 4000)  # absent unless given: a file of samples is read whole
+    if hasattr(args, "samples") and Path(args.input).suffix.lower() in (".csv", ".npz"):
+        raise ValueError(f"--samples picks samples from a MERL file or a .bsdf; {args.input} is a file of samples, "
+                         "read whole")
     if (args.width is not None or args.reciprocal) and args.refine != "full":
         raise ValueError(f"{'--width' if args.width is not None else '--reciprocal'} sets the NBRDF that "
                          f"--refine full fits; with --refine {args.refine} there is none")
-    report = reconstruct_file(args.input, args.out, model=args.model, samples=args.samples, refine=args.refine,
+    report = reconstruct_file(args.input, args.out, model=args.model, samples=samples, refine=args.refine,
                               seed=args.seed, progress=not args.quiet, overwrite=args.overwrite, width=args.width,
                               reciprocal=args.reciprocal)
     if args.json:
@@ -242,7 +249,11 @@ def _reconstruct(args: argparse.Namespace) -> int:
 def _convert(args: argparse.Namespace) -> int:
     from .material.convert import convert
 
-    print(f"wrote {convert(args.input, args.output, samples=args.samples, seed=args.seed, overwrite=args.overwrite)}")
+    if hasattr(args, "samples") and Path(args.output).suffix.lower() == ".binary":
+        raise ValueError("--samples sets how many samples a .csv or .npz output holds; a .binary output is the whole "
+                         "table")
+    samples = getattr(args, "samples", 4000)  # absent unless given
+    print(f"wrote {convert(args.input, args.output, samples=samples, seed=args.seed, overwrite=args.overwrite)}")
     return 0
 
 
@@ -371,7 +382,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--out", required=True, help="PNG file")
     render.add_argument("--resolution", type=int, default=256)
     render.add_argument("--mitsuba", action="store_true", help="path-trace with Mitsuba 3 instead")
-    render.add_argument("--spp", type=int, default=64, help="samples per pixel (--mitsuba)")
+    render.add_argument("--spp", type=int, help="samples per pixel of a --mitsuba render (default 64)")
     render.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     render.set_defaults(run=_render)
 
@@ -400,7 +411,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "(they are deleted)")
     rec.add_argument("--model", default="pretrained", help="training run folder, checkpoint, or 'pretrained' "
                      "(the model shipped in the package; the default)")
-    rec.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
+    rec.add_argument("--samples", type=_sample_count, default=argparse.SUPPRESS, metavar="N|all",
                      help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
@@ -420,7 +431,7 @@ def build_parser() -> argparse.ArgumentParser:
                                   "or MERL file into a CSV/NPZ of samples that reconstruct reads")
     convert.add_argument("input", help="a .bsdf measurement or a MERL .binary file")
     convert.add_argument("output", help="a .binary (MERL table), .csv or .npz (samples) file to write")
-    convert.add_argument("--samples", type=_sample_count, default=4000, metavar="N|all",
+    convert.add_argument("--samples", type=_sample_count, default=argparse.SUPPRESS, metavar="N|all",
                          help="CSV/NPZ output: random valid MERL bins to sample (default 4000), or all")
     convert.add_argument("--seed", type=_seed, default=0, help="seeds the sampling (default 0)")
     convert.add_argument("--overwrite", action="store_true", help="replace the output file if it exists")
