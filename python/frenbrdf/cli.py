@@ -226,16 +226,16 @@ def _demo(args: argparse.Namespace) -> int:
 def _reconstruct(args: argparse.Namespace) -> int:
     from .material.outputs import reconstruct_file
 
-    samples = getattr(args, "samples", 4000)  # absent unless given: a file of samples is read whole
-    if hasattr(args, "samples") and Path(args.input).suffix.lower() in (".csv", ".npz"):
+    given = {"samples": args.samples} if hasattr(args, "samples") else {}  # absent unless given: the default applies
+    if given and Path(args.input).suffix.lower() in (".csv", ".npz"):
         raise ValueError(f"--samples picks samples from a MERL file or a .bsdf; {args.input} is a file of samples, "
                          "read whole")
     if (args.width is not None or args.reciprocal) and args.refine != "full":
         raise ValueError(f"{'--width' if args.width is not None else '--reciprocal'} sets the NBRDF that "
                          f"--refine full fits; with --refine {args.refine} there is none")
-    report = reconstruct_file(args.input, args.out, model=args.model, samples=samples, refine=args.refine,
-                              seed=args.seed, progress=not args.quiet, overwrite=args.overwrite, width=args.width,
-                              reciprocal=args.reciprocal)
+    report = reconstruct_file(args.input, args.out, model=args.model, refine=args.refine, seed=args.seed,
+                              progress=not args.quiet, overwrite=args.overwrite, width=args.width,
+                              reciprocal=args.reciprocal, **given)
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -249,11 +249,11 @@ def _reconstruct(args: argparse.Namespace) -> int:
 def _convert(args: argparse.Namespace) -> int:
     from .material.convert import convert
 
-    if hasattr(args, "samples") and Path(args.output).suffix.lower() == ".binary":
+    given = {"samples": args.samples} if hasattr(args, "samples") else {}  # absent unless given: the default applies
+    if given and Path(args.output).suffix.lower() == ".binary":
         raise ValueError("--samples sets how many samples a .csv or .npz output holds; a .binary output is the whole "
                          "table")
-    samples = getattr(args, "samples", 4000)  # absent unless given
-    print(f"wrote {convert(args.input, args.output, samples=samples, seed=args.seed, overwrite=args.overwrite)}")
+    print(f"wrote {convert(args.input, args.output, seed=args.seed, overwrite=args.overwrite, **given)}")
     return 0
 
 
