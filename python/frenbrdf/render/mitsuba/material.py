@@ -149,7 +149,7 @@ def _load_file(path: Path) -> Material:
 
     loaded = load_material_file(path)
     if isinstance(loaded, MeasuredBSDF):
-        return material_from_measurement(loaded, name=path.stem)
+        return material_from_measurement(loaded)  # named by its file's stem
     if isinstance(loaded, np.ndarray):
         return material_from_table(loaded, name=path.stem)
     return material_from_nbrdf(loaded, name=path.stem)
