@@ -374,6 +374,9 @@ def test_all_over_seeds_evaluates_every_seed_on_the_same_materials(seed_runs, ot
     # One material has no pair to edit: the editing rows cannot be compared, and the table says so.
     assert "edit_psnr" not in on_training["comparison"]["metrics"] and "delta_e" in on_training["comparison"]["metrics"]
     assert "Left out, not finite on every seed: Edit PSNR ↑" in (tmp_path / "eval-train" / "evaluation.md").read_text()
+    for seed in (0, 1):  # each seed's own table: no rows of NaN
+        text = (tmp_path / "eval-train" / f"seed-{seed}" / "evaluation.md").read_text()
+        assert "no editing rows (editing interpolates two" in text and "Edit PSNR" not in text and "nan" not in text
 
 
 def test_all_errors_are_clear(tiny_runs, toy_materials, tmp_path, capsys):

@@ -186,14 +186,17 @@ def markdown_table(summary: dict, n_materials: int, n_edits: int, materials: str
     the refined rows); ``refine``: the refinement budget that ran (:func:`table_rows`)."""
     methods = list(summary)
     header = "| | " + " | ".join(methods) + " | " + " | ".join(f"paper: {m}" for m in PAPER) + " |"
-    lines = [f"Reconstruction on {n_materials} {materials}; editing over {n_edits} interpolations (each "
-             f"unordered pair of {materials} at most once, t ∈ {{0.25, 0.5, 0.75}}). RMSE, PSNR, SSIM and ΔE over "
+    editing = (f"editing over {n_edits} interpolations (each unordered pair of {materials} at most once, "
+               "t ∈ {0.25, 0.5, 0.75})" if n_edits else f"no editing rows (editing interpolates two {materials})")
+    lines = [f"Reconstruction on {n_materials} {materials}; {editing}. RMSE, PSNR, SSIM and ΔE over "
              "the lit material pixels of the renders (background excluded); L_fre normalised on the sphere "
              "(docs/method.md §5).", "",
              header, "|---" * (1 + len(methods) + len(PAPER)) + "|"]
     for key, label in table_rows(refine):
         if key in HIGHLIGHT_KEYS and any(key not in summary[m] for m in methods):
             continue  # a report from before the highlight metrics
+        if key.startswith("edit_") and not n_edits:
+            continue  # a single material: nothing to interpolate, every value NaN
         ours = " | ".join(f"{summary[m][key]:.3g}" for m in methods)
         paper = " | ".join(f"{PAPER[m].get(key, '–')}" for m in PAPER)
         lines.append(f"| {label} | {ours} | {paper} |")
