@@ -175,7 +175,7 @@ NAMES = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters
 def test_render_output_paths(folder, name, suffix):
     target = str(folder / "renders") + os.sep + name + suffix
     try:
-        checked = paths.check_output_file(target, (".png",))
+        checked = paths.check_output_file(target, (".png",), overwrite=True)
     except NAMED:
         return
     assert checked.suffix.lower() == ".png" and not checked.is_dir()

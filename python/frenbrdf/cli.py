@@ -226,7 +226,7 @@ def _demo(args: argparse.Namespace) -> int:
 def _reconstruct(args: argparse.Namespace) -> int:
     from .material.outputs import reconstruct_file
 
-    given = {"samples": args.samples} if hasattr(args, "samples") else {}  # absent unless given: the default applies
+    given = _given(args, "samples")
     if given and Path(args.input).suffix.lower() in (".csv", ".npz"):
         raise ValueError(f"--samples picks samples from a MERL file or a .bsdf; {args.input} is a file of samples, "
                          "read whole")
@@ -249,12 +249,18 @@ def _reconstruct(args: argparse.Namespace) -> int:
 def _convert(args: argparse.Namespace) -> int:
     from .material.convert import convert
 
-    given = {"samples": args.samples} if hasattr(args, "samples") else {}  # absent unless given: the default applies
+    given = _given(args, "samples")
     if given and Path(args.output).suffix.lower() == ".binary":
         raise ValueError("--samples sets how many samples a .csv or .npz output holds; a .binary output is the whole "
                          "table")
     print(f"wrote {convert(args.input, args.output, seed=args.seed, overwrite=args.overwrite, **given)}")
     return 0
+
+
+def _given(args: argparse.Namespace, *options: str) -> dict:
+    """The ``options`` the user gave (declared with ``default=argparse.SUPPRESS``), so the library's defaults apply
+    to the others."""
+    return {name: getattr(args, name) for name in options if hasattr(args, name)}
 
 
 def _seed(text: str) -> int:

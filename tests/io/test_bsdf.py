@@ -105,6 +105,11 @@ def test_convert_refuses_to_replace_a_file_or_to_guess_a_format(tmp_path, capsys
             cli.main(["convert", str(source), str(bad)])
     with pytest.raises(SystemExit):
         cli.main(["convert", str(tmp_path / "mine.binary"), str(tmp_path / "again.txt")])
+    converted = existing.read_bytes()
+    for asked in ([], ["--overwrite"]):  # its own input, even when asked to replace: named, and left as it was
+        with pytest.raises(SystemExit):
+            cli.main(["convert", str(existing), str(existing), *asked])
+        assert "is the input" in capsys.readouterr().err and existing.read_bytes() == converted
 
 
 def test_reconstruct_a_bsdf_reports_metrics_against_the_measurement(tmp_path, capsys):

@@ -201,7 +201,7 @@ def _check_writable(folder: Path, option: str) -> None:
 
 
 def check_output_file(path: str | os.PathLike, suffixes: tuple[str, ...], option: str = "--out", *,
-                      overwrite: bool = True) -> Path:
+                      overwrite: bool) -> Path:
     """Checks a file to be written, before any work: its suffix is one of ``suffixes`` (writers pick the
     format from it), it is not a folder, its folder exists (or can be created) and is writable, and, unless
     ``overwrite``, no file is there already (a command replaces a user's file only when asked)."""

@@ -48,11 +48,9 @@ def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int 
     source = input_file(source, "material file")
     if source.suffix.lower() not in SUFFIXES:
         raise ValueError(f"{source}: convert reads a .bsdf measurement or a MERL .binary file")
-    dest = check_output_file(dest, tuple(OUTPUTS), option="output")
-    if dest.exists() and dest.resolve() == source.resolve():
+    if Path(dest).exists() and Path(dest).resolve() == source.resolve():
         raise ValueError(f"output {dest} is the input; name another file")
-    if dest.exists() and not overwrite:
-        raise FileExistsError(f"output {dest} exists; pass --overwrite to replace it")
+    dest = check_output_file(dest, tuple(OUTPUTS), option="output", overwrite=overwrite)
     dest.parent.mkdir(parents=True, exist_ok=True)  # a folder that can be created (checked above)
     if dest.suffix.lower() == ".binary":
         write_merl(dest, read_table(source))
