@@ -24,7 +24,7 @@ import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
 from frenbrdf.data.materials import load_material_file
-from frenbrdf.io import checkpoints, paths
+from frenbrdf.io import checkpoints, outputs
 from frenbrdf.io.merl import N_BINS
 from frenbrdf.material.measurements import read_measurements
 from frenbrdf.models.autoencoder import MAX_PARAMETERS
@@ -175,7 +175,7 @@ NAMES = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters
 def test_render_output_paths(folder, name, suffix):
     target = str(folder / "renders") + os.sep + name + suffix
     try:
-        checked = paths.check_output_file(target, (".png",), overwrite=True)
+        checked = outputs.check_output_file(target, (".png",), overwrite=True)
     except NAMED:
         return
     assert checked.suffix.lower() == ".png" and not checked.is_dir()
@@ -198,9 +198,8 @@ def test_output_folders_never_take_the_users_files(name, overwrite):
         cwd = os.getcwd()
         os.chdir(root / "input")
         try:
-            out = paths.check_output_folder(Path("..") / name if name else "", written_by="reconstruction.json",
-                                            owned=("reconstruction.json", "render.png"), inputs=(source,),
-                                            overwrite=overwrite)
+            out = outputs.OutputFolder.claim(Path("..") / name if name else "", command="reconstruct",
+                                             inputs=(source,), overwrite=overwrite).path
         except NAMED:
             return
         finally:

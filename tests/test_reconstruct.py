@@ -12,6 +12,7 @@ import torch
 
 import frenbrdf
 from frenbrdf import cli
+from frenbrdf.io.outputs import MARKER
 from frenbrdf.material.measurements import read_measurements
 from frenbrdf.models import pretrained
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
@@ -257,7 +258,7 @@ def test_the_command_end_to_end(run_dir, toy_materials, tmp_path, capsys):
     printed = json.loads(capsys.readouterr().out)
     report = json.loads((out / "reconstruction.json").read_text())
     assert printed == report
-    assert sorted(p.name for p in out.iterdir()) == report["files"] == sorted(
+    assert sorted(p.name for p in out.iterdir() if p.name != MARKER) == report["files"] == sorted(
         ["comparison.png", "material.binary", "material.pt", "reconstruction.json", "render.png", "spectrum.png",
          "truth.png"])
     assert set(report["spectrum"]["relative_error_by_band"]["reconstruction"]) == {"l 0", "l 1–4", "l 5–16", "l 17–49"}

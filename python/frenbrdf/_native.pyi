@@ -95,6 +95,9 @@ class BsdfMeasurement:
     def phi_i(self) -> F64:
         """Incident azimuths (radians) at which the material was measured."""
     @property
+    def rgb(self) -> F32:
+        """The values of the ``rgb`` field as stored (float32, flattened; its shape is in :attr:`fields`)."""
+    @property
     def fields(self) -> dict[str, tuple[str, tuple[int, ...]]]:
         """Every tensor of the file: ``{name: (numpy dtype name, shape)}``."""
 

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
+import math
 import os
 import platform
 import sys
@@ -61,7 +63,7 @@ def _synth(args: argparse.Namespace) -> int:
 def _import_nbrdf(args: argparse.Namespace) -> int:
     from .data.nbrdf_import import import_nbrdf
 
-    paths = import_nbrdf(args.weights, args.out_dir, progress=not args.quiet)
+    paths = import_nbrdf(args.weights, args.out_dir, overwrite=args.overwrite, progress=not args.quiet)
     print(f"wrote {len(paths)} MERL files to {args.out_dir}")
     return 0
 
@@ -106,11 +108,10 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _fit_nbrdf(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from .data.fitting import FitConfig, fit_nbrdf, save_nbrdf
     from .io.measured import read_table
-    from .io.paths import check_output_file, input_file
+    from .io.outputs import OutputFolder
+    from .io.paths import input_file
 
     try:
         hidden = tuple(int(h) for h in args.hidden.split(","))
@@ -123,18 +124,17 @@ def _fit_nbrdf(args: argparse.Namespace) -> int:
     if len(set(stems)) < len(stems):
         raise ValueError(f"two inputs share a name and would write the same {args.out}/<name>.pt: "
                          f"{sorted({stem for stem in stems if stems.count(stem) > 1})}")
-    out = Path(args.out)
-    for stem in stems:
-        check_output_file(out / f"{stem}.pt", (".pt",), overwrite=args.overwrite)
-        if args.merl:
-            check_output_file(out / f"{stem}.binary", (".binary",), overwrite=args.overwrite)
-    out.mkdir(parents=True, exist_ok=True)
-    for path in materials:
+    suffixes = (".pt", ".binary") if args.merl else (".pt",)
+    out = OutputFolder.claim(args.out, command="fit-nbrdf", inputs=materials, overwrite=args.overwrite,
+                             additive=True)
+    out.check_names(stem + suffix for stem in stems for suffix in suffixes)
+    for path in materials:  # each fit moved in as soon as it is done: a long run keeps what it finished
         nbrdf = fit_nbrdf(read_table(path), config, progress=not args.quiet)
-        save_nbrdf(out / f"{path.stem}.pt", nbrdf)
-        if args.merl:
-            nbrdf.to_merl(out / f"{path.stem}.binary")
-        print(f"fitted {path.name} -> {out / (path.stem + '.pt')}")
+        with out.staged() as staging:
+            save_nbrdf(staging / f"{path.stem}.pt", nbrdf)
+            if args.merl:
+                nbrdf.to_merl(staging / f"{path.stem}.binary")
+        print(f"fitted {path.name} -> {out.path / (path.stem + '.pt')}")
     return 0
 
 
@@ -154,12 +154,13 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from .io.paths import check_output_file, input_file
+    from .io.outputs import check_output_file
+    from .io.paths import input_file
 
     if args.spp is not None and not args.mitsuba:
         raise ValueError("--spp sets a --mitsuba render's samples per pixel; the metric renderer has none")
     input_file(args.material, "material file")
-    check_output_file(args.out, (".png",), overwrite=args.overwrite)
+    check_output_file(args.out, (".png",), overwrite=args.overwrite, inputs=(args.material,))
     if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.data.materials
         from .render.mitsuba import render_material
 
@@ -197,7 +198,7 @@ def _select(args: argparse.Namespace) -> int:
     elif args.epochs is not None:
         base = base_config(args.data, epochs=args.epochs)
     selection = select_config(args.data, args.target_psnr, args.out, front=args.front, base=base,
-                              progress=not args.quiet)
+                              progress=not args.quiet, overwrite=args.overwrite)
     if args.json:
         print(json.dumps(selection.summary, indent=2))
     elif selection.reached:
@@ -218,7 +219,8 @@ def _select(args: argparse.Namespace) -> int:
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    out = run_demo(args.out, args.data, epochs=args.epochs, augmentation=args.augmentation, progress=not args.quiet)
+    out = run_demo(args.out, args.data, epochs=args.epochs, augmentation=args.augmentation, progress=not args.quiet,
+                   overwrite=args.overwrite)
     print(f"report: {out / 'README.md'}")
     return 0
 
@@ -263,10 +265,57 @@ def _given(args: argparse.Namespace, *options: str) -> dict:
     return {name: getattr(args, name) for name in options if hasattr(args, name)}
 
 
+#: The most epochs, renders, edits or materials an integer option of the CLI takes (more would run for years).
+MAX_COUNT = 1_000_000
+#: The most samples per pixel of a --mitsuba render.
+MAX_SPP = 1 << 16
+
+
+def _limit(module: str, name: str):
+    """A limit the library sets (``module.name``), read when an option is parsed: its module is imported then,
+    not at every start of the CLI."""
+    return lambda: getattr(importlib.import_module(module, __package__), name)
+
+
+def _whole(low: int, high, what: str = ""):
+    """An argparse type: a whole number in ``low … high`` (an int, or a function giving it: :func:`_limit`);
+    the message says the range. ``what``: the noun for messages ("a seed")."""
+    def parse(text: str) -> int:
+        top = high() if callable(high) else high
+        digits = text.strip().removeprefix("-").removeprefix("+")
+        # ASCII digits only ("²".isdigit() is true), and few of them (int() refuses more than 4300).
+        if not (digits.isascii() and digits.isdigit() and len(digits) <= 30 and low <= int(text) <= top):
+            raise argparse.ArgumentTypeError(f"{f'{what} is' if what else 'expected'} a whole number in "
+                                             f"{low:,} … {top:,}, got {text!r}")
+        return int(text)
+
+    return parse
+
+
 def _seed(text: str) -> int:
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"a seed is a whole number ≥ 0, got {text!r}")
-    return int(text)
+    from .configs import MAX_SEED
+
+    return _whole(0, MAX_SEED, "a seed")(text)
+
+
+# The checked argparse types of the integer options.
+_positive_count, _count = _whole(1, MAX_COUNT), _whole(0, MAX_COUNT)
+_bank_size = _whole(1, _limit(".data.synth", "MAX_BANK"))
+_table_samples = _whole(1, _limit(".io.merl", "N_BINS"))  # drawn from a MERL table's bins
+_resolution = _whole(8, _limit(".render.renderer", "MAX_RESOLUTION"))
+_nbrdf_width = _whole(1, _limit(".models.nbrdf", "MAX_WIDTH"))
+_lmax = _whole(1, _limit(".models.losses", "MAX_LMAX"))
+
+
+def _decibels(text: str) -> float:
+    """An argparse type: a finite number of dB > 0 (NaN and inf are numbers to ``float()``)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number of dB > 0, got {text!r}")
+    return value
 
 
 def _sample_count(text: str) -> int | None:
@@ -292,7 +341,7 @@ def build_parser() -> argparse.ArgumentParser:
     synth = commands.add_parser("synth", help="write the default bank of analytic materials as MERL files")
     synth.add_argument("out_dir", help="folder to write: a new or empty one, or an earlier bank, which is replaced "
                        "whole")
-    synth.add_argument("--n", type=int, default=100, help="number of materials (default 100)")
+    synth.add_argument("--n", type=_bank_size, default=100, help="number of materials (default 100)")
     synth.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
     synth.add_argument("--mix", choices=tuple(MIXES), default="default",
                        help="default: paints, plastics, metals, fabrics, clear coats; features: what real "
@@ -306,7 +355,10 @@ def build_parser() -> argparse.ArgumentParser:
     imported = commands.add_parser("import-nbrdf", help="evaluate published NBRDF weights (Keras .h5) "
                                    "at every MERL bin and write MERL files")
     imported.add_argument("weights", nargs="+", help=".h5 files")
-    imported.add_argument("out_dir", help="folder to write to (created)")
+    imported.add_argument("out_dir", help="folder to write to: a new or empty one, or an earlier import's, which "
+                          "grows")
+    imported.add_argument("--overwrite", action="store_true", help="replace files an earlier import wrote, and write "
+                          "into a folder holding other files (they are kept)")
     imported.add_argument("--quiet", action="store_true", help="no progress bar")
     imported.set_defaults(run=_import_nbrdf)
 
@@ -316,7 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--data", help="folder of MERL .binary files and .bsdf measurements")
     train.add_argument("--out", help="run folder (created)")
     train.add_argument("--config", help="JSON file with any TrainConfig keys, over the method's preset")
-    train.add_argument("--epochs", type=int)
+    train.add_argument("--epochs", type=_positive_count)
     train.add_argument("--seed", type=_seed)
     train.add_argument("--seeds", type=_seed, nargs="+", metavar="S",
                        help="train once per seed (each its own split and initialisation) into OUT/seed-S")
@@ -328,7 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--holdout", nargs="+", metavar="PATTERN",
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")
-    train.add_argument("--render-every", type=int, metavar="N",
+    train.add_argument("--render-every", type=_count, metavar="N",
                        help="render the validation materials every N epochs and log their PSNR and ΔE (docs/charts: "
                        "chart 7)")
     train.add_argument("--select", choices=SELECTION_RULES,
@@ -350,7 +402,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("materials", nargs="+", help="MERL files or .bsdf measurements")
     fit.add_argument("--out", required=True, help="folder for the fitted NBRDFs (<name>.pt)")
     fit.add_argument("--hidden", default="21,21", help="hidden widths (default 21,21)")
-    fit.add_argument("--epochs", type=int, default=10)
+    fit.add_argument("--epochs", type=_positive_count, default=10)
     fit.add_argument("--seed", type=_seed, default=0)
     fit.add_argument("--merl", action="store_true", help="also write each fit as a MERL file")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -368,11 +420,12 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--all", dest="all_materials", action="store_true",
                           help="evaluate every material of --data DIR that no run trained or validated on "
                           "(out-of-distribution), not the runs' test split")
-    evaluate.add_argument("--max-materials", type=int, default=0, metavar="N",
+    evaluate.add_argument("--max-materials", type=_count, default=0, metavar="N",
                           help="evaluate only the first N materials by name (default and 0: all)")
-    evaluate.add_argument("--samples", type=int, default=4000, help="samples given to the encoder (default 4000)")
-    evaluate.add_argument("--edits", type=int, default=2000, help="interpolations for editing (default 2000)")
-    evaluate.add_argument("--resolution", type=int, default=256, help="render size of the reconstruction table")
+    evaluate.add_argument("--samples", type=_table_samples, default=4000,
+                          help="samples given to the encoder (default 4000)")
+    evaluate.add_argument("--edits", type=_count, default=2000, help="interpolations for editing (default 2000)")
+    evaluate.add_argument("--resolution", type=_resolution, default=256, help="render size of the reconstruction table")
     evaluate.add_argument("--refine", choices=("none", "latent", "full"), default="none",
                           help="also refine each material at test time on the same samples (latent: optimise z; "
                           "full: then the NBRDF's weights) and report the refined rows beside the encoder-only ones "
@@ -386,23 +439,25 @@ def build_parser() -> argparse.ArgumentParser:
                                  "NBRDF .pt or Keras NBRDF .h5) on a sphere")
     render.add_argument("material")
     render.add_argument("--out", required=True, help="PNG file")
-    render.add_argument("--resolution", type=int, default=256)
+    render.add_argument("--resolution", type=_resolution, default=256)
     render.add_argument("--mitsuba", action="store_true", help="path-trace with Mitsuba 3 instead")
-    render.add_argument("--spp", type=int, help="samples per pixel of a --mitsuba render (default 64)")
+    render.add_argument("--spp", type=_whole(1, MAX_SPP), help="samples per pixel of a --mitsuba render (default 64)")
     render.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     render.set_defaults(run=_render)
 
     select = commands.add_parser("select", help="the smallest NBRDF/latent configuration (chart 3) whose "
                                  "validation render PSNR reaches a target")
     select.add_argument("--data", required=True, help="folder of MERL files")
-    select.add_argument("--target-psnr", required=True, type=float, metavar="DB",
+    select.add_argument("--target-psnr", required=True, type=_decibels, metavar="DB",
                         help="validation render PSNR to reach, in dB")
     select.add_argument("--out", required=True, help="folder for config.json and the selection report (created)")
     select.add_argument("--front", help="a chart-3 JSON (docs/charts/chart3_capacity.json): choose from its "
                         "measurements, train nothing")
     select.add_argument("--config", help="without --front: JSON training config of the candidates "
                         "(default: FreNBRDF with the sweeps' short training)")
-    select.add_argument("--epochs", type=int, help="without --front: training epochs per candidate")
+    select.add_argument("--epochs", type=_positive_count, help="without --front: training epochs per candidate")
+    select.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files "
+                        "(they are kept)")
     select.add_argument("--json", action="store_true", help="print the selection as JSON")
     select.add_argument("--quiet", action="store_true", help="no progress bars")
     select.set_defaults(run=_select)
@@ -422,7 +477,8 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
                      "space, for editing), full (then the NBRDF's weights; the default: charts 8–8c)")
-    rec.add_argument("--width", type=int, metavar="N", help="with --refine full: widen the NBRDF to at least N hidden "
+    rec.add_argument("--width", type=_nbrdf_width, metavar="N",
+                     help="with --refine full: widen the NBRDF to at least N hidden "
                      "units per layer before refining its weights (default 64; wider: more fidelity for more "
                      "time)")
     rec.add_argument("--reciprocal", action="store_true", help="with --refine full: keep the NBRDF reciprocal even "
@@ -455,7 +511,7 @@ def build_parser() -> argparse.ArgumentParser:
     spectrum.add_argument("--variant", choices=sorted(FREQUENCY_VARIANTS), default="tone",
                           help="the L_fre settings the spectra are taken at (default tone: ln(1 + f), fitted to the "
                           "measured nodes only; docs/frequency.md)")
-    spectrum.add_argument("--lmax", type=int, help="band limit (default: the variant's, 49)")
+    spectrum.add_argument("--lmax", type=_lmax, help="band limit (default: the variant's, 49)")
     spectrum.add_argument("--overwrite", action="store_true", help="replace --out even if it holds other files")
     spectrum.add_argument("--json", action="store_true", help="print the band summaries as JSON")
     spectrum.set_defaults(run=_spectrum)
@@ -463,10 +519,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo = commands.add_parser("demo", help="the main job: synthesise data, train all methods, evaluate, report")
     demo.add_argument("--out", default="frenbrdf-demo", help="report folder (default frenbrdf-demo)")
     demo.add_argument("--data", help="folder of MERL files instead of the synthetic bank")
-    demo.add_argument("--epochs", type=int, help="training epochs per method (default: the demo's)")
+    demo.add_argument("--epochs", type=_positive_count, help="training epochs per method (default: the demo's)")
     demo.add_argument("--augmentation", choices=sorted(AUGMENTATION), default="augmented",
                       help="what the batches hold beyond the tables (default: augmented, mixes and colour gains; "
                       "paper: the tables only)")
+    demo.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files (they "
+                      "are kept); an earlier demo's report folder is replaced without it")
     demo.add_argument("--quiet", action="store_true", help="no progress bars")
     demo.set_defaults(run=_demo)
     return parser
@@ -479,6 +537,8 @@ def main(argv: list[str] | None = None) -> int:
         return args.run(args)
     except (ValueError, OSError, TrainingDiverged) as error:  # bad input: a clear message, not a traceback
         parser.exit(2, f"frenbrdf {args.command}: error: {error}\n")
+    except KeyboardInterrupt:  # Ctrl-C: one line; every output is written atomically, so nothing is left half-written
+        parser.exit(130, f"frenbrdf {args.command}: interrupted\n")
     except RuntimeError as error:
         if not str(error).startswith("Symlink loop"):  # pathlib raises this for a link loop before Python 3.13
             raise

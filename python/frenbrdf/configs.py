@@ -12,6 +12,9 @@ import numbers
 import types
 import typing
 
+#: The largest seed (2³² − 1): every generator the package seeds (numpy's, torch's) accepts it, and offsets added to it.
+MAX_SEED = (1 << 32) - 1
+
 
 def to_dict(config) -> dict:
     """A (nested) dataclass as a JSON-ready dict (tuples become lists)."""

@@ -13,8 +13,9 @@ class BsdfFormatError(ValueError):
     """A file does not follow the RGL material database's ``.bsdf`` (``tensor_file``) format.
 
     The message names the file and what was wrong: the magic number or version, the field
-    and byte offset where the file ends early or a size exceeds it, a field's dtype or
-    shape, or that the file is spectral (only RGB files are supported).
+    and byte offset where the file ends early or a size exceeds it (or exceeds the 256 MiB a
+    tensor file may declare), a field's dtype or shape, values that are not reflectance, or
+    that the file is spectral (only RGB files are supported).
     """
 
 

@@ -174,4 +174,9 @@ impl MeasuredBsdf {
     pub fn jacobian(&self) -> bool {
         self.jacobian
     }
+
+    /// The values of the `rgb` field as stored, `(phi_i, theta_i, 3, ny, nx)` flattened.
+    pub fn rgb(&self) -> &[f32] {
+        self.rgb.data()
+    }
 }

@@ -11,12 +11,14 @@
 //!            u64 byte offset of the data in the file, rank × u64 shape
 //! ```
 //!
-//! Each field's data is its elements in C order at its offset. The whole file is read
-//! into memory once; every count, size and offset it states is checked, with checked
-//! arithmetic, against the file's length before anything is allocated for it.
+//! Each field's data is its elements in C order at its offset. The header is read and
+//! checked first: every count, size and offset it states is checked, with checked
+//! arithmetic, against the file's length and against [`MAX_BYTES`] before anything is
+//! allocated for it. Only then are the bytes the fields declare read, so that any file
+//! named `.bsdf` (a disk image, a sparse file of 20 GB) costs a few reads to refuse.
 
 use std::fs::File;
-use std::io::{ErrorKind, Read};
+use std::io::{BufReader, ErrorKind, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -25,6 +27,12 @@ pub const MAGIC: &[u8; 12] = b"tensor_file\0";
 pub const VERSION: [u8; 2] = [1, 0];
 /// Bytes before the first field's header: magic, version, field count.
 pub const PREAMBLE_BYTES: usize = 12 + 2 + 4;
+/// The most bytes a tensor file may declare, header and data: 256 MiB. The RGL database's
+/// RGB files are about 1 MB and its spectral ones a few tens of MB; a header that declares
+/// more is refused before anything is read, so a stray file never fills memory.
+pub const MAX_BYTES: u64 = 256 << 20;
+/// The most fields a tensor file may declare (the RGL files have about ten).
+pub const MAX_FIELDS: u32 = 4096;
 
 /// Element types, numbered as the format numbers them (0 is invalid).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -120,22 +128,43 @@ pub struct TensorFile {
 }
 
 impl TensorFile {
-    /// Reads and parses the file at `path`.
+    /// Reads and parses the file at `path`: the header first, checked, then only the
+    /// bytes its fields declare (at most [`MAX_BYTES`]).
     pub fn read(path: &Path) -> Result<TensorFile> {
-        let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
         let metadata = file.metadata().map_err(|e| Error::io(path, e))?;
         if metadata.is_dir() {
             return Err(Error::io(path, std::io::Error::from(ErrorKind::IsADirectory)));
         }
-        // The length is only a capacity hint: reading stops at the real end of the file.
-        let mut bytes = Vec::with_capacity(usize::try_from(metadata.len()).unwrap_or(0));
-        file.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
-        TensorFile::parse(path, bytes)
+        let mut reader = BufReader::new(file);
+        let fields = parse_header(path, &mut reader, metadata.len())?;
+        // Checked by parse_header: within the file and at most MAX_BYTES.
+        let end = data_end(&fields);
+        let mut file = reader.into_inner();
+        file.seek(SeekFrom::Start(0)).map_err(|e| Error::io(path, e))?;
+        let mut bytes = Vec::with_capacity(end);
+        file.take(end as u64)
+            .read_to_end(&mut bytes)
+            .map_err(|e| Error::io(path, e))?;
+        if bytes.len() < end {
+            return Err(Error::bsdf_format(
+                path,
+                format!(
+                    "truncated while being read: its fields end at byte {end}, but only {} bytes could be read",
+                    bytes.len()
+                ),
+            ));
+        }
+        Ok(TensorFile {
+            path: path.to_path_buf(),
+            bytes,
+            fields,
+        })
     }
 
     /// Parses the bytes of a tensor file; `path` only names the file in errors.
     pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<TensorFile> {
-        let fields = parse_header(path, &bytes)?;
+        let fields = parse_header(path, &mut bytes.as_slice(), bytes.len() as u64)?;
         Ok(TensorFile {
             path: path.to_path_buf(),
             bytes,
@@ -195,16 +224,31 @@ impl TensorFile {
     }
 }
 
-/// Reads the header, checking every field against the file's length.
-fn parse_header(path: &Path, bytes: &[u8]) -> Result<Vec<Field>> {
-    let mut cursor = Cursor { path, bytes, at: 0 };
+/// The byte just past the last field's data (0 without fields).
+fn data_end(fields: &[Field]) -> usize {
+    fields
+        .iter()
+        .map(|field| field.offset + field.byte_len)
+        .max()
+        .unwrap_or(0)
+}
+
+/// Reads the header from `source`, a file of `len` bytes, checking every field against
+/// the file's length and [`MAX_BYTES`].
+fn parse_header(path: &Path, source: &mut impl Read, len: u64) -> Result<Vec<Field>> {
+    let mut cursor = Cursor {
+        path,
+        source,
+        len,
+        at: 0,
+    };
     let magic = cursor.take(MAGIC.len(), "the magic number")?;
     if magic != MAGIC {
         return Err(Error::bsdf_format(
             path,
             format!(
                 "not a tensor file: starts with {:?}, expected {:?}",
-                String::from_utf8_lossy(magic),
+                String::from_utf8_lossy(&magic),
                 String::from_utf8_lossy(MAGIC)
             ),
         ));
@@ -220,6 +264,12 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Vec<Field>> {
         ));
     }
     let n_fields = cursor.u32("the field count")?;
+    if n_fields > MAX_FIELDS {
+        return Err(Error::bsdf_format(
+            path,
+            format!("declares {n_fields} fields; a tensor file frenbrdf reads has at most {MAX_FIELDS}"),
+        ));
+    }
 
     // All headers first, so that a file cut short in its header says so; nothing is
     // allocated by the stated count, as each header is read before it is stored.
@@ -228,8 +278,12 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Vec<Field>> {
         let what = |part: &str| format!("{part} of field {index} (of {n_fields})");
         let name_len = cursor.u16(&what("the name length"))? as usize;
         let name = cursor.take(name_len, &what("the name"))?;
-        let name = String::from_utf8(name.to_vec())
-            .map_err(|_| Error::bsdf_format(path, format!("the name of field {index} is not UTF-8: {name:?}")))?;
+        let name = String::from_utf8(name).map_err(|e| {
+            Error::bsdf_format(
+                path,
+                format!("the name of field {index} is not UTF-8: {:?}", e.as_bytes()),
+            )
+        })?;
         let rank = cursor.u16(&format!("the rank of field `{name}`"))? as usize;
         let code = cursor.u8(&format!("the dtype of field `{name}`"))?;
         let dtype = Dtype::from_code(code).ok_or_else(|| {
@@ -252,16 +306,9 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Vec<Field>> {
 
     let mut fields = Vec::with_capacity(headers.len());
     for (name, dtype, offset, shape) in headers {
-        let beyond = |detail: String| {
-            Error::bsdf_format(
-                path,
-                format!(
-                    "field `{name}` ({} {shape:?} at byte offset {offset}) {detail}, but the file is {} bytes",
-                    dtype.name(),
-                    bytes.len()
-                ),
-            )
-        };
+        let field = format!("field `{name}` ({} {shape:?} at byte offset {offset})", dtype.name());
+        let beyond =
+            |detail: String| Error::bsdf_format(path, format!("{field} {detail}, but the file is {len} bytes"));
         let elements = shape
             .iter()
             .try_fold(1u64, |product, &n| product.checked_mul(n))
@@ -272,12 +319,21 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Vec<Field>> {
         let end = offset
             .checked_add(byte_len)
             .ok_or_else(|| beyond(format!("claims {elements} elements ({byte_len} bytes), past 2^64")))?;
-        if end > bytes.len() as u64 {
+        if end > len {
             return Err(beyond(format!(
                 "claims {elements} elements ({byte_len} bytes) ending at byte {end}"
             )));
         }
-        // `end` lies within the file, so every size below fits in a usize.
+        if end > MAX_BYTES {
+            return Err(Error::bsdf_format(
+                path,
+                format!(
+                    "{field} claims {elements} elements ({byte_len} bytes) ending at byte {end}, past the \
+                     {MAX_BYTES} bytes (256 MiB) frenbrdf reads of a tensor file (the RGL files are a few MB)"
+                ),
+            ));
+        }
+        // `end` is at most MAX_BYTES, so every size below fits in a usize.
         fields.push(Field {
             name,
             dtype,
@@ -289,28 +345,44 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Vec<Field>> {
     Ok(fields)
 }
 
-/// Reads the header front to back, naming what is missing when the file ends early.
-struct Cursor<'a> {
+/// Reads the header front to back from a file of `len` bytes, naming what is missing when
+/// the file ends early.
+struct Cursor<'a, R> {
     path: &'a Path,
-    bytes: &'a [u8],
-    at: usize,
+    source: R,
+    len: u64,
+    at: u64,
 }
 
-impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8]> {
-        let available = self.bytes.len() - self.at;
-        if n > available {
+impl<R: Read> Cursor<'_, R> {
+    /// The next `n` bytes (`n` < 2^20: a name or a shape at most).
+    fn take(&mut self, n: usize, what: &str) -> Result<Vec<u8>> {
+        let truncated = |at: u64, len: u64| {
+            Error::bsdf_format(
+                self.path,
+                format!("truncated: {what} needs {n} bytes at byte offset {at}, but the file is {len} bytes"),
+            )
+        };
+        let end = self.at + n as u64;
+        if end > self.len {
+            return Err(truncated(self.at, self.len));
+        }
+        if end > MAX_BYTES {
             return Err(Error::bsdf_format(
                 self.path,
                 format!(
-                    "truncated: {what} needs {n} bytes at byte offset {}, but the file is {} bytes",
-                    self.at,
-                    self.bytes.len()
+                    "the header runs past byte {MAX_BYTES} (256 MiB) at {what}: more than frenbrdf reads of a \
+                     tensor file (the RGL files are a few MB)"
                 ),
             ));
         }
-        let taken = &self.bytes[self.at..self.at + n];
-        self.at += n;
+        let mut taken = vec![0; n];
+        self.source.read_exact(&mut taken).map_err(|e| match e.kind() {
+            // The file shrank since its length was read.
+            ErrorKind::UnexpectedEof => truncated(self.at, self.at),
+            _ => Error::io(self.path, e),
+        })?;
+        self.at = end;
         Ok(taken)
     }
 
@@ -382,6 +454,8 @@ pub fn f32_bytes(values: &[f32]) -> Vec<u8> {
 
 #[cfg(test)]
 mod tests {
+    use std::os::unix::fs::FileExt;
+
     use super::*;
 
     fn sample_fields() -> (Vec<f32>, Vec<u8>) {
@@ -551,15 +625,96 @@ mod tests {
         bytes[offset_at..offset_at + 8].copy_from_slice(&(u64::MAX - 4).to_le_bytes());
         assert!(format_message(parse(bytes)).contains("past 2^64"));
 
-        // A field count of 2^32 − 1 with three fields present: fails at the fourth.
+        // A field count of 2^32 − 1 is refused as such; one of 4 with three fields present
+        // fails at the fourth.
         let mut bytes = sample_file();
         bytes[14..18].copy_from_slice(&u32::MAX.to_le_bytes());
+        let message = format_message(parse(bytes));
+        assert!(message.contains("declares 4294967295 fields"), "{message}");
+        let mut bytes = sample_file();
+        bytes[14..18].copy_from_slice(&4u32.to_le_bytes());
         bytes.truncate(field_header_offset(3));
         let message = format_message(parse(bytes));
         assert!(
-            message.contains("truncated: the name length of field 3 (of 4294967295)"),
+            message.contains("truncated: the name length of field 3 (of 4)"),
             "{message}"
         );
+    }
+
+    /// A file of `len` bytes (sparse: nothing is written past `head`) starting with `head`.
+    fn sparse_file(folder: &Path, name: &str, head: &[u8], len: u64) -> PathBuf {
+        let path = folder.join(name);
+        std::fs::write(&path, head).unwrap();
+        File::options().write(true).open(&path).unwrap().set_len(len).unwrap();
+        path
+    }
+
+    fn read_message(path: &Path) -> String {
+        match TensorFile::read(path) {
+            Err(Error::BsdfFormat { path: named, message }) => {
+                assert_eq!(named, path);
+                message
+            }
+            other => panic!("expected a BsdfFormat error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn large_files_are_refused_from_their_header() {
+        // 20 GB of zeros, random bytes, and a valid header declaring 16 GB: each is refused
+        // after reading its header (a whole-file read would abort on the allocation).
+        let folder = tempfile::tempdir().unwrap();
+        let huge = 20 << 30;
+        let zeros = sparse_file(folder.path(), "zeros.bsdf", &[], huge);
+        assert!(read_message(&zeros).contains("not a tensor file"));
+        let noise: Vec<u8> = (0..4096u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect();
+        let noise = sparse_file(folder.path(), "noise.bsdf", &noise, huge);
+        assert!(read_message(&noise).contains("not a tensor file"));
+
+        let mut header = sample_file();
+        let shape_at = field_header_offset(1) - 3 * 8;
+        for (k, n) in [1u64 << 32, 1, 1].iter().enumerate() {
+            header[shape_at + 8 * k..shape_at + 8 * k + 8].copy_from_slice(&n.to_le_bytes());
+        }
+        let declares = sparse_file(folder.path(), "declares.bsdf", &header, huge);
+        let message = read_message(&declares);
+        assert!(
+            message.contains("field `values`") && message.contains(&format!("past the {MAX_BYTES} bytes")),
+            "{message}"
+        );
+
+        // A header longer than MAX_BYTES: empty fields of rank 2^16 − 1 (half a MB of
+        // shape each, zeros the sparse file reads as), written where each one starts.
+        let mut preamble = Vec::from(&MAGIC[..]);
+        preamble.extend_from_slice(&VERSION);
+        preamble.extend_from_slice(&MAX_FIELDS.to_le_bytes());
+        let long = sparse_file(folder.path(), "long.bsdf", &preamble, huge);
+        let file = File::options().write(true).open(&long).unwrap();
+        let field_len = 2 + 4 + 2 + 1 + 8 + 8 * u16::MAX as u64;
+        for index in 0..=MAX_BYTES / field_len {
+            let mut header = 4u16.to_le_bytes().to_vec();
+            header.extend_from_slice(format!("{index:04}").as_bytes());
+            header.extend_from_slice(&u16::MAX.to_le_bytes());
+            header.push(Dtype::UInt8 as u8);
+            header.extend_from_slice(&0u64.to_le_bytes());
+            file.write_all_at(&header, PREAMBLE_BYTES as u64 + index * field_len)
+                .unwrap();
+        }
+        let message = read_message(&long);
+        assert!(
+            message.contains(&format!("the header runs past byte {MAX_BYTES}")),
+            "{message}"
+        );
+
+        // A valid file with a gigabyte of anything after its data reads: only the data
+        // are read.
+        let bytes = sample_file();
+        let padded = sparse_file(folder.path(), "padded.bsdf", &bytes, 1 << 30);
+        let file = TensorFile::read(&padded).unwrap();
+        assert_eq!(file.f32_values("values", 3).unwrap().1, sample_fields().0);
+        assert!(file.bytes.len() <= bytes.len());
     }
 
     #[test]

@@ -234,6 +234,11 @@ impl Interpolant {
         })
     }
 
+    /// The values as stored, `[slice][channel][y][x]`.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
     pub fn axes(&self) -> &ParamAxes {
         &self.axes
     }

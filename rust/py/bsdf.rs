@@ -83,6 +83,12 @@ impl BsdfMeasurement {
         let values: Vec<f64> = self.inner.phi_i().iter().map(|&v| v as f64).collect();
         to_numpy(py, values.len(), values)
     }
+    /// The values of the `rgb` field as stored (float32, flattened; its shape is in `fields`).
+    #[getter]
+    fn rgb<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        let values = self.inner.rgb().to_vec();
+        to_numpy(py, values.len(), values)
+    }
     /// Every tensor of the file: `{name: (dtype, shape)}`, dtype named as numpy names it.
     #[getter]
     fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

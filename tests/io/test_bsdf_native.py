@@ -268,7 +268,7 @@ def test_absurd_sizes_do_not_allocate(tmp_path):
     with pytest.raises(BsdfFormatError, match=r"field `vndf` .* claims 1152921504606846976 elements \(4611686018427387904 bytes\)"):
         BsdfMeasurement.read(write(tmp_path, huge))
     many = good[:14] + struct.pack("<I", 2**32 - 1) + good[18:]
-    with pytest.raises(BsdfFormatError, match=r"of field \d+ \(of 4294967295\)|unknown dtype"):
+    with pytest.raises(BsdfFormatError, match=r"declares 4294967295 fields; a tensor file frenbrdf reads has at most 4096"):
         BsdfMeasurement.read(write(tmp_path, many, "many.bsdf"))
 
 

@@ -76,8 +76,21 @@ class Split:
         return {key: list(value) if isinstance(value, tuple) else value for key, value in asdict(self).items()}
 
     @classmethod
-    def from_json(cls, data: dict) -> Split:
-        return cls(tuple(data["train"]), tuple(data["val"]), tuple(data["test"]), int(data["seed"]))
+    def from_json(cls, data: dict, where: str = "split") -> Split:
+        """The inverse of :meth:`to_json`, checked: three lists of material names and an integer seed (``where``
+        names the source in messages)."""
+        if not isinstance(data, dict):
+            raise ValueError(f"{where} must be a JSON object, got {type(data).__name__}")
+        parts = {}
+        for key in ("train", "val", "test"):
+            names = data.get(key)
+            if not isinstance(names, (list, tuple)) or not all(isinstance(name, str) for name in names):
+                raise ValueError(f"{where}: {key} must be a list of material names, got {names!r:.80}")
+            parts[key] = tuple(names)
+        seed = data.get("seed")
+        if isinstance(seed, bool) or not isinstance(seed, int):
+            raise ValueError(f"{where}: seed must be an integer, got {seed!r:.80}")
+        return cls(**parts, seed=seed)
 
 
 def split_materials(names, seed: int, fractions: tuple[float, float, float] = (0.7, 0.1, 0.2),

@@ -48,7 +48,8 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from ..io.merl import write_merl
+from ..io.merl import FILE_BYTES, write_merl
+from ..io.outputs import OutputFolder, check_free_space
 from ..io.paths import input_file
 from ..models.nbrdf import MAX_WIDTH, NBRDF, nbrdf_forward
 from ..models.nbrdf import nbrdf_merl_table as _write_table
@@ -58,6 +59,9 @@ Layer = tuple[np.ndarray, np.ndarray]
 
 #: Input size (H and D) and output size (RGB) of an NBRDF.
 N_INPUTS, N_OUTPUTS = 6, 3
+
+#: The most links a weight file may hold (a Keras NBRDF holds about a dozen): a larger file is not one.
+MAX_ENTRIES = 10_000
 
 _DENSE_GROUP = re.compile(r"dense_(\d+)")
 # Rows evaluated at once: small blocks stay in cache (and bound the memory).
@@ -84,21 +88,68 @@ def load_keras_nbrdf(path: str | os.PathLike) -> list[Layer]:
     FileNotFoundError
         ``path`` does not exist.
     ValueError
-        Not an HDF5 file or truncated; no Dense layers; a missing kernel or bias;
+        Not an HDF5 file or truncated; an external link, data kept in other files, or a soft
+        link that does not resolve (:func:`_check_structure`); no Dense layers; a missing kernel or bias;
         weights in a layer that is not Dense; shapes that do not chain from 6 inputs to
         3 outputs; a NaN or infinite weight. The message names the file and the layer.
     """
     path = input_file(path, "NBRDF weight file")
     try:
         with h5py.File(path, "r") as file:
+            _check_structure(file, path)
             layers = _read_dense_layers(file, path)
     except (FileNotFoundError, IsADirectoryError, PermissionError):
         raise
     except OSError as error:
         # h5py reports a wrong signature or a short file as a plain OSError.
         raise ValueError(f"{path}: not a readable HDF5 file (not HDF5, or truncated): {error}") from error
+    except ValueError as error:
+        if str(path) in str(error):
+            raise
+        raise ValueError(f"{path}: not a readable NBRDF weight file ({error})") from None
+    except (KeyError, RuntimeError, TypeError) as error:
+        # h5py's errors for what HDF5 allows but a weight file never holds (an unsupported dtype, say).
+        raise ValueError(f"{path}: not a readable NBRDF weight file ({type(error).__name__}: {error})") from None
     _check_layers(layers, path)
     return [layer for _, layer in layers]
+
+
+def _check_structure(file: h5py.File, path: Path) -> None:
+    """Walks every link of the file before any layer is read; a ValueError names the first bad one.
+
+    Refused: an external link, and a dataset whose data lie in other files (external storage, a
+    virtual dataset), which would make reading this file read others; a soft link that does not
+    resolve (dangling, or a loop of soft links), which is damage; more than :data:`MAX_ENTRIES`
+    links (a Keras NBRDF holds a dozen). Soft links that resolve are allowed; groups reached twice
+    through hard links are walked once.
+    """
+    seen, pending, count = set(), [file], 0
+    while pending:
+        group = pending.pop()
+        for name in group:
+            count += 1
+            if count > MAX_ENTRIES:
+                raise ValueError(f"{path}: more than {MAX_ENTRIES:,} entries; a Keras NBRDF weight file holds a few "
+                                 "dense_<n> groups")
+            where = f"{group.name.rstrip('/')}/{name}"
+            link = group.get(name, getlink=True)
+            if isinstance(link, h5py.ExternalLink):
+                raise ValueError(f"{path}: {where} is an external link to {link.filename}:{link.path}; frenbrdf "
+                                 "reads nothing outside the file it is given")
+            try:
+                item = group[name]
+            except (KeyError, RuntimeError) as error:  # RuntimeError: "too many links", a loop
+                kind = "a loop of soft links" if isinstance(error, RuntimeError) else "a link to nothing"
+                target = f" to {link.path}" if isinstance(link, h5py.SoftLink) else ""
+                raise ValueError(f"{path}: {where} is {kind}{target}, which does not resolve") from None
+            if isinstance(link, h5py.SoftLink):
+                continue  # its target is reached through hard links as well
+            if isinstance(item, h5py.Dataset) and (item.is_virtual or item.external):
+                raise ValueError(f"{path}: dataset {where} keeps its data in other files (external storage or a "
+                                 "virtual dataset); frenbrdf reads nothing outside the file it is given")
+            if isinstance(item, h5py.Group) and item.id not in seen:
+                seen.add(item.id)
+                pending.append(item)
 
 
 def _read_dense_layers(file: h5py.File, path: Path) -> list[tuple[str, Layer]]:
@@ -242,7 +293,7 @@ def nbrdf_merl_table(layers: list[Layer]) -> np.ndarray:
 
 
 def import_nbrdf(weight_paths: Iterable[str | os.PathLike], out_dir: str | os.PathLike, *,
-                 progress: bool = True) -> list[Path]:
+                 overwrite: bool = False, progress: bool = True) -> list[Path]:
     """Converts NBRDF weight files to MERL files ``out_dir/<stem>.binary``.
 
     Every weight file is read and checked before anything is written, so one bad file
@@ -253,8 +304,10 @@ def import_nbrdf(weight_paths: Iterable[str | os.PathLike], out_dir: str | os.Pa
     weight_paths
         Keras ``.h5`` weight files (see :func:`load_keras_nbrdf`).
     out_dir
-        Destination folder, created if needed. Existing files of the same name are
-        replaced (each atomically).
+        Destination folder (the output rule of :mod:`frenbrdf.io.outputs`): new, empty, or an earlier
+        import's, which grows; the files are moved in once all are written, each atomically.
+    overwrite
+        Replace a file an earlier import wrote, and write beside the user's files (never replacing one).
     progress
         Show a progress bar on stderr.
 
@@ -282,14 +335,15 @@ def import_nbrdf(weight_paths: Iterable[str | os.PathLike], out_dir: str | os.Pa
         listed = "; ".join(f"{stem}: {', '.join(map(str, group))}" for stem, group in clashes.items())
         raise ValueError(f"weight files with the same name would write the same output file ({listed})")
 
+    out = OutputFolder.claim(out_dir, command="import-nbrdf", inputs=paths, overwrite=overwrite, additive=True)
+    names = [f"{path.stem}.binary" for path in paths]
+    out.check_names(names)
+    check_free_space(out.target, len(names) * FILE_BYTES, f"{len(names)} MERL files")
     networks = [load_keras_nbrdf(path) for path in paths]
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    written = []
-    bar = tqdm(zip(paths, networks), total=len(paths), desc="import-nbrdf", unit="material", disable=not progress)
-    for path, layers in bar:
-        target = out_dir / f"{path.stem}.binary"
-        write_merl(target, nbrdf_merl_table(layers))
-        written.append(target)
-    return written
+    with out.staged() as staging:
+        bar = tqdm(zip(names, networks), total=len(paths), desc="import-nbrdf", unit="material",
+                   disable=not progress)
+        for name, layers in bar:
+            write_merl(staging / name, nbrdf_merl_table(layers))
+    return [out.path / name for name in names]

@@ -27,14 +27,13 @@ from __future__ import annotations
 import colorsys
 import json
 import os
-import shutil
 from pathlib import Path
 
 import numpy as np
 
 from ..io.atomic import write_text
-from ..io.merl import write_merl
-from ..io.paths import check_output_folder, replace_folder, staging_folder
+from ..io.merl import FILE_BYTES, write_merl
+from ..io.outputs import OutputFolder, check_free_space
 from .analytic import (
     METALS,
     MIN_ROUGHNESS,
@@ -225,6 +224,16 @@ def draw_material(rng: np.random.Generator, kind: str | None = None, name: str =
     return AnalyticMaterial(name=name.format(label=label, kind=kind), **params)
 
 
+#: The most materials a bank holds (each MERL file is 35 MB: 10,000 of them are 350 GB).
+MAX_BANK = 10_000
+
+
+def check_bank_size(n) -> None:
+    """Refuses a bank size outside 1 … :data:`MAX_BANK` before anything is drawn."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_BANK:
+        raise ValueError(f"a material bank holds 1 … {MAX_BANK:,} materials, got {n!r}")
+
+
 def material_bank(n: int = 100, seed: int = 0, mix: str = "default") -> list[AnalyticMaterial]:
     """A deterministic bank of ``n`` analytic materials.
 
@@ -237,10 +246,9 @@ def material_bank(n: int = 100, seed: int = 0, mix: str = "default") -> list[Ana
     Raises
     ------
     ValueError
-        ``n < 1``, or a ``mix`` not in :data:`MIXES`.
+        ``n`` outside 1 … :data:`MAX_BANK`, or a ``mix`` not in :data:`MIXES`.
     """
-    if n < 1:
-        raise ValueError(f"a material bank needs n >= 1 materials, got {n}")
+    check_bank_size(n)
     if mix not in MIXES:
         raise ValueError(f"mix must be one of {tuple(MIXES)}, got {mix!r}")
     rng = np.random.default_rng(seed)
@@ -258,10 +266,10 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: 
     """Writes :func:`material_bank` ``(n, seed, mix)`` as MERL files and a manifest.
 
     Each material becomes ``out_dir / f"{name}.binary"``; ``out_dir / "bank.json"`` records
-    ``n``, ``seed``, ``mix`` and every material's parameters. The bank is written into a hidden
-    folder beside ``out_dir`` and put in place whole (:func:`frenbrdf.io.paths.replace_folder`):
-    an earlier bank there (its manifest and only its files) is replaced, never mixed with this
-    one; any other non-empty folder is refused unless ``overwrite``.
+    ``n``, ``seed``, ``mix`` and every material's parameters. The folder follows the output rule of
+    :mod:`frenbrdf.io.outputs`: an earlier bank there is replaced, never mixed with this one; a folder
+    holding anything else is refused unless ``overwrite`` (the user's entries are then kept). The size
+    and the free disk space are checked before anything is drawn.
 
     Parameters
     ----------
@@ -270,7 +278,7 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: 
     n, seed, mix
         Passed to :func:`material_bank`.
     overwrite
-        Replace ``out_dir`` even if it holds files that are not an earlier bank's (they are deleted).
+        Write into ``out_dir`` even if it holds entries that are not an earlier bank's (they are kept).
     progress
         Show a progress bar.
 
@@ -282,30 +290,24 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: 
     Raises
     ------
     ValueError
-        ``n < 1``, an unknown ``mix``, or an ``out_dir`` that holds other files (without ``overwrite``).
+        ``n`` outside 1 … :data:`MAX_BANK`, an unknown ``mix``, or an ``out_dir`` that holds other entries
+        (without ``overwrite``).
+    OSError
+        Not enough free disk space.
     """
     from tqdm import tqdm
 
+    check_bank_size(n)
+    out = OutputFolder.claim(out_dir, command="synth", overwrite=overwrite, option="out_dir")
+    check_free_space(out.target, n * FILE_BYTES, f"{n} MERL files")
     bank = material_bank(n, seed, mix)
-    out_dir = check_output_folder(out_dir, written_by=MANIFEST_NAME, owned=_bank_files(Path(out_dir)),
-                                  overwrite=overwrite, option="out_dir")
-    staging = staging_folder(out_dir)
-    try:
-        for material in tqdm(bank, desc="synthesising BRDFs", unit="material", disable=not progress):
-            write_merl(staging / f"{material.name}.binary", merl_table(material))
+    names = [f"{material.name}.binary" for material in bank]
+    out.check_names([*names, MANIFEST_NAME])
+    with out.staged() as staging:
+        for material, name in zip(tqdm(bank, desc="synthesising BRDFs", unit="material", disable=not progress),
+                                  names):
+            write_merl(staging / name, merl_table(material))
         manifest = {"n": n, "seed": seed, "mix": mix,
-                    "materials": [{"file": f"{m.name}.binary", **m.to_dict()} for m in bank]}
+                    "materials": [{"file": name, **m.to_dict()} for name, m in zip(names, bank)]}
         write_text(staging / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    replace_folder(staging, out_dir)
-    return [out_dir / f"{m.name}.binary" for m in bank]
-
-
-def _bank_files(folder: Path) -> tuple[str, ...]:
-    """The files an earlier bank's manifest in ``folder`` lists (none if there is no readable one)."""
-    try:
-        return tuple(entry["file"] for entry in json.loads((folder / MANIFEST_NAME).read_text())["materials"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return ()
+    return [out.path / name for name in names]

@@ -24,8 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from .._native import BSDF_HORIZON, BsdfMeasurement
+from ..exceptions import BsdfFormatError
 from ..numerics._arrays import rows
 from .paths import input_file
+from .reflectance import check_reflectance
 
 #: The suffix of the files :func:`read_bsdf` reads.
 SUFFIX = ".bsdf"
@@ -94,20 +96,29 @@ def read_bsdf(path: str | os.PathLike) -> MeasuredBSDF:
         A FIFO, device or link loop rather than a file.
     frenbrdf.BsdfFormatError
         The file is not a ``tensor_file`` v1.0 RGB BSDF (wrong magic or version, truncated, a
-        field of the wrong type or shape, a spectral file); the message names the file and what
-        was wrong.
+        field of the wrong type or shape, declaring more than 256 MiB, a spectral file), or its
+        ``rgb`` values are not reflectance (:func:`~frenbrdf.io.reflectance.check_reflectance`);
+        the message names the file and what was wrong.
     """
     path = input_file(path, ".bsdf measurement")  # a folder or FIFO is named as such, never read
-    return MeasuredBSDF(BsdfMeasurement.read(path))
+    native = BsdfMeasurement.read(path)
+    # The stored values are f·cos θ_o, divided by D/(4σ) where `jacobian` is set: the RGL files hold at most
+    # about 20; one past MAX_REFLECTANCE is no reflectance (and rendering evaluates these values as they are).
+    check_reflectance(native.rgb.reshape(native.fields["rgb"][1]), path, what="values of field rgb",
+                      axes="(phi_i, theta_i, channel, y, x)", error=BsdfFormatError)
+    return MeasuredBSDF(native)
 
 
 def _as_table(measurement: MeasuredBSDF) -> np.ndarray:
-    from .merl import SHAPE, merl_above_horizon
+    from .merl import SHAPE, TABLE_AXES, merl_above_horizon
 
     wi, wo = _bin_directions()
     table = np.full((3, *SHAPE[1:]), -1.0)
     valid = merl_above_horizon()
     table[:, valid] = measurement(wi[valid], wo[valid]).T
+    # What trains and reconstructs: the values at the bins, checked as a MERL file's are.
+    check_reflectance(table, measurement.path, what="values at the MERL bins", axes=TABLE_AXES,
+                      error=BsdfFormatError)
     return table
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from .. import _native
 from ..exceptions import MerlFormatError
 from ..numerics._arrays import rows
+from .reflectance import check_reflectance
 
 #: Table shape: (channel, θ_h, θ_d, φ_d).
 SHAPE = (3, 90, 90, 180)
@@ -32,6 +33,8 @@ N_BINS = SHAPE[1] * SHAPE[2] * SHAPE[3]
 CHANNEL_SCALES = tuple(_native.CHANNEL_SCALES)
 #: Size in bytes of every MERL file.
 FILE_BYTES = _native.FILE_BYTES
+#: The axes of a table, as messages name a bin.
+TABLE_AXES = "(channel, θ_h, θ_d, φ_d)"
 
 
 def read_merl(path: str | os.PathLike, *, physical_units: bool = True) -> np.ndarray:
@@ -55,13 +58,18 @@ def read_merl(path: str | os.PathLike, *, physical_units: bool = True) -> np.nda
     ------
     MerlFormatError
         Wrong header dimensions, a size that does not match the header (e.g. a truncated
-        file) or a NaN/inf value; the message names the file and the problem.
+        file), a NaN/inf value or a reflectance above :data:`~frenbrdf.io.reflectance.MAX_REFLECTANCE`
+        (:func:`~frenbrdf.io.reflectance.check_reflectance`); the message names the file and the problem.
     FileNotFoundError, IsADirectoryError, PermissionError
         As the operating system reports them.
     """
     from .paths import input_file
 
-    return _native.read_merl(os.fspath(input_file(path, "MERL file")), physical_units)
+    path = input_file(path, "MERL file")
+    table = _native.read_merl(os.fspath(path), physical_units)
+    reflectance = table if physical_units else table * np.reshape(CHANNEL_SCALES, (3, 1, 1, 1))
+    check_reflectance(reflectance, path, axes=TABLE_AXES, error=MerlFormatError)
+    return table
 
 
 def write_merl(path: str | os.PathLike, table, *, physical_units: bool = True) -> None:

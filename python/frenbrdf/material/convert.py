@@ -25,7 +25,8 @@ import numpy as np
 from ..io.atomic import atomic_path, save_csv
 from ..io.measured import SUFFIXES, read_table
 from ..io.merl import write_merl
-from ..io.paths import check_output_file, input_file
+from ..io.outputs import check_output_file
+from ..io.paths import input_file
 from .measurements import FORMS, read_measurements
 
 #: What each output suffix holds.
@@ -48,9 +49,7 @@ def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int 
     source = input_file(source, "material file")
     if source.suffix.lower() not in SUFFIXES:
         raise ValueError(f"{source}: convert reads a .bsdf measurement or a MERL .binary file")
-    if Path(dest).exists() and Path(dest).resolve() == source.resolve():
-        raise ValueError(f"output {dest} is the input; name another file")
-    dest = check_output_file(dest, tuple(OUTPUTS), option="output", overwrite=overwrite)
+    dest = check_output_file(dest, tuple(OUTPUTS), option="output", overwrite=overwrite, inputs=(source,))
     dest.parent.mkdir(parents=True, exist_ok=True)  # a folder that can be created (checked above)
     if dest.suffix.lower() == ".binary":
         write_merl(dest, read_table(source))

@@ -27,15 +27,13 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import shutil
-from pathlib import Path
 
 import numpy as np
 
 from ..data.fitting import save_nbrdf
 from ..io.atomic import save_json
 from ..io.merl import write_merl
-from ..io.paths import check_output_folder, replace_folder, staging_folder
+from ..io.outputs import OutputFolder
 from ..models.autoencoder import Model, load_model
 from ..models.reconstruct import Reconstruction, refine_config
 from ..render.renderer import Scene, material_mask, render, save_png
@@ -57,7 +55,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     source
         A CSV or NPZ of samples, or a MERL file (:func:`frenbrdf.material.measurements.read_measurements`).
     out_dir
-        The result folder, created whole or replacing an earlier one whole (:func:`check_out` says which
+        The result folder, created whole or replacing an earlier result (:func:`check_out` says which
         folders may be written; nothing is computed when this one may not).
     model
         ``"pretrained"``, a run folder or a checkpoint.
@@ -74,7 +72,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         ``refine="full"``: keep the refined NBRDF reciprocal even when the samples hold both orders of pairs
         (:attr:`frenbrdf.models.reconstruct.RefineConfig.keep_order` False).
     overwrite
-        Replace ``out_dir`` even when it holds files this function did not write (they are deleted).
+        Write into ``out_dir`` even when it holds entries this function did not write (they are kept).
 
     Returns
     -------
@@ -127,21 +125,21 @@ def truth_metrics(model: Model, result: Reconstruction, measurements: Measuremen
 
 
 def check_out(source: str | os.PathLike, out_dir: str | os.PathLike, model: str | os.PathLike = "pretrained", *,
-              overwrite: bool = False) -> Path:
-    """Where :func:`reconstruct_file` may write, checked before any work (:func:`frenbrdf.io.paths.check_output_folder`):
-    a new or empty folder, or an earlier result folder (``reconstruction.json`` and only its files); never the
-    folder of the input or of the model; another folder only with ``overwrite``."""
+              overwrite: bool = False) -> OutputFolder:
+    """Where :func:`reconstruct_file` may write, checked before any work (:class:`frenbrdf.io.outputs.OutputFolder`):
+    a new or empty folder, or an earlier result folder of ``reconstruct``; never the folder of the input or of
+    the model; a folder holding other entries only with ``overwrite`` (they are kept)."""
     inputs = (source,) if str(model) == "pretrained" else (source, model)
-    return check_output_folder(out_dir, written_by=FILES["report"], owned=tuple(FILES.values()), inputs=inputs,
-                               overwrite=overwrite)
+    out = OutputFolder.claim(out_dir, command="reconstruct", inputs=inputs, overwrite=overwrite)
+    out.check_names(FILES.values())
+    return out
 
 
-def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: dict, report: dict,
+def _write_folder(out: OutputFolder, result: Reconstruction, table: np.ndarray, images: dict, report: dict,
                   spectrum=None) -> None:
-    """Writes the result into a hidden folder beside ``out``, then puts it in place whole, in one rename
-    (:func:`frenbrdf.io.paths.replace_folder`): an earlier folder is replaced whole, never mixed with this one."""
-    staging = staging_folder(out)
-    try:
+    """Writes the result into a hidden folder, then puts it in place (:meth:`OutputFolder.staged`): an earlier
+    result is replaced, never mixed with this one, and nothing else in the folder is touched."""
+    with out.staged() as staging:
         save_nbrdf(staging / FILES["nbrdf"], result.nbrdf)
         write_merl(staging / FILES["merl"], table)
         for name, image in images.items():
@@ -149,7 +147,3 @@ def _write_folder(out: Path, result: Reconstruction, table: np.ndarray, images: 
         if spectrum is not None:
             spectrum.write(staging / FILES["spectrum"])
         save_json(staging / FILES["report"], report)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    replace_folder(staging, out)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -14,6 +13,7 @@ from torch import nn
 
 from ..configs import from_dict
 from ..io import checkpoints
+from ..io.jsonfile import parse_json
 from .encoder import EncoderConfig, EncoderMean, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .mapping import LogRelativeMapping, MappingConfig
@@ -73,7 +73,8 @@ class ModelConfig:
     @classmethod
     def from_checkpoint(cls, checkpoint: dict) -> ModelConfig:
         """The model config saved in a checkpoint (inside its training config)."""
-        return from_dict(cls, json.loads(checkpoint["config"])["model"], "checkpoint model config")
+        training = parse_json(checkpoint["config"], "checkpoint config", "training config")
+        return from_dict(cls, training.get("model"), "checkpoint model config")
 
 
 class AutoEncoder(nn.Module):
@@ -128,7 +129,7 @@ class Model:
         have the shapes the config gives them, and that they are finite. ``source`` names the file in errors.
         """
         try:
-            training = json.loads(checkpoint["config"])
+            training = parse_json(checkpoint["config"], "its training config", "training config", expect=None)
             if not isinstance(training, dict) or not isinstance(training.get("model"), dict):
                 raise ValueError("its training config holds no model settings")
             config = from_dict(ModelConfig, training["model"], "its model config")
@@ -147,7 +148,7 @@ class Model:
             if bad:
                 raise ValueError(f"its weights hold NaN or inf ({', '.join(bad[:3])}): the model is damaged")
             mapping = LogRelativeMapping.from_state(mapping_state)
-        except (KeyError, TypeError, json.JSONDecodeError) as error:
+        except (KeyError, TypeError) as error:
             raise ValueError(f"{source}: not a complete frenbrdf model (missing or wrong {error})") from None
         except ValueError as error:
             raise ValueError(f"{source}: {error}") from None
@@ -241,7 +242,7 @@ def load_model(model: str | os.PathLike) -> Model:
     if not path.exists():
         raise FileNotFoundError(f"model {path} does not exist (give a training run folder, a checkpoint file, a "
                                 "packed model's folder or 'pretrained')")
-    if path.is_dir() and (path / "card.json").is_file():
+    if path.is_dir() and (path / "card.json").exists():  # a FIFO there is refused by the card's reader
         return Model.pretrained(path)
     return Model.load(path)
 

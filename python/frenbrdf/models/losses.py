@@ -314,7 +314,9 @@ class FrequencyTruth:
             rows = slice(i * per_slice, (i + 1) * per_slice)
             slice_valid, slice_values = valid[rows], self.values.from_mapped(mapped[rows].astype(np.float64))
             if not slice_valid.any():
-                raise ValueError(f"θ_h slice {i} holds no valid bin; choose other frequency-loss slices")
+                raise ValueError(f"the material's table holds no valid bin at θ_h index {i}, one of the frequency "
+                                 f"loss's slices ({int(valid.sum()):,} valid bins in all, of {valid.size:,}): a table "
+                                 "this sparse has no spectrum there (MERL marks missing bins with negative values)")
             interpolator, source_bins = self._interpolator(slice_valid)
             grid_values = interpolator.apply(slice_values[source_bins])  # (nlat·nlon, 3)
             if self.config.extension == "zero":
@@ -328,12 +330,15 @@ class FrequencyTruth:
         path = None
         if self.cache_dir is not None and cache_key is not None:
             path = self.cache_dir / f"{cache_key}.npy"
-            if path.exists():
+            expected = (len(self.config.slices), 3, self.sht.n_coefficients)
+            # A regular file of about the right size only: np.load would block on a FIFO, and allocate what a
+            # damaged header declares.
+            if path.is_file() and path.stat().st_size <= 4 * math.prod(expected) + 4096:
                 try:
                     cached = np.load(path, allow_pickle=False)
                     # An entry is used only if it is what this code writes: the shape, float32, finite. A damaged
                     # or poisoned one (a NaN would stop training as if it diverged) is recomputed and replaced.
-                    if cached.shape == (len(self.config.slices), 3, self.sht.n_coefficients) and \
+                    if cached.shape == expected and \
                             cached.dtype == np.float32 and np.all(np.isfinite(cached)):
                         return cached
                 except (OSError, ValueError, EOFError):

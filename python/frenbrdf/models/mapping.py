@@ -1,6 +1,6 @@
 """The log-relative mapping of reflectance, in which every model of the package works:
 
-    y = ln(c + (f + ε) / (f_ref + ε)),     f = (f_ref + ε) · (exp(y) − c) − ε  (clamped to ≥ 0),
+    y = ln(c + (f + ε) / (f_ref + ε)),     f = (f_ref + ε) · (exp(y) − c) − ε  (clamped to 0 … MAX_REFLECTANCE),
 
 with c = 0 (``form="ratio"``, ours) or c = 1 (``form="one_plus_ratio"``, HyperBRDF's),
 
@@ -16,6 +16,7 @@ import numpy as np
 import torch
 
 from ..io.merl import N_BINS, SHAPE, merl_lookup_directions
+from ..io.reflectance import MAX_REFLECTANCE
 
 #: The constant c added to the ratio inside the logarithm, per form.
 FORM_OFFSETS = {"ratio": 0.0, "one_plus_ratio": 1.0}
@@ -138,10 +139,14 @@ class LogRelativeMapping:
         return log(self.offset + (reflectance + self.epsilon) / (reference + self.epsilon))
 
     def inverse(self, mapped, reference):
-        """Mapped values → reflectance, clamped to ≥ 0 (numpy or torch)."""
+        """Mapped values → reflectance, clamped to 0 … :data:`~frenbrdf.io.reflectance.MAX_REFLECTANCE` (numpy or
+        torch): the largest value any reader accepts is the largest a model gives back, whatever it extrapolates."""
         if isinstance(mapped, torch.Tensor):
-            return ((reference + self.epsilon) * (torch.exp(mapped) - self.offset) - self.epsilon).clamp_min(0.0)
-        return np.maximum((reference + self.epsilon) * (np.exp(mapped) - self.offset) - self.epsilon, 0.0)
+            linear = (reference + self.epsilon) * (torch.exp(mapped) - self.offset) - self.epsilon
+            return linear.clamp(0.0, MAX_REFLECTANCE)
+        with np.errstate(over="ignore"):
+            linear = (reference + self.epsilon) * (np.exp(mapped) - self.offset) - self.epsilon
+        return np.clip(linear, 0.0, MAX_REFLECTANCE)
 
     def state(self) -> dict:
         """What the mapping is: f_ref (float32), ε and the offset c."""

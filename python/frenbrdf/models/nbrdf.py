@@ -16,6 +16,7 @@ import numpy as np
 import torch
 
 from ..io.merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz, write_merl
+from ..io.reflectance import MAX_REFLECTANCE  # the largest reflectance a model takes: every reader's limit
 from ..numerics.coords import half_diff_vectors, rusinkiewicz_to_half_diff
 from .mapping import LogRelativeMapping
 
@@ -31,9 +32,6 @@ N_OUTPUTS = 3
 MAX_WIDTH, MAX_LAYERS = 1024, 16
 #: How far from 1 the length of a given direction may be.
 UNIT_TOLERANCE = 1e-3
-#: The largest reflectance (1/sr) a model takes: MERL's grazing spikes reach 10⁵; far larger values overflow the
-#: networks' float32 (the log mapping turns 10³⁰ into a target the refinement overshoots to inf).
-MAX_REFLECTANCE = 1e8
 
 
 @dataclass

@@ -38,7 +38,7 @@ from tqdm.auto import tqdm
 from ..data.folders import list_materials
 from ..io.atomic import save_json, write_text
 from ..io.measured import as_table, read_truth
-from ..io.paths import check_output_folder
+from ..io.outputs import OutputFolder
 from ..models.autoencoder import Model
 from ..models.reconstruct import BUDGETS, refine_config
 from ..presets import method_names
@@ -255,25 +255,27 @@ def run_label(path: Path, method: str = "") -> str:
     return path.parents[1].name if path.parent.name == method else path.parent.name
 
 
-def check_out(out_dir, run_dirs, *, overwrite: bool = False) -> Path:
-    """Where an evaluation may write, checked before any work: a new or empty folder or an earlier evaluation's
-    (holding ``evaluation.json``), writable, not a file, not a run folder; another folder only with ``overwrite``."""
-    return check_output_folder(out_dir, written_by="evaluation.json", inputs=tuple(run_dirs), overwrite=overwrite)
+def check_out(out_dir, run_dirs, *, overwrite: bool = False) -> OutputFolder:
+    """Where an evaluation may write, checked before any work (:class:`frenbrdf.io.outputs.OutputFolder`): a new or
+    empty folder or an earlier evaluation's, not a run folder nor one holding a run; a folder holding other
+    entries only with ``overwrite`` (they are kept)."""
+    out = OutputFolder.claim(out_dir, command="evaluate", inputs=tuple(run_dirs), overwrite=overwrite)
+    out.check_names(["evaluation.json", "evaluation.md"])
+    return out
 
 
 def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig(),
                   materials: EvaluationSet | None = None, overwrite: bool = False) -> dict:
     """Evaluates runs (one per method) on their common test split, or with ``config.all_materials`` on every
-    material of ``data`` they never saw; writes tables and figures to ``out_dir`` (:func:`check_out`).
+    material of ``data`` they never saw; writes tables and figures to ``out_dir`` (:func:`check_out`; or an
+    :class:`~frenbrdf.io.outputs.OutputFolder` claimed already) once everything is computed.
 
     ``materials``: the materials, when chosen already (see :func:`load_runs`).
     """
     start = time.perf_counter()
-    check_out(out_dir, run_dirs, overwrite=overwrite)
+    out = out_dir if isinstance(out_dir, OutputFolder) else check_out(out_dir, run_dirs, overwrite=overwrite)
     loaded = load_runs(run_dirs, data, config.max_materials, all_materials=config.all_materials, materials=materials)
     runs, models, names, files = loaded.runs, loaded.models, loaded.test, loaded.files
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(config.seed)
     scene, edit_scene = Scene(resolution=config.resolution), Scene(resolution=config.edit_resolution)
     mask, edit_mask = material_mask(scene), material_mask(edit_scene)
@@ -346,13 +348,15 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         report["refinement"] = {"budget": config.refine, "config": dataclasses.asdict(refinement),
                                 "seconds_per_material": {method: float(np.mean([r["refine_seconds"] for r in rows]))
                                                          for method, rows in per_material.items()}}
-    save_json(out / "evaluation.json", report)
-    write_text(out / "evaluation.md", report_markdown(report))
     edit_pair = (names[pairs[0][0]], names[pairs[0][1]]) if pairs else None
-    write_figures(out, first + hardest, renders, per_material, models, latents[""], edit_pair, edit_truth_linear,
-                  config.weights, config.edit_resolution)
-    spectrum.write(out / "spectrum.png", f"Per-degree power spectra of the {len(names)} evaluated materials (mean) and "
-                   "each method's encoder-only reconstructions; dashed: their error (L_fre variant 'tone')")
+    with out.staged() as staging:
+        save_json(staging / "evaluation.json", report)
+        write_text(staging / "evaluation.md", report_markdown(report))
+        write_figures(staging, first + hardest, renders, per_material, models, latents[""], edit_pair,
+                      edit_truth_linear, config.weights, config.edit_resolution)
+        spectrum.write(staging / "spectrum.png", f"Per-degree power spectra of the {len(names)} evaluated materials "
+                       "(mean) and each method's encoder-only reconstructions; dashed: their error (L_fre variant "
+                       "'tone')")
     return report
 
 
@@ -368,7 +372,7 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     ``data`` that no run of any seed trained or validated on. Everything that can be checked (the
     output folder, every run, the methods of every seed) is checked before anything is computed.
     """
-    check_out(out_dir, run_dirs, overwrite=overwrite)
+    out = check_out(out_dir, run_dirs, overwrite=overwrite)
     runs = [Run(path) for path in run_dirs]
     groups: dict[int, list] = {}
     splits: dict[int, tuple] = {}
@@ -392,11 +396,15 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     materials = (evaluation_set(runs, data, all_materials=True, max_materials=config.max_materials)
                  if config.all_materials else None)
     if len(groups) == 1:
-        return evaluate_runs(next(iter(groups.values())), out_dir, data=data, config=config, materials=materials,
-                             overwrite=True)
-    out = Path(out_dir)
-    reports = {seed: evaluate_runs(group, out / f"seed-{seed}", data=data, config=config, materials=materials,
-                                   overwrite=True) for seed, group in sorted(groups.items())}
+        return evaluate_runs(next(iter(groups.values())), out, data=data, config=config, materials=materials)
+    with out.staged() as staging:
+        return _compare_seeds(runs, groups, staging, data, config, materials)
+
+
+def _compare_seeds(runs: list, groups: dict, staging: Path, data, config: EvaluateConfig, materials) -> dict:
+    """:func:`evaluate_seeds` with several seeds: each evaluated into ``staging/seed-S``, then compared."""
+    reports = {seed: evaluate_runs(group, staging / f"seed-{seed}", data=data, config=config, materials=materials)
+               for seed, group in sorted(groups.items())}
     # A row without a finite value on every seed (editing of a single material) cannot be compared.
     keys = [key for key, _ in table_rows(config.refine)
             if all(np.isfinite(v.get(key, np.nan)) for r in reports.values() for v in r["summary"].values())]
@@ -408,6 +416,6 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
               "seeds": {str(seed): r for seed, r in reports.items()},
               "test_materials": sum(len(r["test_materials"]) for r in reports.values()),
               "seconds": sum(r["seconds"] for r in reports.values())}
-    save_json(out / "evaluation.json", report)
-    write_text(out / "evaluation.md", seeds_markdown(report))
+    save_json(staging / "evaluation.json", report)
+    write_text(staging / "evaluation.md", seeds_markdown(report))
     return report

@@ -7,7 +7,6 @@ trained and measured smallest first until one reaches the target.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass
@@ -17,6 +16,8 @@ from tqdm.auto import tqdm
 
 from ..data.folders import list_materials
 from ..io.atomic import save_json, write_text
+from ..io.jsonfile import read_json
+from ..io.outputs import OutputFolder
 from ..training import TrainConfig
 from .variants import MeasureSettings, SweepCaches, Variant, base_config, capacity_variants, run_variant, storage
 
@@ -50,11 +51,8 @@ def read_front(path: str | os.PathLike) -> dict:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"front file {path} does not exist")
-    try:
-        chart = json.loads(path.read_text())
-    except json.JSONDecodeError as error:
-        raise ValueError(f"{path}: not valid JSON ({error})") from None
-    if not isinstance(chart, dict) or chart.get("chart") != "capacity" or not isinstance(chart.get("rows"), list):
+    chart = read_json(path, "chart-3 file")
+    if chart.get("chart") != "capacity" or not isinstance(chart.get("rows"), list):
         raise ValueError(f"{path}: not a chart-3 (capacity) file; make one with benches/charts/chart_capacity.py")
     needed = ("name", "psnr", "bytes_per_material", "latent_bytes", "config")
     for i, row in enumerate(chart["rows"]):
@@ -62,15 +60,24 @@ def read_front(path: str | os.PathLike) -> dict:
         if missing:
             raise ValueError(f"{path}: row {i} lacks {missing}")
         if not isinstance(row["psnr"], (int, float)) or math.isnan(row["psnr"]):
-            raise ValueError(f"{path}: row {i} ({row['name']}) has no valid PSNR: {row['psnr']!r}")
+            raise ValueError(f"{path}: row {i} ({row['name']!r:.40}) has no valid PSNR: {row['psnr']!r:.40}")
+        for key in ("bytes_per_material", "latent_bytes"):
+            if isinstance(row[key], bool) or not isinstance(row[key], int) or row[key] < 0:
+                raise ValueError(f"{path}: row {i}: {key} must be a whole number ≥ 0, got {row[key]!r:.40}")
+        if not isinstance(row["name"], str) or not isinstance(row["config"], dict):
+            raise ValueError(f"{path}: row {i}: name must be a string and config a JSON object (a training config)")
     if not chart["rows"]:
         raise ValueError(f"{path}: holds no measured configuration")
     return chart
 
 
+#: What ``select`` writes into its folder: the trained candidates and their cache (reused by a rerun) and the reports.
+SELECT_FILES = ("runs", "cache", "config.json", "selection.json", "selection.md")
+
+
 def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfig | None = None,
                   variants: list[Variant] | None = None, measure: MeasureSettings | None = None,
-                  progress: bool = True) -> Selection:
+                  progress: bool = True, overwrite: bool = False) -> Selection:
     """The smallest chart-3 configuration whose validation render PSNR reaches ``target_psnr``.
 
     Candidates go from the smallest material (NBRDF bytes, then latent bytes) to the
@@ -79,7 +86,8 @@ def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfi
     ``base``, default :func:`base_config`) is trained and measured in ``OUT/runs/`` in that
     order until one reaches the target. If one does, ``OUT/config.json`` holds its
     training config (usable by ``frenbrdf train --config``; ``out`` set to ``OUT/run``).
-    Either way ``OUT/selection.{json,md}`` report what was considered.
+    Either way ``OUT/selection.{json,md}`` report what was considered. ``OUT`` follows the output rule of
+    :mod:`frenbrdf.io.outputs` (an earlier selection's folder is reused: its trained candidates are resumed).
     """
     try:
         target = float(target_psnr)
@@ -92,8 +100,9 @@ def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfi
     if front is not None and (base is not None or variants is not None):
         raise ValueError("a base config or candidates apply to training; with a front file nothing is trained")
     chart = read_front(front) if front is not None else None  # a bad file fails before anything is written
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    folder = OutputFolder.claim(out, command="select", inputs=[data, *([front] if front is not None else [])],
+                                overwrite=overwrite)
+    out = folder.begin(SELECT_FILES, keep=("runs", "cache"))  # trained candidates are resumed
 
     if chart is not None:
         considered = by_size(chart["rows"])
@@ -127,6 +136,7 @@ def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfi
     save_json(out / "selection.json", summary)
     report_path = out / "selection.md"
     write_text(report_path, _selection_markdown(summary))
+    folder.finish()
     return Selection(target, chosen is not None, chosen, best, considered, source, config_path, report_path, summary)
 
 

@@ -37,7 +37,8 @@ import torch
 from ..io.atomic import save_csv, save_json
 from ..io.measured import is_bsdf, read_table
 from ..io.merl import N_BINS, merl_bin_angles
-from ..io.paths import check_output_folder, input_file
+from ..io.outputs import OutputFolder
+from ..io.paths import input_file
 from ..models.frequency_fit import slice_directions
 from ..models.losses import SPHERE_AREA, FrequencyLoss, FrequencyLossConfig, FrequencyTruth, frequency_variant
 from ..models.mapping import LogRelativeMapping
@@ -171,11 +172,12 @@ def plot_spectra(powers: dict[str, np.ndarray], path: str | os.PathLike, *, erro
     plt.close(figure)
 
 
-def check_out(out_dir, inputs, *, overwrite: bool = False) -> Path:
-    """Where :func:`spectrum_report` may write, checked before any work: a new or empty folder or an earlier
-    spectrum folder (``spectrum.json`` and only its files), not the folder of an input."""
-    return check_output_folder(out_dir, written_by=FILES["report"], owned=tuple(FILES.values()), inputs=tuple(inputs),
-                               overwrite=overwrite)
+def check_out(out_dir, inputs, *, overwrite: bool = False) -> OutputFolder:
+    """Where :func:`spectrum_report` may write, checked before any work (:class:`frenbrdf.io.outputs.OutputFolder`):
+    a new or empty folder or an earlier spectrum folder, not the folder of an input."""
+    out = OutputFolder.claim(out_dir, command="spectrum", inputs=tuple(inputs), overwrite=overwrite)
+    out.check_names(FILES.values())
+    return out
 
 
 def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None, variant: str = "tone",
@@ -229,12 +231,12 @@ def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None,
                                                             for s in range(len(theta_h))],
                                 "power": error.tolist()} for name, error in errors.items()},
               "files": sorted(FILES.values())}
-    out.mkdir(parents=True, exist_ok=True)
-    save_csv(out / FILES["csv"], rows)
-    save_json(out / FILES["report"], report)
-    plot_spectra(powers, out / FILES["plot"], errors=errors, theta_h=theta_h,
-                 title=f"Per-degree power spectra, L_fre variant '{variant}' ({report['values']}, {config.fit} fit, "
-                       f"lmax {config.lmax})" + (f"; dashed: error against {truth_name}" if truth else ""))
+    with out.staged() as staging:
+        save_csv(staging / FILES["csv"], rows)
+        save_json(staging / FILES["report"], report)
+        plot_spectra(powers, staging / FILES["plot"], errors=errors, theta_h=theta_h,
+                     title=f"Per-degree power spectra, L_fre variant '{variant}' ({report['values']}, {config.fit} "
+                           f"fit, lmax {config.lmax})" + (f"; dashed: error against {truth_name}" if truth else ""))
     return report
 
 

@@ -36,6 +36,7 @@ from tqdm.auto import tqdm
 from ..configs import from_dict, merge, to_dict
 from ..data.folders import list_materials
 from ..io.atomic import save_json
+from ..io.jsonfile import read_json
 from ..render.scoring import FrequencyMetric, reconstruction_rows
 from ..training import TrainConfig, config_for, train
 from .timing import time_training_step
@@ -154,11 +155,11 @@ def run_variant(variant: Variant, base: TrainConfig, work: str | os.PathLike,
     result_path = run_dir / "result.json"
     if result_path.exists():
         try:
-            row = json.loads(result_path.read_text())
+            row = read_json(result_path, "result file")
             if row.get("key") == key and (not measure.timing_steps or "step_ms" in row) and (
                     not measure.lfre or row.get("lfre") is not None):
                 return {**row, "name": variant.name, "axis": variant.axis, "value": variant.value, "seed": cfg.seed}
-        except json.JSONDecodeError:
+        except ValueError:
             pass  # a damaged result is measured again
     cfg.out, cfg.progress = str(run_dir), measure.progress
     cfg.cache_dir = cfg.cache_dir or str(work / "cache")

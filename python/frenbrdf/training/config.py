@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..configs import from_dict, merge, to_dict
+from ..configs import MAX_SEED, from_dict, merge, to_dict
+from ..io.jsonfile import read_json
 from ..io.merl import N_BINS
 from ..models.autoencoder import ModelConfig
 from ..models.losses import LossConfig
@@ -21,6 +21,9 @@ from ..presets import (
     frequency_overrides,
     training_overrides,
 )
+
+#: The largest training config file read (one is about 2 kB).
+MAX_CONFIG_BYTES = 1 << 20
 
 
 def selection_score(entry: dict, rule: str) -> float | None:
@@ -168,6 +171,10 @@ class TrainConfig:
         for name in ("context_samples", "query_samples"):  # drawn per material per step: a table has no more bins
             if int(getattr(self, name)) > N_BINS:
                 problems.append(f"{name} must be ≤ {N_BINS} (the bins of a MERL table), got {getattr(self, name)}")
+        if not 0 <= int(self.seed) <= MAX_SEED:
+            problems.append(f"seed must lie in 0 … {MAX_SEED}, got {self.seed}")
+        if len(self.split) != 3 or not all(0 <= f <= 1 for f in self.split) or not math.isclose(sum(self.split), 1):
+            problems.append(f"split must be three fractions in [0, 1] summing to 1, got {tuple(self.split)}")
         if not 0 < self.lr <= 1:
             problems.append(f"lr must lie in (0, 1], got {self.lr}")
         for name in ("grad_clip", "weight_decay"):
@@ -225,12 +232,14 @@ def config_for(method: str, *, training: str | None = None, augmentation: str | 
 
 def load_config(path: str | os.PathLike, **overrides) -> TrainConfig:
     """A JSON config file (any subset of :class:`TrainConfig`'s keys) over its method's preset."""
-    try:
-        data = json.loads(Path(path).read_text())
-    except json.JSONDecodeError as error:
-        raise ValueError(f"{path}: not valid JSON ({error})") from None
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: a config must be a JSON object, got {type(data).__name__}")
+    data = read_json(path, "training config", max_bytes=MAX_CONFIG_BYTES)
+    if not isinstance(data.get("method", "frenbrdf"), str):
+        raise ValueError(f"{path}: method must be a string, got {data['method']!r}")
     data.update({key: value for key, value in overrides.items() if value is not None})
     base = to_dict(config_for(data.get("method", "frenbrdf")))
-    return from_dict(TrainConfig, merge(base, data), str(path))
+    try:
+        return from_dict(TrainConfig, merge(base, data), str(path))
+    except ValueError as error:  # the dataclasses' own checks do not know the file
+        if str(path) in str(error):
+            raise
+        raise ValueError(f"{path}: {error}") from None

@@ -27,6 +27,7 @@ from ..data.folders import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
 from ..io import checkpoints
 from ..io.atomic import save_json
+from ..io.outputs import OutputFolder
 from ..models.autoencoder import AutoEncoder, Model, load_model
 from ..models.losses import FrequencyLoss
 from ..presets import SELECTION_RULES
@@ -42,30 +43,27 @@ RUN_FILES = ("config.json", "split.json", "mapping.npz", "history.json", "last.p
              "best-psnr.pt")
 
 
-def check_run_folder(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False) -> Path:
-    """Where :func:`train` may write, checked before any work: without ``resume`` a new or empty folder, or with
-    ``overwrite`` any folder (an earlier run's files are then removed before training); with ``resume`` a run
-    folder. Never the data folder, nor a folder holding it."""
-    from ..io.paths import check_output_folder
-
+def check_run_folder(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False) -> OutputFolder:
+    """Where :func:`train` may write, checked before any work (the output rule of :mod:`frenbrdf.io.outputs`):
+    without ``resume`` a new or empty folder; an earlier run's folder, or one holding other entries, only with
+    ``overwrite`` (the earlier run's files are then removed before training, the user's entries kept); with
+    ``resume`` a folder holding ``last.pt``. Never the data folder, nor a folder holding it."""
     if not cfg.out:
         raise ValueError("config.out (the run folder) is empty")
     if not cfg.data:
         raise ValueError("config.data (the folder of MERL files) is empty")
-    run_dir = Path(cfg.out)
-    if resume:
-        if not (run_dir / "last.pt").is_file():
-            raise FileNotFoundError(f"{run_dir} holds no last.pt to resume from")
-        return run_dir
-    check_output_folder(run_dir, written_by="config.json", inputs=(Path(cfg.data).resolve(),), overwrite=True)
-    held = sorted(entry.name for entry in run_dir.iterdir() if not entry.name.startswith(".")) \
-        if run_dir.is_dir() else []
-    if held and not overwrite:
-        what = "a training run" if "config.json" in held else "files"
-        raise ValueError(f"{run_dir} already holds {what} ({', '.join(held[:4])}{' …' * (len(held) > 4)}); "
-                         "continue it with --resume (resume=True), replace it with --overwrite (overwrite=True), or "
-                         "choose another folder")
-    return run_dir
+    inputs = (cfg.data,)
+    if resume:  # the run's own files are written again; nothing else in the folder is touched
+        folder = OutputFolder.claim(cfg.out, command="train", inputs=inputs, overwrite=True)
+        if not (folder.target / "last.pt").is_file():
+            raise FileNotFoundError(f"{cfg.out} holds no last.pt to resume from")
+        return folder
+    folder = OutputFolder.claim(cfg.out, command="train", inputs=inputs, overwrite=overwrite)
+    if folder.earlier and not overwrite:
+        raise ValueError(f"{cfg.out} already holds a training run; continue it with --resume (resume=True), replace "
+                         "it with --overwrite (overwrite=True), or choose another folder")
+    folder.check_names(RUN_FILES)
+    return folder
 
 
 def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, data_cache: dict | None = None) -> Run:
@@ -78,12 +76,13 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     same data, split and mapping read and map the materials once (sweeps of many runs).
     """
     start = time.perf_counter()
-    run_dir = check_run_folder(cfg, resume=resume, overwrite=overwrite)
+    folder = check_run_folder(cfg, resume=resume, overwrite=overwrite)
+    run_dir = folder.target
     files = {path.stem: path for path in list_materials(cfg.data)}
     device = select_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")))
     ranks = Distributed.start(device)
 
-    checkpoint = checkpoints.load(run_dir / "last.pt") if resume else None
+    checkpoint = checked_resume(run_dir, cfg) if resume else None  # a damaged last.pt fails here, before any write
     split = _resumed_split(checkpoint, cfg, files, run_dir) if checkpoint else split_materials(files, cfg.seed,
                                                                                                cfg.split, cfg.holdout)
     # Full batches only (the last partial one is dropped; each epoch reshuffles), so that
@@ -98,10 +97,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
         check_source(cfg, source)
     data = prepare(cfg, split, files, ranks, data_cache, mapping=source and source.mapping)  # bad data fails here
     if ranks.main:
-        run_dir.mkdir(parents=True, exist_ok=True)
         if not resume:  # overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's)
-            for name in RUN_FILES:
-                (run_dir / name).unlink(missing_ok=True)
+            folder.begin(RUN_FILES)
         save_json(run_dir / "config.json", to_dict(cfg))
         save_json(run_dir / "split.json", split.to_json())
         checkpoints.save_mapping(run_dir, data.mapping.state())
@@ -199,6 +196,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
         if cfg.patience and since_best >= cfg.patience:
             break  # early stopping: the selection measure has not improved for `patience` epochs
     bar.close()
+    if ranks.main:
+        folder.finish()
     ranks.barrier()
     return Run(run_dir, seconds=time.perf_counter() - start)
 
@@ -240,6 +239,17 @@ def check_source(cfg: TrainConfig, source: Model):
                        ("decoder_from", "its model config; only the encoder may differ"))
         raise ValueError(f"{field} {getattr(cfg, field)!r}: its model config differs from this run's in "
                          f"{', '.join(differ)}; give this run {rule}")
+
+
+def checked_resume(run_dir: Path, cfg: TrainConfig) -> dict:
+    """The run folder's ``last.pt``, every field a resume restores checked (:func:`checkpoints.load_for_resume`)
+    against the network and optimiser ``cfg`` gives, built on the meta device (nothing allocated, no random
+    numbers drawn)."""
+    with torch.device("meta"):
+        network = AutoEncoder(cfg.model)
+    if cfg.decoder_from:
+        network.decoder.requires_grad_(False)  # as train() freezes it: the optimiser holds the encoder's only
+    return checkpoints.load_for_resume(run_dir / "last.pt", network, make_optimizer(network, cfg))
 
 
 def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Path) -> Split:

@@ -7,12 +7,12 @@ open run folders only through it.
 from __future__ import annotations
 
 import functools
-import json
 import os
 from pathlib import Path
 
 from ..configs import from_dict
 from ..data.folders import Split
+from ..io.jsonfile import read_json
 from ..models.autoencoder import Model
 from ..presets import AUGMENTATION
 from .config import TrainConfig, selection_score
@@ -57,7 +57,7 @@ class Run:
 
     @functools.cached_property
     def split(self) -> Split:
-        return Split.from_json(self._json("split.json"))
+        return Split.from_json(self._json("split.json"), str(self.path / "split.json"))
 
     @property
     def method(self) -> str:
@@ -71,7 +71,14 @@ class Run:
     @property
     def history(self) -> list[dict]:
         """One entry per epoch (epoch −1: the untrained model); read afresh, it grows while training runs."""
-        return self._json("history.json") if (self.path / "history.json").exists() else []
+        if not (self.path / "history.json").exists():
+            return []
+        history = self._json("history.json", expect=list)
+        if not all(isinstance(entry, dict) and isinstance(entry.get("epoch"), int) and all(
+                isinstance(value, (int, float)) and not isinstance(value, bool) for value in entry.values())
+                for entry in history):
+            raise ValueError(f"{self.path / 'history.json'}: not a training history (a list of epochs' records)")
+        return history
 
     @property
     def best(self) -> dict:
@@ -101,10 +108,8 @@ class Run:
             raise FileNotFoundError(f"{self.path} holds no best.pt: training has not finished an epoch")
         return Model.load(self.path)
 
-    def _json(self, name: str):
+    def _json(self, name: str, expect: type = dict):
         try:
-            return json.loads((self.path / name).read_text())
+            return read_json(self.path / name, f"run folder's {name}", expect=expect)
         except FileNotFoundError:
             raise FileNotFoundError(f"{self.path} lacks {name}: not a complete training run folder") from None
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{self.path / name}: not valid JSON ({error})") from None

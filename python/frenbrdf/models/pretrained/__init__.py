@@ -28,6 +28,9 @@ import torch
 
 from ...io import checkpoints
 from ...io.atomic import atomic_path, save_json
+from ...io.jsonfile import read_json
+from ...io.merl import SHAPE
+from ...io.paths import checked_npz, torch_load
 
 #: Where the shipped model lives: this package folder.
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -56,15 +59,34 @@ def pack_mapping(state: dict) -> dict[str, np.ndarray]:
             "log_range": np.array([low, high])}
 
 
-def unpack_mapping(packed) -> dict:
-    """The inverse of :func:`pack_mapping`: a mapping state with f_ref as float64."""
-    epsilon, offset = float(packed["epsilon"]), float(packed["offset"])
+def unpack_mapping(packed, where: str = "packed mapping") -> dict:
+    """The inverse of :func:`pack_mapping`: a mapping state with f_ref as float64, every field checked
+    (``where`` names the file in messages).
+
+    Raises
+    ------
+    ValueError
+        A field is missing, of the wrong type or shape, or out of range.
+    """
     if "reference" in packed:
-        return {"reference": np.asarray(packed["reference"], dtype=np.float64), "epsilon": epsilon, "offset": offset}
-    low, high = (float(v) for v in packed["log_range"])
-    levels = np.cumsum(np.asarray(packed["log_steps"], dtype=np.int64), axis=-1)
-    reference = np.maximum(np.exp(levels / LEVELS * (high - low) + low) - epsilon, 0.0)
-    return {"reference": reference, "epsilon": epsilon, "offset": offset}
+        return checkpoints.check_mapping_state(packed, where)
+    missing = [key for key in ("epsilon", "log_steps", "log_range") if key not in packed]
+    if missing:
+        raise ValueError(f"{where}: not a packed mapping: it lacks {', '.join(missing)}")
+    steps, bounds = np.asarray(packed["log_steps"]), np.asarray(packed["log_range"])
+    if steps.dtype.kind not in "iu" or steps.shape != SHAPE:
+        raise ValueError(f"{where}: log_steps must be integers of shape {SHAPE}, got {steps.dtype} {steps.shape}")
+    if bounds.dtype.kind not in "fiu" or bounds.shape != (2,) or not (np.all(np.isfinite(bounds))
+                                                                    and bounds[0] <= bounds[1]):
+        raise ValueError(f"{where}: log_range must be two finite numbers low ≤ high, got {bounds!r:.80}")
+    low, high = (float(v) for v in bounds)
+    levels = np.cumsum(steps, axis=-1, dtype=np.int64)
+    if levels.min() < 0 or levels.max() > LEVELS:
+        raise ValueError(f"{where}: log_steps add up to levels outside 0 … {LEVELS}: damaged")
+    state = checkpoints.check_mapping_state({"reference": np.zeros(3), **{k: packed[k] for k in ("epsilon", "offset")
+                                                                          if k in packed}}, where)
+    state["reference"] = np.maximum(np.exp(levels / LEVELS * (high - low) + low) - state["epsilon"], 0.0)
+    return state
 
 
 def pack_pretrained(run_dir: str | os.PathLike, dest: str | os.PathLike | None = None, *, card: dict | None = None,
@@ -124,24 +146,20 @@ def load_packed(folder: str | os.PathLike | None = None) -> tuple[dict, dict, di
         A packed file is damaged or of another format; the message names it.
     """
     folder = Path(folder) if folder is not None else PACKAGE_DIR
-    missing = [name for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE) if not (folder / name).is_file()]
+    # exists(), not is_file(): a FIFO or a folder in their place is then named as such by the readers below
+    missing = [name for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE) if not (folder / name).exists()]
     if missing:
         raise FileNotFoundError(f"no pretrained model: {folder} lacks {', '.join(missing)}. This installation of "
                                 "frenbrdf ships without one; train one and pass its run folder with --model RUN_DIR, "
                                 "or pack one with benches/pretrained.py (docs/pretrained.md)")
     path = folder / MODEL_FILE
-    try:
-        packed = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as error:  # torch raises several types for damaged files
-        raise ValueError(f"{path}: not a readable packed model ({error})") from None
+    packed = torch_load(path, "packed model")
     if not isinstance(packed, dict) or not {"format", "model", "config", "method"} <= set(packed):
         raise ValueError(f"{path}: not a packed frenbrdf model")
-    if packed["format"] != FORMAT:
-        raise ValueError(f"{path}: packed-model format {packed['format']!r}; this frenbrdf reads format {FORMAT}")
-    try:
-        with np.load(folder / MAPPING_FILE) as saved:
-            mapping = unpack_mapping(saved)
-        card = json.loads((folder / CARD_FILE).read_text())
-    except Exception as error:  # numpy and json raise several types for damaged files
-        raise ValueError(f"{folder}: a damaged {MAPPING_FILE} or {CARD_FILE} ({error})") from None
+    if isinstance(packed["format"], bool) or packed["format"] != FORMAT:
+        raise ValueError(f"{path}: packed-model format {packed['format']!r:.40}; this frenbrdf reads format {FORMAT}")
+    # The method, config and weights are checked by Model.from_checkpoint, the mapping here.
+    mapping = unpack_mapping(checked_npz(folder / MAPPING_FILE, "packed mapping", member_bytes=64 << 20),
+                             str(folder / MAPPING_FILE))
+    card = read_json(folder / CARD_FILE, "model card", max_bytes=1 << 20)
     return packed, mapping, card
