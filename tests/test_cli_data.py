@@ -11,6 +11,7 @@ import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data import synth
 from frenbrdf.data.fitting import FitConfig, fit_nbrdf, load_nbrdf
+from frenbrdf.io.outputs import MARKER
 
 from .conftest import SHARED_DATA, toy_table
 
@@ -49,7 +50,8 @@ def test_synth_never_replaces_files_it_did_not_write(tmp_path, capsys):
     assert cli.main(["synth", str(bank), "--n", "2", "--mix", "features", "--quiet"]) == 0
     manifest = json.loads((bank / "bank.json").read_text())
     assert manifest["mix"] == "features"
-    assert sorted(p.name for p in bank.iterdir()) == sorted(["bank.json", *(m["file"] for m in manifest["materials"])])
+    assert sorted(p.name for p in bank.iterdir() if p.name != MARKER) == sorted(
+        ["bank.json", *(m["file"] for m in manifest["materials"])])
     assert not any(p.name.startswith(".") for p in tmp_path.iterdir())  # no staging folder left behind
 
     (bank / "notes.txt").write_text("added by the user")  # no longer only the bank's files
@@ -130,7 +132,7 @@ def test_fit_nbrdf_replaces_a_fit_only_when_asked_and_checks_before_any_work(tmp
     command = ["fit-nbrdf", str(path), "--out", str(fits), "--epochs", "1", "--hidden", "8,8", "--quiet"]
     assert cli.main(command) == 0
     before = (fits / "toy.pt").read_bytes()
-    for argv, message in ((command, "exists; pass --overwrite"),
+    for argv, message in ((command, "already holds toy.pt; pass --overwrite"),
                           ([*command[:-1], "--hidden", "abc"], "--hidden takes hidden widths"),
                           (["fit-nbrdf", str(tmp_path / "missing.binary"), "--out", str(tmp_path / "new")],
                            "missing.binary")):

@@ -384,7 +384,7 @@ def test_all_errors_are_clear(tiny_runs, toy_materials, tmp_path, capsys):
     for extra, message in (([], "needs that folder: give it with --data DIR"),
                            (["--data", str(tmp_path / "nowhere")], "does not exist"),
                            (["--data", str(tmp_path)], "holds no material files"),
-                           (["--data", str(tmp_path), "--max-materials", "-1"], "max_materials must be ≥ 0")):
+                           (["--data", str(tmp_path), "--max-materials", "-1"], "--max-materials: expected")):
         with pytest.raises(SystemExit):
             cli.main(base + extra)
         assert message in capsys.readouterr().err, extra

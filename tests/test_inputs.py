@@ -16,6 +16,7 @@ import torch
 import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
+from frenbrdf.io.outputs import MARKER
 from frenbrdf.material.measurements import read_measurements
 
 from .conftest import tiny
@@ -60,23 +61,27 @@ def test_reconstruct_never_touches_a_folder_it_did_not_write(run_dir, csv_input,
     (mine / "truth.png").write_bytes(b"the user's own")
     (mine / "render.png").write_bytes(b"the user's own too")
     assert _reconstruct(csv_input, mine, run_dir) == 2
-    assert "not empty and was not written by this command" in capsys.readouterr().err
+    assert "holds render.png, truth.png (not this command's earlier output)" in capsys.readouterr().err
     assert (mine / "truth.png").read_bytes() == b"the user's own" and len(list(mine.iterdir())) == 2
     # --out equal to the input's folder, or holding it, is refused even with --overwrite.
     for out in (csv_input.parent, tmp_path.parent):
         assert _reconstruct(csv_input, out, run_dir, "--overwrite") == 2
-        assert "is the folder of the input" in capsys.readouterr().err
+        assert "its folder, or holds it" in capsys.readouterr().err
     # A result folder of this command with a file of the user's beside it: the message names that file.
     assert _reconstruct(csv_input, tmp_path / "result", run_dir) == 0
     (tmp_path / "result" / "notes.txt").write_text("mine")
     assert _reconstruct(csv_input, tmp_path / "result", run_dir) == 2
-    assert "holds files this command does not write: notes.txt" in capsys.readouterr().err
+    assert "holds notes.txt (not this command's earlier output)" in capsys.readouterr().err
     assert _reconstruct(csv_input, "", run_dir) == 2
     assert "--out is empty" in capsys.readouterr().err
     assert csv_input.exists()
-    # --overwrite replaces the folder whole.
+    # --overwrite writes beside the user's files, never over one: a file at a name it writes is refused.
+    assert _reconstruct(csv_input, mine, run_dir, "--overwrite") == 2
+    assert "holds render.png, truth.png, which this command would replace" in capsys.readouterr().err
+    (mine / "render.png").unlink()
+    (mine / "truth.png").rename(mine / "my-truth.png")
     assert _reconstruct(csv_input, mine, run_dir, "--overwrite") == 0
-    assert not (mine / "truth.png").exists() and (mine / "reconstruction.json").exists()
+    assert (mine / "my-truth.png").read_bytes() == b"the user's own" and (mine / "reconstruction.json").exists()
 
 
 def test_reconstruct_replaces_its_own_earlier_folder_whole(run_dir, toy_materials, csv_input, tmp_path):
@@ -85,7 +90,8 @@ def test_reconstruct_replaces_its_own_earlier_folder_whole(run_dir, toy_material
     assert _reconstruct(source, out, run_dir, "--samples", 300) == 0
     assert (out / "truth.png").exists()
     assert _reconstruct(csv_input, out, run_dir) == 0  # an earlier result: replaced whole, nothing stale left
-    assert sorted(p.name for p in out.iterdir()) == json.loads((out / "reconstruction.json").read_text())["files"]
+    assert sorted(p.name for p in out.iterdir() if p.name != MARKER) == json.loads(
+        (out / "reconstruction.json").read_text())["files"]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
@@ -107,7 +113,9 @@ def test_train_never_replaces_a_run_without_being_asked(toy_materials, tmp_path,
     assert (run / "best.pt").read_bytes() == before
     with pytest.raises(ValueError, match="already holds"):
         check_run_folder(cfg)
-    (run / "best-psnr.pt").write_bytes(b"an earlier run's")
+    (run / "best-psnr.pt").write_bytes(b"an earlier run's")  # as if the earlier run had written it
+    marker = json.loads((run / MARKER).read_text())
+    (run / MARKER).write_text(json.dumps({**marker, "entries": [*marker["entries"], "best-psnr.pt"]}))
     assert _cli("train", "--config", config, "--out", run, "--quiet", "--overwrite")[0] == 0
     assert not (run / "best-psnr.pt").exists()  # nothing of the earlier run passes for this one's
     other = tmp_path / "theirs"
@@ -133,7 +141,7 @@ def test_evaluate_checks_everything_before_computing(toy_materials, tmp_path, ca
     assert _cli("evaluate", runs[0], "--out", file, "--quiet")[0] == 2
     assert "exists and is not a folder" in capsys.readouterr().err
     assert _cli("evaluate", runs[0], "--out", runs[0], "--quiet")[0] == 2  # a run folder is not an output folder
-    assert "is the folder of the input" in capsys.readouterr().err
+    assert "is the input" in capsys.readouterr().err
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")

@@ -346,7 +346,7 @@ def test_plugin_refuses_bad_properties(mi, tmp_path):
         fm.load_material(NBRDF([torch.cat([p, p]) for p in tiny_nbrdf().params], LogRelativeMapping(np.ones(3))))
     with pytest.raises(ValueError, match="unknown scene"):
         fm.render_material(tiny_nbrdf(), scene="cornell-box")
-    with pytest.raises(ValueError, match="resolution must be in 1 … 8192"):  # before Mitsuba sizes a tensor
+    with pytest.raises(ValueError, match="resolution must be in 1 … 4096"):  # before Mitsuba sizes a tensor
         fm.render_material(tiny_nbrdf(), resolution=50_000, spp=1)
 
 

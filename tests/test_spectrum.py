@@ -13,6 +13,7 @@ from frenbrdf import cli
 from frenbrdf.data import analytic
 from frenbrdf.data.fitting import save_nbrdf
 from frenbrdf.io.merl import write_merl
+from frenbrdf.io.outputs import MARKER
 from frenbrdf.models import NBRDF, NBRDFConfig
 from frenbrdf.models.losses import SPHERE_AREA, frequency_variant
 from frenbrdf.models.mapping import LogRelativeMapping
@@ -51,7 +52,7 @@ def test_the_spectrum_command_writes_plot_csv_and_json_of_materials_and_of_error
             "--lmax", "11"]
     assert cli.main(argv) == 0
     assert "guess vs truth: error / truth power" in capsys.readouterr().out
-    assert sorted(p.name for p in out.iterdir()) == ["spectrum.csv", "spectrum.json", "spectrum.png"]
+    assert sorted(p.name for p in out.iterdir()) == [MARKER, "spectrum.csv", "spectrum.json", "spectrum.png"]
     with open(out / "spectrum.csv", newline="") as file:
         rows = list(csv.DictReader(file))
     assert len(rows) == 3 * 4 * 3 * 12  # truth, guess and guess's error; 4 slices × 3 channels × 12 degrees

@@ -139,9 +139,9 @@ def test_select_trains_candidates_smallest_first_and_writes_a_loadable_config(to
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--target-psnr", "nan"], "finite positive"),
-    (["--target-psnr", "-3"], "finite positive"),
-    (["--target-psnr", "inf"], "finite positive"),
+    (["--target-psnr", "nan"], "a finite number of dB > 0"),
+    (["--target-psnr", "-3"], "a finite number of dB > 0"),
+    (["--target-psnr", "inf"], "a finite number of dB > 0"),
     (["--target-psnr", "30", "--front", "{tmp}/absent.json"], "does not exist"),
     (["--target-psnr", "30", "--front", "{tmp}/bad.json"], "not a chart-3"),
     (["--target-psnr", "30", "--front", "{tmp}/bad.json", "--epochs", "3"], "nothing is trained"),

@@ -19,6 +19,7 @@ from frenbrdf.configs import to_dict
 from frenbrdf.data.folders import list_materials, split_materials
 from frenbrdf.io import checkpoints
 from frenbrdf.io.checkpoints import load as load_checkpoint
+from frenbrdf.io.outputs import MARKER
 from frenbrdf.models.losses import LossConfig
 from frenbrdf.training import Run, TrainingDiverged, config_for, load_config, train
 
@@ -42,7 +43,7 @@ def test_every_method_writes_a_loadable_run(method, toy_materials, tmp_path):
     assert ("train_fre" in result.history[-1]) == (method == "frenbrdf")
     for name in ("config.json", "split.json", "history.json", "mapping.npz", "best.pt", "last.pt"):
         assert (result.run_dir / name).exists(), name
-    assert not list(result.run_dir.glob(".*")), "temporary files left behind"
+    assert [p.name for p in result.run_dir.glob(".*")] == [MARKER], "temporary files left behind"
     split = json.loads((result.run_dir / "split.json").read_text())
     assert len(split["train"]) + len(split["val"]) + len(split["test"]) == 8
     model = frenbrdf.Model.load(result.run_dir)

@@ -191,20 +191,23 @@ def test_a_damaged_packed_model_names_the_file_and_the_field(tmp_path):
 
 
 class _Unblocked:
-    """A FIFO that a reader blocked on gets EOF after a few seconds, so that a test fails instead of hanging."""
+    """A FIFO that a reader opening it gets EOF from at once, so that a test fails instead of hanging; ``read``
+    says whether anyone opened it to read (the code under test must not)."""
 
     def __init__(self, fifo: Path):
-        self.fifo = fifo
+        self.fifo, self.read, self.closing = fifo, False, False
         self.thread = threading.Thread(target=self._write, daemon=True)
 
     def _write(self):
-        os.close(os.open(self.fifo, os.O_WRONLY))  # blocks until someone reads; then EOF for them
+        os.close(os.open(self.fifo, os.O_WRONLY))  # blocks until someone opens it to read; EOF for them
+        self.read = not self.closing
 
     def __enter__(self):
         self.thread.start()
-        return self.fifo
+        return self
 
     def __exit__(self, *exc):
+        self.closing = True
         os.close(os.open(self.fifo, os.O_RDONLY | os.O_NONBLOCK))  # releases the writer if nobody read
         self.thread.join(5)
 
@@ -215,8 +218,9 @@ def test_fifos_named_as_config_or_front_are_refused_not_waited_on(toy_materials,
     for argv in (["train", "--config", fifo, "--data", toy_materials, "--out", tmp_path / "run", "--quiet"],
                  ["select", "--data", toy_materials, "--target-psnr", 30, "--out", tmp_path / "s", "--config", fifo],
                  ["select", "--data", toy_materials, "--target-psnr", 30, "--out", tmp_path / "s", "--front", fifo]):
-        with _Unblocked(fifo):
+        with _Unblocked(fifo) as unblocked:
             assert "config.json: a FIFO (named pipe)" in _fails(argv, capsys)
+        assert not unblocked.read
     assert not (tmp_path / "run").exists() and not (tmp_path / "s").exists()
 
 
@@ -317,6 +321,7 @@ def test_a_fifo_in_the_truth_cache_is_replaced_not_read(tmp_path, merl_table):
     mapped = np.log(np.maximum(merl_table.reshape(3, -1).T, 0) + 0.01)
     valid = np.all(merl_table.reshape(3, -1) >= 0, axis=0)
     os.mkfifo(tmp_path / "key.npy")
-    with _Unblocked(tmp_path / "key.npy"):
+    with _Unblocked(tmp_path / "key.npy") as unblocked:
         computed = truth.coefficients(mapped, valid, "key")
+    assert not unblocked.read
     np.testing.assert_array_equal(np.load(tmp_path / "key.npy"), computed)

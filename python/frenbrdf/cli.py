@@ -303,6 +303,7 @@ _positive_count, _count = _whole(1, MAX_COUNT), _whole(0, MAX_COUNT)
 _bank_size = _whole(1, _limit(".data.synth", "MAX_BANK"))
 _table_samples = _whole(1, _limit(".io.merl", "N_BINS"))  # drawn from a MERL table's bins
 _resolution = _whole(8, _limit(".render.renderer", "MAX_RESOLUTION"))
+_evaluate_resolution = _whole(8, _limit(".study.evaluation", "MAX_RESOLUTION"))
 _nbrdf_width = _whole(1, _limit(".models.nbrdf", "MAX_WIDTH"))
 _lmax = _whole(1, _limit(".models.losses", "MAX_LMAX"))
 
@@ -424,8 +425,9 @@ def build_parser() -> argparse.ArgumentParser:
                           help="evaluate only the first N materials by name (default and 0: all)")
     evaluate.add_argument("--samples", type=_table_samples, default=4000,
                           help="samples given to the encoder (default 4000)")
-    evaluate.add_argument("--edits", type=_count, default=2000, help="interpolations for editing (default 2000)")
-    evaluate.add_argument("--resolution", type=_resolution, default=256, help="render size of the reconstruction table")
+    evaluate.add_argument("--edits", type=_count, default=2000, help="interpolations for editing (default 2000; 0: no editing table)")
+    evaluate.add_argument("--resolution", type=_evaluate_resolution, default=256,
+                          help="render size of the reconstruction table (8 … 1024)")
     evaluate.add_argument("--refine", choices=("none", "latent", "full"), default="none",
                           help="also refine each material at test time on the same samples (latent: optimise z; "
                           "full: then the NBRDF's weights) and report the refined rows beside the encoder-only ones "

@@ -50,7 +50,7 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
         begin = time.perf_counter()
         # The report folder holds everything the demo made, the coefficient cache too.
         cfg = config_for(method, training="demo", augmentation=augmentation, data=str(data), out=str(out / "runs" / method),
-                         cache_dir=str(out / "cache"), progress=progress, **({"epochs": epochs} if epochs else {}))
+                         cache_dir=str(out / "cache"), progress=progress, **({"epochs": epochs} if epochs is not None else {}))
         runs.append(train(cfg, overwrite=True))  # the demo folder is its own: a rerun trains afresh
         timings[f"train {method}"] = time.perf_counter() - begin
     begin = time.perf_counter()

@@ -43,8 +43,11 @@ from ..models.nbrdf import MAX_REFLECTANCE, UNIT_TOLERANCE
 
 #: The fewest samples accepted: fewer say too little about a material for the encoder.
 MIN_SAMPLES = 50
-#: The most samples accepted (a MERL table holds 1.1 million): 20 million rows of a CSV take 1.4 GB to hold.
-MAX_SAMPLES = 20_000_000
+#: The most samples accepted (a MERL table holds 1.1 million). ``frenbrdf reconstruct`` holds each sample several
+#: times over (the values and directions, their NBRDF inputs and mapped values in float64 and float32, the refined
+#: NBRDF's copy): about 330 bytes a sample with ``--refine none`` and 540 with ``full``. At this many its measured
+#: peak is about 3 GB; a CSV is refused while it is read, at the first row beyond.
+MAX_SAMPLES = 4_000_000
 #: ``UNIT_TOLERANCE`` (:data:`frenbrdf.models.nbrdf.UNIT_TOLERANCE`): how far from 1 a direction's length may be (it
 #: is then normalised); ``MAX_REFLECTANCE``: the largest value a model takes.
 __all__ = ["MAX_REFLECTANCE", "MAX_SAMPLES", "MIN_SAMPLES", "UNIT_TOLERANCE", "Measurements", "merl_measurements",

@@ -71,8 +71,13 @@ def latent_penalty(z: torch.Tensor) -> torch.Tensor:
 
 
 SPHERE_AREA = 4 * math.pi
-#: The highest band limit L_fre takes (a config read from a file is checked before any table is built).
+#: The highest band limit L_fre takes (a config read from a file is checked before any table is built): the SHT of
+#: the whole sphere (``fit="sphere"``) costs memory ∝ lmax², 0.8 GB for ``frenbrdf spectrum`` at 511.
 MAX_LMAX = 511
+#: The highest band limit of the fit to the measured nodes (``fit="measured"``): its operator is a dense matrix of
+#: about (lmax + 1)⁴ / 4 numbers per slice, built with a few copies, so memory grows as lmax⁴ (measured peak of
+#: ``frenbrdf spectrum``: 1.6 GB at 80, 2.9 GB at 100; it would be 30 GiB at 300).
+MAX_MEASURED_LMAX = 80
 
 
 def spectral_distance(predicted, true, weights=None):
@@ -135,6 +140,10 @@ class FrequencyLossConfig:
         if not 1 <= self.lmax <= MAX_LMAX:
             problems.append(f"lmax must lie in 1 … {MAX_LMAX}, got {self.lmax} (L_fre evaluates every NBRDF of a batch "
                             "at (lmax + 1)² nodes per slice; the default is 49)")
+        elif self.fit == "measured" and self.lmax > MAX_MEASURED_LMAX:
+            problems.append(f"lmax must lie in 1 … {MAX_MEASURED_LMAX} with fit 'measured', got {self.lmax} (the fit "
+                            "to the measured nodes is a dense matrix of about (lmax + 1)⁴ / 4 numbers per slice: 1.6 GB "
+                            f"at {MAX_MEASURED_LMAX}; fit 'sphere' takes lmax up to {MAX_LMAX})")
         if self.grid not in ("gauss", "equiangular"):
             problems.append(f"grid must be 'gauss' or 'equiangular', got {self.grid!r}")
         if not self.slices or min(self.slices) < 0 or max(self.slices) >= SHAPE[1] or len(set(self.slices)) != len(

@@ -65,6 +65,9 @@ from .tables import ROWS as ROWS
 from .tables import colour_losses, report_markdown, seeds_markdown, summarise, table_rows
 from .tables import markdown_table as markdown_table
 
+#: The largest render sizes an evaluation takes: about 2 GB at these on 100 test materials.
+MAX_RESOLUTION, MAX_EDIT_RESOLUTION = 1024, 256
+
 
 @dataclass
 class EvaluateConfig:
@@ -95,6 +98,14 @@ class EvaluateConfig:
     def __post_init__(self):
         if self.refine not in BUDGETS:
             raise ValueError(f"refine must be a refinement budget, one of {tuple(BUDGETS)}; got {self.refine!r}")
+        # Every test material's editing truth is kept for the editing table, and each material's renders while it
+        # is scored: the render sizes bound the memory an evaluation needs.
+        for name, value, most in (("resolution", self.resolution, MAX_RESOLUTION),
+                                  ("edit_resolution", self.edit_resolution, MAX_EDIT_RESOLUTION)):
+            if isinstance(value, bool) or not isinstance(value, int) or not 8 <= value <= most:
+                raise ValueError(f"{name} must be a whole number in 8 … {most}, got {value!r}")
+        if isinstance(self.edits, bool) or not isinstance(self.edits, int) or self.edits < 0:
+            raise ValueError(f"edits must be a whole number ≥ 0 (0: no editing table), got {self.edits!r}")
 
 
 def edit_pairs(n_materials: int, most: int, rng: np.random.Generator) -> list[tuple[int, int]]:
@@ -320,7 +331,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         spectrum.add(table, decoded)
 
     # Editing.
-    pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)), rng)
+    pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)) if config.edits else 0, rng)
     edits = {m: [] for m in models}
     with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing", disable=not show) as bar:
         for a, b in pairs:

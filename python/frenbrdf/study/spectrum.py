@@ -28,6 +28,7 @@ for others (``frenbrdf reconstruct`` writes it for its reconstruction and the tr
 
 from __future__ import annotations
 
+import numbers
 import os
 from pathlib import Path
 
@@ -40,7 +41,15 @@ from ..io.merl import N_BINS, merl_bin_angles
 from ..io.outputs import OutputFolder
 from ..io.paths import input_file
 from ..models.frequency_fit import slice_directions
-from ..models.losses import SPHERE_AREA, FrequencyLoss, FrequencyLossConfig, FrequencyTruth, frequency_variant
+from ..models.losses import (
+    MAX_LMAX,
+    MAX_MEASURED_LMAX,
+    SPHERE_AREA,
+    FrequencyLoss,
+    FrequencyLossConfig,
+    FrequencyTruth,
+    frequency_variant,
+)
 from ..models.mapping import LogRelativeMapping
 from ..models.nbrdf import NBRDF
 from ..numerics.sht import SHT
@@ -49,6 +58,9 @@ from ..numerics.sht import SHT
 FILES = {"plot": "spectrum.png", "csv": "spectrum.csv", "report": "spectrum.json"}
 #: ε of the "mapped" values, ln(f + ε).
 EPSILON = 0.002
+#: The largest band limit every variant takes, that of the default ``tone`` (a fit to the measured nodes; measured
+#: peak memory of ``frenbrdf spectrum``: 1.6 GB); those fitting the whole sphere take more (:func:`largest_lmax`).
+MAX_SPECTRUM_LMAX = MAX_MEASURED_LMAX
 #: Degree bands of the summaries (as ``benches/studies/lfre_floor.py``).
 BANDS = ((0, 0), (1, 4), (5, 16), (17, 10_000))
 
@@ -180,6 +192,12 @@ def check_out(out_dir, inputs, *, overwrite: bool = False) -> OutputFolder:
     return out
 
 
+def largest_lmax(variant: str) -> int:
+    """The largest band limit a spectrum takes at a variant: :data:`MAX_SPECTRUM_LMAX` for a fit to the measured nodes
+    (memory ∝ lmax⁴), :data:`frenbrdf.models.losses.MAX_LMAX` for the SHT of the whole sphere (memory ∝ lmax²)."""
+    return MAX_SPECTRUM_LMAX if frequency_variant(variant).fit == "measured" else MAX_LMAX
+
+
 def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None, variant: str = "tone",
                     lmax: int | None = None, overwrite: bool = False) -> dict:
     """Spectra of material files (and with ``truth``, each one's error spectrum against it) into ``out_dir``.
@@ -194,7 +212,7 @@ def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None,
         A material file each source is compared with (a reconstruction against its truth).
     variant, lmax
         The L_fre settings the spectra are taken at (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`; lmax
-        overrides the variant's band limit).
+        overrides the variant's band limit, 1 … :func:`largest_lmax`, checked before any work).
 
     Returns
     -------
@@ -204,8 +222,16 @@ def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None,
     sources = [Path(s) for s in sources]
     if not sources:
         raise ValueError("give at least one material file")
+    config = frequency_variant(variant)
+    if lmax is not None:  # 0 is a band limit asked for (and refused), not "the default"
+        limit = largest_lmax(variant)
+        if isinstance(lmax, bool) or not isinstance(lmax, numbers.Integral) or not 1 <= lmax <= limit:
+            raise ValueError(f"lmax must be a whole number in 1 … {limit} for variant {variant!r}, got {lmax!r} ("
+                             + ("its fit to the measured nodes holds about (lmax + 1)⁴ / 4 numbers per slice, 1.6 GB "
+                                f"at {MAX_MEASURED_LMAX}; the variants fitting the whole sphere, e.g. 'paper', take up "
+                                f"to {MAX_LMAX})" if config.fit == "measured" else f"the default is {config.lmax})"))
+        config = frequency_variant(variant, lmax=int(lmax))
     out = check_out(out_dir, [*sources, *([truth] if truth else [])], overwrite=overwrite)
-    config = frequency_variant(variant, **({"lmax": lmax} if lmax else {}))
     analyser = SpectrumAnalyser(config)
     named = {}
     for path in ([Path(truth)] if truth else []) + sources:

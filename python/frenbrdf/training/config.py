@@ -12,7 +12,9 @@ from ..configs import MAX_SEED, from_dict, merge, to_dict
 from ..io.jsonfile import read_json
 from ..io.merl import N_BINS
 from ..models.autoencoder import ModelConfig
+from ..models.encoder import SAMPLE_SIZE
 from ..models.losses import LossConfig
+from ..models.nbrdf import N_INPUTS, N_OUTPUTS
 from ..presets import (
     METHODS,
     SELECTION_RULES,
@@ -24,6 +26,9 @@ from ..presets import (
 
 #: The largest training config file read (one is about 2 kB).
 MAX_CONFIG_BYTES = 1 << 20
+#: The most memory a training step may hold (:meth:`TrainConfig.step_bytes`): what every accepted config runs in on
+#: a machine of a few GB. The presets take 120–190 MB.
+MAX_STEP_BYTES = 2 << 30
 
 
 def selection_score(entry: dict, rule: str) -> float | None:
@@ -197,10 +202,47 @@ class TrainConfig:
             problems.append("give decoder_from (a frozen decoder) or init_from (start from a whole model), not both")
         if self.device not in ("cpu", "cuda", "auto"):
             problems.append(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
+        if not problems:  # the sizes are valid: what a step of them holds
+            problems += self._step_memory_problems()
         if problems:
             raise ValueError("invalid training config: " + "; ".join(problems))
         self.split = tuple(self.split)
         self.holdout = (self.holdout,) if isinstance(self.holdout, str) else tuple(self.holdout)
+
+    def step_bytes(self) -> tuple[int, int, int, int]:
+        """What a training step holds, computed from the config (nothing allocated): the bytes of activations per
+        context sample and per query sample of a material, the fixed bytes per material (L_fre's NBRDF at the SHT
+        nodes of every slice, when ``loss.eta`` > 0), and the bytes of the model's state (weights, gradients and
+        Adam's two moments, float32).
+
+        A layer's output and its ReLU's are kept for the backward pass: 2 float32 per hidden unit and sample (the
+        backward pass's gradients live a layer at a time). An upper bound: the encoder's step at the defaults and
+        30,000 context samples holds 0.49 GB, this says 0.78."""
+        model = self.model
+        encoder = sum(2 * sum((*e.hidden, *e.pooled)) + e.latent + SAMPLE_SIZE for e in model.encoders)
+        nbrdf = 2 * sum(model.nbrdf.hidden) + N_INPUTS + N_OUTPUTS
+        frequency = self.loss.frequency
+        nodes = len(frequency.slices) * (frequency.nlat + 1) // 2 * (frequency.nlon // 2) if self.loss.eta > 0 else 0
+        return 4 * encoder, 4 * nbrdf, 4 * nbrdf * nodes, 4 * 4 * model.n_parameters
+
+    def _step_memory_problems(self) -> list[str]:
+        """The largest sizes a step of this config may have within :data:`MAX_STEP_BYTES`, named, when it has more."""
+        context, query, fixed, state = self.step_bytes()
+        batch, n_context, n_query = int(self.batch_materials), int(self.context_samples), int(self.query_samples)
+        total = state + batch * (n_context * context + n_query * query + fixed)
+        if total <= MAX_STEP_BYTES:
+            return []
+        room = MAX_STEP_BYTES - state  # what the samples of a batch may take
+        limits = {"context_samples": (room // batch - n_query * query - fixed) // context,
+                  "query_samples": (room // batch - n_context * context - fixed) // query,
+                  "batch_materials": room // (n_context * context + n_query * query + fixed)}
+        allowed = [f"{name} in 1 … {limit:,}" for name, limit in limits.items() if limit >= 1]
+        return [f"a training step would hold {total / 2**30:.1f} GiB (every sample's activations for the backward "
+                f"pass: {context:,} bytes per context sample, {query:,} per query sample"
+                + (f", {fixed / 2**20:,.0f} MiB per material for L_fre's {self.loss.frequency.lmax}-degree nodes"
+                   if fixed else "") + f"; {state / 2**20:,.0f} MiB of weights and optimiser state), more than "
+                f"MAX_STEP_BYTES = {MAX_STEP_BYTES / 2**30:g} GiB: at the other settings, "
+                + (" or ".join(allowed) if allowed else "no batch fits; choose a smaller model or L_fre lmax")]
 
     @property
     def cache_folder(self) -> Path:

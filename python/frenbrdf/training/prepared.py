@@ -20,6 +20,7 @@ import torch.distributed as dist
 from tqdm.auto import tqdm
 
 from ..data.folders import MaterialBank, Split, files_mapping, mapped_bank, max_directional_albedo, read_valid_table
+from ..io.merl import N_BINS
 from ..models.losses import FrequencyTruth
 from ..models.mapping import LogRelativeMapping
 from .config import TrainConfig
@@ -94,6 +95,23 @@ def file_hash(path: Path) -> str:
     return digest.hexdigest()[:32]
 
 
+#: Bytes the mapped bank holds per material: float32 values and a validity flag at every MERL bin.
+BANK_BYTES_PER_MATERIAL = N_BINS * 3 * 4 + N_BINS
+#: The share of this machine's memory the bank may take (the rest: the model, the batches, the truth).
+BANK_MEMORY_SHARE = 0.5
+
+
+def check_bank_memory(n_materials: int) -> None:
+    """Refuses, before any table is read, a training set whose mapped bank would not fit in memory."""
+    needed = n_materials * BANK_BYTES_PER_MATERIAL
+    total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    if needed > BANK_MEMORY_SHARE * total:
+        most = int(BANK_MEMORY_SHARE * total // BANK_BYTES_PER_MATERIAL)
+        raise ValueError(f"training and validation hold {n_materials:,} materials: {needed / 1e9:.1f} GB in memory "
+                         f"({BANK_BYTES_PER_MATERIAL / 1e6:.1f} MB each); this machine ({total / 1e9:.0f} GB) takes "
+                         f"at most {most:,}: train on fewer (a subfolder, or --holdout)")
+
+
 def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distributed = Distributed(),
             data_cache: dict | None = None, mapping: LogRelativeMapping | None = None) -> PreparedData:
     """Reads the materials, builds the mapping from the training split (unless ``mapping`` is given: a
@@ -104,6 +122,7 @@ def prepare(cfg: TrainConfig, split: Split, files: dict[str, Path], ranks: Distr
     reuse them instead of reading the materials again.
     """
     names = list(split.train) + list(split.val)
+    check_bank_memory(len(names))
     key = json.dumps([[str(files[n]) for n in names], len(split.train), dataclasses.asdict(cfg.model.mapping),
                       cfg.decoder_from, cfg.init_from])
     if data_cache is not None and key in data_cache:

@@ -7,10 +7,15 @@ import os
 import numpy as np
 
 from ..lighting import FILL_LIGHT, KEY_LIGHT, environment_radiance
-from ..renderer import MAX_RESOLUTION, save_png, tonemap  # one tone mapping for both renderers
+from ..renderer import save_png, tonemap  # one tone mapping for both renderers
 from .bsdf import register
 from .material import _HANDLES, bsdf_dict, material_handle, release_handle
 from .variants import _import_mitsuba
+
+#: The largest Mitsuba render (pixels per side), below the metric renderer's: Mitsuba's film, its image and ours take
+#: about 55 bytes a pixel whatever the samples per pixel (measured peak of ``frenbrdf render --mitsuba``: 1.7 GB at
+#: 4096², so about 4.5 GB at 8192²; 64 samples per pixel take some 10 minutes per 2048² on two cores).
+MAX_MITSUBA_RESOLUTION = 4096
 
 
 def environment_bitmap(width: int = 128) -> np.ndarray:
@@ -45,8 +50,7 @@ def scene_dict(bsdf: dict, *, resolution: int = 256, spp: int = 64, scene: str =
     mi, _ = _import_mitsuba()
     if scene != "sphere":
         raise ValueError(f"unknown scene {scene!r}; available: 'sphere'")
-    if not 1 <= resolution <= MAX_RESOLUTION or spp < 1:
-        raise ValueError(f"resolution must be in 1 … {MAX_RESOLUTION} and spp ≥ 1, got {resolution} and {spp}")
+    _check_size(resolution, spp)
     lights = {"key": KEY_LIGHT, "fill": FILL_LIGHT}  # those of the metric renderer (frenbrdf.render.lighting)
     emitters = {name: {"type": "directional", "direction": [-c for c in towards],
                        "irradiance": {"type": "rgb", "value": list(colour)}}
@@ -66,6 +70,12 @@ def scene_dict(bsdf: dict, *, resolution: int = 256, spp: int = 64, scene: str =
         "environment": {"type": "envmap", "bitmap": mi.Bitmap(environment_bitmap())},
         **emitters,
     }
+
+
+def _check_size(resolution: int, spp: int) -> None:
+    if not 1 <= resolution <= MAX_MITSUBA_RESOLUTION or spp < 1:
+        raise ValueError(f"resolution must be in 1 … {MAX_MITSUBA_RESOLUTION} (MAX_MITSUBA_RESOLUTION: a Mitsuba render "
+                         f"takes about 55 bytes a pixel) and spp ≥ 1, got {resolution} and {spp}")
 
 
 def render_material(material, out_path: str | os.PathLike | None = None, spp: int = 64, resolution: int = 256,
@@ -96,6 +106,7 @@ def render_material(material, out_path: str | os.PathLike | None = None, spp: in
     numpy.ndarray
         Linear RGB radiance, float32 ``(resolution, resolution, 3)``.
     """
+    _check_size(resolution, spp)  # before the material is read or Mitsuba sizes a tensor
     mi, _ = _import_mitsuba()
     register()
     known = isinstance(material, str) and material in _HANDLES
