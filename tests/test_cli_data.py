@@ -59,7 +59,7 @@ def test_synth_never_replaces_files_it_did_not_write(tmp_path, capsys):
         cli.main(["synth", str(bank), "--n", "2", "--quiet"])
     assert (bank / "notes.txt").exists() and json.loads((bank / "bank.json").read_text())["mix"] == "features"
     assert cli.main(["synth", str(bank), "--n", "2", "--quiet", "--overwrite"]) == 0
-    assert not (bank / "notes.txt").exists()
+    assert (bank / "notes.txt").read_text() == "added by the user"  # --overwrite writes beside it, never over it
 
 
 def test_synth_command_rejects_bad_n(tmp_path, capsys):

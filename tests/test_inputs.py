@@ -121,9 +121,9 @@ def test_train_never_replaces_a_run_without_being_asked(toy_materials, tmp_path,
     other = tmp_path / "theirs"
     other.mkdir()
     (other / "notes.txt").write_text("mine")
-    with pytest.raises(ValueError, match="already holds files"):
+    with pytest.raises(ValueError, match="holds notes.txt"):
         check_run_folder(tiny("frenbrdf", toy_materials, other))
-    with pytest.raises(ValueError, match="folder of the input"):
+    with pytest.raises(ValueError, match="its folder, or holds it"):
         check_run_folder(tiny("frenbrdf", toy_materials, toy_materials), overwrite=True)
 
 

@@ -63,4 +63,4 @@ def test_the_spectrum_command_writes_plot_csv_and_json_of_materials_and_of_error
     assert cli.main(argv) == 0  # an earlier spectrum folder is replaced
     with pytest.raises(SystemExit):
         cli.main(["spectrum", str(inputs / "plastic.binary"), "--out", str(inputs)])  # never the input's folder
-    assert "folder of the input" in capsys.readouterr().err
+    assert "its folder, or holds it" in capsys.readouterr().err

@@ -135,17 +135,21 @@ class LogRelativeMapping:
 
     def forward(self, reflectance, reference):
         """Reflectance → mapped values (numpy or torch, broadcasting)."""
-        log = torch.log if isinstance(reflectance, torch.Tensor) else np.log
-        return log(self.offset + (reflectance + self.epsilon) / (reference + self.epsilon))
+        torch_in = isinstance(reflectance, torch.Tensor)
+        ratio = (reflectance + self.epsilon) / (reference + self.epsilon)
+        if self.offset:  # ln(1 + ratio), exact for a tiny ratio
+            return torch.log1p(ratio) if torch_in else np.log1p(ratio)
+        return torch.log(ratio) if torch_in else np.log(ratio)
 
     def inverse(self, mapped, reference):
         """Mapped values → reflectance, clamped to 0 … :data:`~frenbrdf.io.reflectance.MAX_REFLECTANCE` (numpy or
         torch): the largest value any reader accepts is the largest a model gives back, whatever it extrapolates."""
         if isinstance(mapped, torch.Tensor):
-            linear = (reference + self.epsilon) * (torch.exp(mapped) - self.offset) - self.epsilon
-            return linear.clamp(0.0, MAX_REFLECTANCE)
+            grown = torch.expm1(mapped) if self.offset else torch.exp(mapped)  # exp(y) − c
+            return ((reference + self.epsilon) * grown - self.epsilon).clamp(0.0, MAX_REFLECTANCE)
         with np.errstate(over="ignore"):
-            linear = (reference + self.epsilon) * (np.exp(mapped) - self.offset) - self.epsilon
+            grown = np.expm1(mapped) if self.offset else np.exp(mapped)
+            linear = (reference + self.epsilon) * grown - self.epsilon
         return np.clip(linear, 0.0, MAX_REFLECTANCE)
 
     def state(self) -> dict:
