@@ -298,7 +298,7 @@ def test_ctrl_c_ends_with_one_line_and_status_130(monkeypatch, capsys):
     def interrupted(args):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli, "_info", interrupted)  # build_parser binds the command functions when called
+    monkeypatch.setattr(cli.commands, "info", interrupted)  # build_parser binds the command functions when called
     with pytest.raises(SystemExit) as exit_info:
         cli.main(["info"])
     assert exit_info.value.code == 130

@@ -32,6 +32,7 @@ from .numerics.coords import (
     rusinkiewicz_to_half_diff,
 )
 from .numerics.knn import KnnInterpolator, knn_interpolate
+from .render.viewer import view
 from .training import Run, TrainConfig, TrainResult, config_for, train
 
 # Module paths the README documented before the package had layer folders (docs/changelog.md).
@@ -78,5 +79,6 @@ __all__ = [
     "rusinkiewicz_to_half_diff",
     "train",
     "valid_mask",
+    "view",
     "write_merl",
 ]

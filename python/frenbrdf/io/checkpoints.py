@@ -83,7 +83,8 @@ def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer
     dict
         The checkpoint: its weights and optimiser state fit ``network`` and ``optimizer``, its ``generator`` is a
         torch CPU generator's state, ``epoch`` an integer ≥ 0, ``best``/``bests`` the best epochs and scores,
-        ``history`` a list of epochs, ``config`` a training config (JSON) and ``split`` a split.
+        ``history`` a list of epochs, ``config`` a training config (JSON); ``split`` is left to the caller, which
+        knows splits.
 
     Raises
     ------
@@ -107,14 +108,12 @@ RESUME_KEYS = ("split", "optimizer", "generator", "epoch", "best", "history")
 
 def _check_resume_fields(checkpoint: dict, network: torch.nn.Module, optimizer: torch.optim.Optimizer) -> None:
     """Raises ValueError (naming the field) for the first field of ``checkpoint`` a resume cannot restore."""
-    from ..data.folders import Split
     from ..presets import SELECTION_RULES
     from .jsonfile import parse_json
 
     config = parse_json(checkpoint["config"], "config", "training config")
     if not isinstance(config.get("model"), dict) or not _is_integer(config.get("seed")):
         raise ValueError("config: holds no model settings or seed")
-    Split.from_json(checkpoint["split"], "split")
     _check_weights(checkpoint["model"], network.state_dict())
     _check_optimizer(checkpoint["optimizer"], optimizer, {name: p for name, p in network.named_parameters()})
     try:

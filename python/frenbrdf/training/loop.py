@@ -249,7 +249,13 @@ def checked_resume(run_dir: Path, cfg: TrainConfig) -> dict:
         network = AutoEncoder(cfg.model)
     if cfg.decoder_from:
         network.decoder.requires_grad_(False)  # as train() freezes it: the optimiser holds the encoder's only
-    return checkpoints.load_for_resume(run_dir / "last.pt", network, make_optimizer(network, cfg))
+    path = run_dir / "last.pt"
+    checkpoint = checkpoints.load_for_resume(path, network, make_optimizer(network, cfg))
+    try:
+        Split.from_json(checkpoint["split"], "split")
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
+    return checkpoint
 
 
 def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Path) -> Split:
