@@ -193,7 +193,7 @@ def test_every_config_reader_refuses_a_bad_file_in_one_line(files, tmp_path, cap
 
 NUMBERS = st.sampled_from(["-1", "0", "1", "3", "1e9", "nan", "inf", "-inf", "2.5", "x", "", str(2**64), str(2**31),
                            "99999999999999999999"])
-FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+FAST = settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 @FAST

@@ -3,7 +3,7 @@ folder (or file) it is pointed at, with every file under the test's folder hashe
 
 A command may write into a new folder, an empty one, or its own earlier output (recognised by its marker);
 a folder holding anything else (hidden entries included) is refused, and with --overwrite those entries are
-kept; an input, its folder, or a folder holding it is refused even with --overwrite. Files a command did not
+kept; an input, its folder, a folder holding it, or another command's output is refused even with --overwrite. Files a command did not
 write never change, whatever the outcome.
 """
 
@@ -118,7 +118,7 @@ def _state(state: str, root: Path, inputs: Path, command: Command) -> tuple[Path
         other = "spectrum" if command.name != "spectrum" else "synth"
         argv = next(c for c in COMMANDS if c.name == other).argv(inputs, out)
         assert _run(argv) == 0
-        return out, "refused"
+        return out, "never"  # one command's output a folder: never shared, even when asked
     elif state == "input-folder":  # synth reads nothing: there it is a folder of the user's files
         return inputs, "refused" if command.name == "synth" else "never"
     elif state == "symlink-to-empty":
@@ -233,10 +233,8 @@ def test_a_forged_marker_cannot_make_a_command_delete_outside_its_folder(tmp_pat
     out = tmp_path / "out"
     out.mkdir()
     (out / MARKER).write_text(json.dumps({"command": "synth", "entries": ["../victim.txt", "/etc"]}))
-    claimed = OutputFolder.claim(out, command="synth", overwrite=True)
-    assert claimed.earlier == frozenset() and MARKER in claimed.others  # not a marker of ours: the user's file
-    with claimed.staged() as staging:
-        (staging / "a.txt").write_text("new")
+    with pytest.raises(ValueError, match="cannot read"):  # not a marker of ours, and not to be replaced
+        OutputFolder.claim(out, command="synth", overwrite=True)
     assert victim.read_text() == "keep me"
 
 

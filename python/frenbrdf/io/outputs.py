@@ -9,8 +9,9 @@ A command writes its folder into
 
 Anything else in the folder is the user's. Without ``overwrite`` a folder holding such entries is
 refused; with ``overwrite`` the command writes beside them, and still never replaces or deletes one:
-``overwrite`` lets a command replace only what a run of the same command wrote. An output is never
-one of the command's inputs, the folder of an input, nor a folder holding one.
+``overwrite`` lets a command replace only what a run of the same command wrote. A folder holds one
+command's output: another command's (or a marker that cannot be read) is refused even with ``overwrite``.
+An output is never one of the command's inputs, the folder of an input, nor a folder holding one.
 
 Two ways to write, both through :class:`OutputFolder`:
 
@@ -177,12 +178,13 @@ class OutputFolder:
                 earlier = frozenset(set(marker["entries"]) & entries)
                 entries -= earlier | {MARKER}
             others = frozenset(entries)
+            if MARKER in others:  # one marker a folder: another command's output is never shared, even when asked
+                whose = f"frenbrdf {marker['command']}'s output" if marker else f"a {MARKER} frenbrdf cannot read"
+                raise _option_error(option, out, f"holds {whose}; choose a new or empty folder")
             if others and not overwrite:
                 shown = ", ".join(sorted(others)[:4]) + (" …" if len(others) > 4 else "")
-                whose = f"frenbrdf {marker['command']}'s output" if marker and marker["command"] != command \
-                    else "not this command's earlier output"
-                raise _option_error(option, out, f"holds {shown} ({whose}); choose a new or empty folder, or pass "
-                                    "--overwrite to write beside those (they are kept)")
+                raise _option_error(option, out, f"holds {shown} (not this command's earlier output); choose a new "
+                                    "or empty folder, or pass --overwrite to write beside those (they are kept)")
             _check_writable(target, option)
         else:
             parent = next(p for p in target.parents if p.exists())

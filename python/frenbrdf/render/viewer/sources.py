@@ -155,7 +155,8 @@ def _result_folder(folder: Path) -> Material:
     if z.ndim != 1 or not np.all(np.isfinite(z)):
         raise ValueError(f"{report_path}: its latent z is not a finite vector")
     nbrdf = load_nbrdf(nbrdf_path)
-    return Material(nbrdf, folder.name, f"{folder}: reconstructed from {source} by the model {model_key} "
+    model_name = "the packaged model" if model_key == "pretrained" else f"the model {model_key}"
+    return Material(nbrdf, folder.name, f"reconstructed in {folder}/ from {source} by {model_name} "
                     f"(refine {refine}; {_describe(nbrdf)})", z, model_key)
 
 
