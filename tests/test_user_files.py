@@ -325,3 +325,18 @@ def test_a_fifo_in_the_truth_cache_is_replaced_not_read(tmp_path, merl_table):
         computed = truth.coefficients(mapped, valid, "key")
     assert not unblocked.read
     np.testing.assert_array_equal(np.load(tmp_path / "key.npy"), computed)
+
+
+def test_a_resume_with_another_method_or_model_names_the_difference_not_a_weight(run, tmp_path, capsys):
+    source, config = run
+    folder = tmp_path / "run"
+    folder.mkdir()
+    for path in source.iterdir():
+        (folder / path.name).write_bytes(path.read_bytes())
+    before = {path.name: path.read_bytes() for path in folder.iterdir()}
+    last = _fails(["train", "--config", config, "--method", "frenbrdf", "--out", folder, "--resume", "--quiet"], capsys)
+    assert "the run was trained with another method ('nbrdf', this resume asks for 'frenbrdf')" in last, last
+    last = _fails(["train", "--method", "nbrdf", "--data", load_config(config).data, "--out", folder, "--resume",
+                   "--quiet"], capsys)  # the preset's model, not the run's
+    assert re.search(r"another model\.\w+\.hidden \(", last), last
+    assert {path.name: path.read_bytes() for path in folder.iterdir()} == before

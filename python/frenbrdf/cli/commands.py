@@ -106,7 +106,7 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
     from ..data.fitting import FitConfig, fit_nbrdf, save_nbrdf
     from ..io.measured import read_table
     from ..io.outputs import OutputFolder
-    from ..io.paths import input_file
+    from ..io.paths import input_file, naming
 
     try:
         hidden = tuple(int(h) for h in args.hidden.split(","))
@@ -124,7 +124,8 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
                              additive=True)
     out.check_names(stem + suffix for stem in stems for suffix in suffixes)
     for path in materials:  # each fit moved in as soon as it is done: a long run keeps what it finished
-        nbrdf = fit_nbrdf(read_table(path), config, progress=not args.quiet)
+        with naming(path):
+            nbrdf = fit_nbrdf(read_table(path), config, progress=not args.quiet)
         with out.staged() as staging:
             save_nbrdf(staging / f"{path.stem}.pt", nbrdf)
             if args.merl:

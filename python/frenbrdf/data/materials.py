@@ -51,17 +51,18 @@ def load_material_file(path: str | os.PathLike):
     from .fitting import load_nbrdf
 
     path = input_file(path, "material file")  # a folder, FIFO or link loop is named as such, never read
-    if path.suffix == ".h5":
+    suffix = path.suffix.lower()  # GOLD.H5 is read as every other command reads it
+    if suffix == ".h5":
         from .nbrdf_import import keras_nbrdf, load_keras_nbrdf
 
         return keras_nbrdf(load_keras_nbrdf(path))
-    if path.suffix == ".pt":
+    if suffix == ".pt":
         return load_nbrdf(path)
-    if path.suffix == ".bsdf":
+    if suffix == ".bsdf":
         from ..io.bsdf import read_bsdf
 
         return read_bsdf(path)
-    if path.suffix == ".binary" or path.stat().st_size == FILE_BYTES:
+    if suffix == ".binary" or path.stat().st_size == FILE_BYTES:
         return read_merl(path)
     try:
         return load_nbrdf(path)

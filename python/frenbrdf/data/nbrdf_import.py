@@ -195,9 +195,9 @@ def _check_layers(layers: list[tuple[str, Layer]], path: Path) -> None:
                              f"{bias.shape}; expected (in, out) and (out,)")
         if kernel.shape[0] != n_in:
             raise ValueError(f"{path}: layer {name!r} takes {kernel.shape[0]} inputs but {source} has {n_in}")
-        if kernel.shape[1] > MAX_WIDTH:
-            raise ValueError(f"{path}: layer {name!r} is {kernel.shape[1]} wide; an NBRDF's layers are at most "
-                             f"{MAX_WIDTH}")
+        if not 1 <= kernel.shape[1] <= MAX_WIDTH:
+            raise ValueError(f"{path}: layer {name!r} is {kernel.shape[1]} wide; an NBRDF's layers are 1 … "
+                             f"{MAX_WIDTH} wide")
         for weight, values in (("kernel", kernel), ("bias", bias)):
             bad = np.argwhere(~np.isfinite(values))
             if len(bad):
@@ -335,15 +335,20 @@ def import_nbrdf(weight_paths: Iterable[str | os.PathLike], out_dir: str | os.Pa
         listed = "; ".join(f"{stem}: {', '.join(map(str, group))}" for stem, group in clashes.items())
         raise ValueError(f"weight files with the same name would write the same output file ({listed})")
 
-    out = OutputFolder.claim(out_dir, command="import-nbrdf", inputs=paths, overwrite=overwrite, additive=True)
+    out = OutputFolder.claim(out_dir, command="import-nbrdf", inputs=paths, overwrite=overwrite, additive=True,
+                             option="out_dir")
     names = [f"{path.stem}.binary" for path in paths]
     out.check_names(names)
     check_free_space(out.target, len(names) * FILE_BYTES, f"{len(names)} MERL files")
     networks = [load_keras_nbrdf(path) for path in paths]
 
     with out.staged() as staging:
-        bar = tqdm(zip(names, networks), total=len(paths), desc="import-nbrdf", unit="material",
+        bar = tqdm(zip(paths, names, networks), total=len(paths), desc="import-nbrdf", unit="material",
                    disable=not progress)
-        for name, layers in bar:
-            write_merl(staging / name, nbrdf_merl_table(layers))
+        for path, name, layers in bar:
+            table = nbrdf_merl_table(layers)
+            if not np.all(np.isfinite(table)):  # finite weights so large that exp(x) − 1 overflows
+                raise ValueError(f"{path}: the network's output is not finite at {np.sum(~np.isfinite(table)):,} "
+                                 "MERL bins (its weights are too large); not an NBRDF of a material")
+            write_merl(staging / name, table)
     return [out.path / name for name in names]

@@ -8,6 +8,7 @@ target, if it existed, is left as it was.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -22,24 +23,52 @@ from pathlib import Path
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """A temporary path to write to; renamed over ``path`` when the block ends without error.
 
+    ``path``'s folder is created if missing (:func:`frenbrdf.io.outputs.check_output_file` accepts a folder that
+    can be created: the work done must not be lost for want of it).
+
     >>> with atomic_path("out.png") as temporary:   # doctest: +SKIP
     ...     figure.savefig(temporary)
     """
     path = Path(path)
-    # A name no other process or thread picks; the writer creates the file, so it gets the
-    # usual permissions (a file made by mkstemp would be private to its owner).
-    temporary = path.with_name(f".{path.name}.{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix or '.tmp'}")
+    temporary = path.with_name(temporary_name(path.name))
+    path.parent.mkdir(parents=True, exist_ok=True)
     try:
         yield temporary
         os.replace(temporary, path)
     except BaseException as error:
-        temporary.unlink(missing_ok=True)
-        # A message names the path the caller gave, never the hidden temporary one.
-        if isinstance(error, OSError) and error.filename is not None and str(temporary) in str(error.filename):
-            raise type(error)(error.errno, error.strerror, str(path)) from None
-        if isinstance(error, ValueError) and str(temporary) in str(error):
-            raise type(error)(str(error).replace(str(temporary), str(path))) from None
-        raise
+        with contextlib.suppress(OSError):  # e.g. a name too long to create is too long to remove
+            temporary.unlink(missing_ok=True)
+        raise_naming(error, temporary, path)
+
+
+def raise_naming(error: BaseException, hidden: Path, shown: Path) -> None:
+    """Raises ``error``, its message naming ``shown`` where it named ``hidden`` (a temporary file or a staging
+    folder a user never sees: a message names the path the user gave)."""
+    if isinstance(error, OSError) and error.filename is not None and str(hidden) in str(error.filename):
+        raise type(error)(error.errno, error.strerror, str(error.filename).replace(str(hidden), str(shown))) from None
+    if isinstance(error, ValueError) and str(hidden) in str(error):
+        try:
+            renamed = type(error)(str(error).replace(str(hidden), str(shown)))
+        except TypeError:  # a subclass with other arguments
+            renamed = ValueError(str(error).replace(str(hidden), str(shown)))
+        raise renamed from None
+    raise error
+
+
+#: The longest file name (in bytes) most file systems take; a temporary name is kept within it.
+NAME_MAX = 255
+
+
+def temporary_name(name: str) -> str:
+    """A hidden name beside ``name`` that no other process or thread picks, with the same suffix, and no
+    longer than :data:`NAME_MAX` bytes however long ``name`` is (a legal 250-byte name must not fail for its
+    temporary's sake). The writer creates the file, so it gets the usual permissions (a file made by mkstemp
+    would be private to its owner)."""
+    suffix = Path(name).suffix or ".tmp"
+    tail = f".{os.getpid()}-{uuid.uuid4().hex[:8]}{suffix}"
+    room = NAME_MAX - 1 - len(tail.encode())
+    stem = name.encode()[:max(room, 0)].decode(errors="ignore")  # cut on a character, not inside one
+    return f".{stem}{tail}"
 
 
 def write_text(path: str | os.PathLike, text: str) -> None:

@@ -67,7 +67,8 @@ def load(path: str | os.PathLike) -> dict:
     return checkpoint
 
 
-def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer: torch.optim.Optimizer) -> dict:
+def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer: torch.optim.Optimizer,
+                    config: dict | None = None) -> dict:
     """The checkpoint a training run resumes from (``last.pt``), every field it restores checked.
 
     Parameters
@@ -77,6 +78,9 @@ def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer
     network, optimizer
         The run's network and optimiser, as the resumed run builds them (on the ``meta`` device is enough:
         only their shapes and parameter groups are read, nothing is loaded into them).
+    config
+        The resumed run's training config (:func:`frenbrdf.training.to_dict`): its method, model and seed must be
+        the checkpoint's, checked first, so a mismatch is named as such rather than as weights that do not fit.
 
     Returns
     -------
@@ -96,17 +100,27 @@ def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer
     if missing:
         raise ValueError(f"{path}: not a checkpoint to resume from: it lacks {', '.join(missing)}")
     try:
-        _check_resume_fields(checkpoint, network, optimizer)
+        _check_resume_fields(checkpoint, network, optimizer, config)
     except ValueError as error:
         raise ValueError(f"{path}: {error}") from None
     return checkpoint
+
+
+def _difference(saved, given, where: str) -> tuple[str, object, object]:
+    """The first place (a dotted key) where two configs differ, with the two values there."""
+    if isinstance(saved, dict) and isinstance(given, dict):
+        for key in sorted(set(saved) | set(given)):
+            if saved.get(key) != given.get(key):
+                return _difference(saved.get(key), given.get(key), f"{where}.{key}")
+    return where, saved, given
 
 
 #: What a checkpoint a run resumes from holds beyond :func:`load`'s fields.
 RESUME_KEYS = ("split", "optimizer", "generator", "epoch", "best", "history")
 
 
-def _check_resume_fields(checkpoint: dict, network: torch.nn.Module, optimizer: torch.optim.Optimizer) -> None:
+def _check_resume_fields(checkpoint: dict, network: torch.nn.Module, optimizer: torch.optim.Optimizer,
+                         expected: dict | None = None) -> None:
     """Raises ValueError (naming the field) for the first field of ``checkpoint`` a resume cannot restore."""
     from ..presets import SELECTION_RULES
     from .jsonfile import parse_json
@@ -114,6 +128,11 @@ def _check_resume_fields(checkpoint: dict, network: torch.nn.Module, optimizer: 
     config = parse_json(checkpoint["config"], "config", "training config")
     if not isinstance(config.get("model"), dict) or not _is_integer(config.get("seed")):
         raise ValueError("config: holds no model settings or seed")
+    for key in ("method", "seed", "model"):
+        if expected is not None and key in expected and config.get(key) != expected[key]:
+            where = _difference(config.get(key), expected[key], key)
+            raise ValueError(f"the run was trained with another {where[0]} ({where[1]!r:.60}, this resume asks for "
+                             f"{where[2]!r:.60}); resume with the run's own config (--config RUN/config.json)")
     _check_weights(checkpoint["model"], network.state_dict())
     _check_optimizer(checkpoint["optimizer"], optimizer, {name: p for name, p in network.named_parameters()})
     try:

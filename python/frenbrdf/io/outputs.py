@@ -38,7 +38,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from .atomic import save_json
+from .atomic import raise_naming, save_json
 
 #: The hidden file that marks a folder as a command's output and lists what it wrote.
 MARKER = ".frenbrdf-output.json"
@@ -253,6 +253,8 @@ class OutputFolder:
                 for name in self.earlier - names:
                     _remove(self.target / name)
             self.finish()
+        except (OSError, ValueError) as error:  # a message names the output, never the hidden staging folder
+            raise_naming(error, staging, self.path)
         finally:
             shutil.rmtree(staging, ignore_errors=True)
 

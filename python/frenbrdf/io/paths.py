@@ -16,6 +16,8 @@ import os
 import stat
 import zipfile
 import zlib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 #: The most bytes one member of an ``.npz`` file may declare (uncompressed) by default: 2 GiB.
@@ -49,6 +51,23 @@ def input_file(path: str | os.PathLike, what: str = "file") -> Path:
         kind = "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode) else "a device"
         raise ValueError(f"{path}: {kind}, not a regular {what}")
     return path
+
+
+@contextmanager
+def naming(path: str | os.PathLike) -> Iterator[None]:
+    """Names ``path`` in a ValueError raised in the block that does not name it already: what a command finds
+    wrong in a file's content (no measured bin, a value out of range) is reported against the file, as a reader's
+    own errors are, however deep in the analysis it is found."""
+    try:
+        yield
+    except ValueError as error:
+        if os.fspath(path) in str(error):
+            raise
+        try:
+            named = type(error)(f"{os.fspath(path)}: {error}")
+        except TypeError:  # a subclass with other arguments (UnicodeDecodeError)
+            named = ValueError(f"{os.fspath(path)}: {error}")
+        raise named from None
 
 
 def checked_npz(path: str | os.PathLike, what: str = ".npz file", *, member_bytes: int = NPZ_MEMBER_BYTES,

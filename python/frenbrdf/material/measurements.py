@@ -216,11 +216,13 @@ def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], np.ndarray]:
     lengths = {name: array.shape for name, array in columns.items()}
     if any(len(shape) != 1 for shape in lengths.values()) or len(set(lengths.values())) != 1:
         raise ValueError(f"{path}: every array must be 1-D with one entry per sample, got shapes {lengths}")
-    try:
-        columns = {name: array.astype(np.float64) for name, array in columns.items()}
-    except (TypeError, ValueError):
-        raise ValueError(f"{path}: the arrays must be numbers, got dtypes "
-                         f"{ {name: str(a.dtype) for name, a in columns.items()} }") from None
+    # Real numbers only: numpy would turn text into numbers, drop an imaginary part, and read booleans, dates or
+    # records as numbers without a word.
+    for name, values in columns.items():
+        if values.dtype.kind not in "iuf":
+            raise ValueError(f"{path}: array {name} holds {values.dtype} values; the arrays must be real numbers "
+                             "(integer or floating point)")
+    columns = {name: array.astype(np.float64) for name, array in columns.items()}
     return columns, np.arange(1, len(next(iter(columns.values()))) + 1)
 
 
@@ -254,6 +256,14 @@ def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.nda
     if values.max() > MAX_REFLECTANCE:
         fail(np.any(values > MAX_REFLECTANCE, axis=1), f"reflectance above {MAX_REFLECTANCE:g} 1/sr (MERL's highest "
              "spikes are about 1e5; is the unit right?)")
+    for column, top, unit in (("theta_i", np.pi / 2, " rad"), ("theta_o", np.pi / 2, " rad"),
+                              ("theta_i_deg", 90.0, "°"), ("theta_o_deg", 90.0, "°")):
+        # θ is measured from the normal: 0 ≤ θ < 90° (angles in the wrong unit would wrap round without a word)
+        outside = (columns[column] < 0) | (columns[column] >= top) if column in columns else None
+        if outside is not None and outside.any():
+            hint = "; angles in degrees go in columns named theta_i_deg, …" if unit == " rad" else ""
+            fail(outside, f"{column} is {columns[column][outside][0]:.6g}, outside 0 … {top:.6g}{unit} "
+                          f"(above the surface{hint})")
     wi, wo = _directions(columns)
     for name, d in (("ω_i", wi), ("ω_o", wo)):
         length = np.sqrt(np.einsum("ij,ij->i", d, d))  # no (N, 3) temporary: memory stays near the data's

@@ -39,7 +39,7 @@ from ..io.atomic import save_csv, save_json
 from ..io.measured import is_bsdf, read_table
 from ..io.merl import N_BINS, merl_bin_angles
 from ..io.outputs import OutputFolder
-from ..io.paths import input_file
+from ..io.paths import input_file, naming
 from ..models.frequency_fit import slice_directions
 from ..models.losses import (
     MAX_LMAX,
@@ -236,7 +236,9 @@ def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None,
     named = {}
     for path in ([Path(truth)] if truth else []) + sources:
         name = path.stem if path.stem not in named else f"{path.stem} ({path.parent.name or path})"
-        named[f"{name} (truth)" if truth and not named else name] = (path, analyser.coefficients(load_source(path)))
+        with naming(path):
+            coefficients = analyser.coefficients(load_source(path))
+        named[f"{name} (truth)" if truth and not named else name] = (path, coefficients)
     powers = {name: analyser.power(c) for name, (_, c) in named.items()}
     truth_name = next(iter(named)) if truth else None
     errors = ({name: analyser.power(c - named[truth_name][1]) for name, (_, c) in named.items() if name != truth_name}

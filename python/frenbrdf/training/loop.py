@@ -250,7 +250,7 @@ def checked_resume(run_dir: Path, cfg: TrainConfig) -> dict:
     if cfg.decoder_from:
         network.decoder.requires_grad_(False)  # as train() freezes it: the optimiser holds the encoder's only
     path = run_dir / "last.pt"
-    checkpoint = checkpoints.load_for_resume(path, network, make_optimizer(network, cfg))
+    checkpoint = checkpoints.load_for_resume(path, network, make_optimizer(network, cfg), to_dict(cfg))
     try:
         Split.from_json(checkpoint["split"], "split")
     except ValueError as error:
