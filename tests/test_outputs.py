@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,19 +25,19 @@ from frenbrdf.io.outputs import MARKER, OutputFolder
 
 from .conftest import constant_table, random_layers, write_keras_h5
 
-# --- the commands, each a function (tmp, out, overwrite) -> argv, with the inputs it reads -----------------------
+# --- the commands, each with the argv it runs given the inputs folder and the output --------------------------
 
 
 @dataclass(frozen=True)
 class Command:
     name: str
-    argv: callable  # (inputs: Path, out: Path) -> list[str]
+    argv: Callable[[Path, Path], list[str]]  # (the inputs folder, the output) -> the command line
     replaces_own: bool = True  # a rerun into its own output needs no --overwrite (train and additive ones do)
     slow: bool = False  # a success takes more than a few seconds: only the refusals run by default
 
 
 def _inputs(root: Path) -> Path:
-    """The inputs every command reads, in ``root/inputs``: a MERL table, samples, weights, a run, a front."""
+    """The inputs the commands read, in ``root/inputs``: a MERL table, samples, Keras weights, a chart-3 front."""
     folder = root / "inputs"
     if folder.is_dir():
         return folder
@@ -257,3 +258,32 @@ def test_a_dead_writers_staging_folder_is_cleaned_and_a_live_ones_refused(tmp_pa
     (out / f".frenbrdf-partial-{os.getppid()}-cafebabe").mkdir()  # a live process
     with pytest.raises(ValueError, match="another frenbrdf process"):
         OutputFolder.claim(out, command="synth")
+
+
+# --- the long commands: train, evaluate, demo refuse before any work --------------------------------------------
+
+LONG = {
+    "train": lambda source, out: ["train", "--data", str(source), "--out", str(out), "--epochs", "1", "--quiet"],
+    "evaluate": lambda source, out: ["evaluate", str(source), "--out", str(out), "--quiet"],
+    "demo": lambda source, out: ["demo", "--data", str(source), "--out", str(out), "--epochs", "1", "--quiet"],
+}
+
+
+@pytest.mark.parametrize("state", ["hidden-only", "user-files", "other-result", "symlink-to-user", "input-folder"])
+@pytest.mark.parametrize("name", sorted(LONG))
+def test_the_long_commands_refuse_a_folder_that_is_not_theirs_before_any_work(tmp_path, name, state):
+    """Their successful writes are tested where they run (tests/test_training.py, test_evaluation.py, test_inputs.py);
+    here every refusal, which comes before any training or rendering."""
+    source = tmp_path / ("run" if name == "evaluate" else "data")  # what the command reads: a run or a data folder
+    source.mkdir()
+    frenbrdf.write_merl(source / "grey.binary", constant_table(0.1))
+    inputs = _inputs(tmp_path)
+    if state == "input-folder":
+        out = source
+    else:
+        out, _ = _state(state, tmp_path, inputs, COMMANDS[1])  # synth: its other-result is spectrum's output
+    before = _hashes(tmp_path)
+    assert _run(LONG[name](source, out)) == 2
+    if state in ("input-folder", "other-result"):  # never, even when asked
+        assert _run(LONG[name](source, out) + ["--overwrite"]) == 2
+    assert _hashes(tmp_path) == before
