@@ -76,6 +76,7 @@ def test_a_legal_254_byte_output_name_is_written(grey, tmp_path, capsys, argv, n
 @pytest.mark.parametrize("argv", [
     ["render", "{grey}", "--out", "{out}/new/x.png", "--resolution", "8"],
     ["convert", "{grey}", "{out}/new/x.csv", "--samples", "60"],
+    ["convert", "{grey}", "{out}/new/x.binary"],  # the native MERL writer: frenbrdf.io.merl.write_merl
 ])
 def test_a_file_output_in_a_folder_not_yet_made_is_written(grey, tmp_path, capsys, argv):
     """The check accepts a folder that can be created; render once failed for want of it after rendering."""
