@@ -1,7 +1,7 @@
 //! The weight stage of `full` refinement (`_native::refine`): 100 Adam steps on one NBRDF
 //! (6 → w → w → 3, the widths `full` refines) against 4000 samples, the budget's sample
 //! count. The PyTorch loop it replaced is timed against it, in the whole of `full`, by
-//! `benches/studies/refine_timing.py ../shared/data/rgl-measured/*.bsdf --against 1940711
+//! `research/studies/refine_timing.py ../shared/data/rgl-measured/*.bsdf --against 1940711
 //! --width 48 --weight-steps 1000` (docs/performance.md).
 
 use std::hint::black_box;

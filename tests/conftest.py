@@ -24,7 +24,8 @@ PUBLISHED_DIR = SHARED_DATA / "merl-nbrdf"
 PUBLISHED = sorted(PUBLISHED_DIR.glob("*.h5"))
 needs_published = pytest.mark.skipif(
     not PUBLISHED, reason=f"published NBRDF weights not found in {PUBLISHED_DIR} (set FRENBRDF_SHARED_DATA)")
-BENCHES = Path(__file__).resolve().parents[1] / "benches"
+#: The folders of scripts outside the package: benchmarks, research (studies, charts) and the release step.
+SCRIPT_FOLDERS = [Path(__file__).resolve().parents[1] / name for name in ("benches", "research", "release")]
 
 
 def _installed(name: str) -> bool:
@@ -58,9 +59,10 @@ def mitsuba_jit():
     return mitsuba
 
 
-def bench_module(name: str):
-    """A module of benches/ (not part of the installed package), imported as the scripts import it."""
-    for folder in (BENCHES, *(path for path in sorted(BENCHES.iterdir()) if path.is_dir())):
+def script_module(name: str):
+    """A script's module from benches/, research/ or release/ (not part of the installed package), imported as the
+    scripts import each other: their folders on ``sys.path``."""
+    for folder in (folder for top in SCRIPT_FOLDERS for folder in (top, *sorted(top.iterdir())) if folder.is_dir()):
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))
     return importlib.import_module(name)

@@ -12,12 +12,12 @@ import pytest
 
 from frenbrdf.training import train
 
-from .conftest import BENCHES, mitsuba_jit, tiny
+from .conftest import SCRIPT_FOLDERS, mitsuba_jit, tiny
 
 
 def load_script(name: str):
-    """A script of benches/ (any of its folders) as a module (benches/ is not a package)."""
-    (path,) = BENCHES.glob(f"**/{name}.py")
+    """A script of benches/, research/ or release/ (any of their folders) as a module (none is a package)."""
+    (path,) = (path for folder in SCRIPT_FOLDERS for path in folder.glob(f"**/{name}.py"))
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

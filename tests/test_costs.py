@@ -95,7 +95,7 @@ def test_the_measured_fit_refuses_an_lmax_whose_matrix_would_not_fit():
 @pytest.mark.parametrize(("variant", "lmax", "limit"), [("tone", 0, "80"), ("tone", 300, "80"), ("paper", 0, "511"),
                                                         ("paper", 512, "511")])
 def test_spectrum_refuses_an_lmax_out_of_range_before_any_work(tmp_path, variant, lmax, limit):
-    from frenbrdf.study.spectrum import spectrum_report
+    from frenbrdf.evaluation.spectrum import spectrum_report
 
     material = tmp_path / "missing.binary"  # not read: the size is refused first
     with pytest.raises(ValueError, match=f"lmax must be a whole number in 1 … {limit} for variant '{variant}', "
@@ -105,8 +105,8 @@ def test_spectrum_refuses_an_lmax_out_of_range_before_any_work(tmp_path, variant
 
 
 def test_spectrum_takes_the_sphere_fits_larger_lmax():
+    from frenbrdf.evaluation.spectrum import MAX_SPECTRUM_LMAX, largest_lmax
     from frenbrdf.models.losses import MAX_LMAX
-    from frenbrdf.study.spectrum import MAX_SPECTRUM_LMAX, largest_lmax
 
     assert largest_lmax("tone") == largest_lmax("highlights") == MAX_SPECTRUM_LMAX < largest_lmax("paper") == MAX_LMAX
 

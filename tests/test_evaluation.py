@@ -11,9 +11,7 @@ import pytest
 
 from frenbrdf import cli
 from frenbrdf.data.synth import write_bank
-from frenbrdf.render.figures import rendered_materials
-from frenbrdf.render.renderer import Scene, material_mask
-from frenbrdf.study.evaluation import (
+from frenbrdf.evaluation.evaluate import (
     ROWS,
     EvaluateConfig,
     edit_pairs,
@@ -22,6 +20,8 @@ from frenbrdf.study.evaluation import (
     evaluation_set,
     image_metrics,
 )
+from frenbrdf.render.figures import rendered_materials
+from frenbrdf.render.renderer import Scene, material_mask
 from frenbrdf.training import Run, train
 
 from .conftest import tiny
@@ -410,7 +410,7 @@ def test_cli_evaluate_all(tiny_runs, other_bank, tmp_path, capsys):
 def test_a_method_evaluated_twice_is_named_alike_in_every_seed(tmp_path):
     """Two runs of one method (e.g. trained with and without augmentation) keep one name across seeds,
     so the over-seeds comparison pairs them: the folder above the method's for ``--seeds`` runs."""
-    from frenbrdf.study.evaluation import run_label
+    from frenbrdf.evaluation.evaluate import run_label
 
     assert {run_label(tmp_path / "bank-paper" / "frenbrdf" / f"seed-{s}", "frenbrdf") for s in (0, 1, 2)} == {
         "bank-paper"}

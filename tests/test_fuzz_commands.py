@@ -266,7 +266,7 @@ def test_a_sparse_20_gb_bsdf_is_refused_under_a_memory_cap(files, tmp_path, comm
 @pytest.mark.parametrize("argv", [["render", "GREY", "--out", "x.png", "--resolution", "8192"],
                                   ["spectrum", "GREY", "--out", "s", "--lmax", "MAXLMAX"]])
 def test_the_largest_accepted_sizes_run_under_the_memory_cap(files, tmp_path, argv):
-    from frenbrdf.study.spectrum import MAX_SPECTRUM_LMAX
+    from frenbrdf.evaluation.spectrum import MAX_SPECTRUM_LMAX
 
     argv = [str(files["grey.binary"]) if a == "GREY" else str(MAX_SPECTRUM_LMAX) if a == "MAXLMAX" else a
             for a in argv]

@@ -17,7 +17,7 @@ from frenbrdf.material.measurements import read_measurements
 from frenbrdf.models import pretrained
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
 
-from .conftest import bench_module, tiny
+from .conftest import script_module, tiny
 from .io.test_bsdf_native import flat_material, tensor_file
 
 
@@ -388,7 +388,7 @@ def test_missing_or_foreign_packed_files_are_named(run_dir, tmp_path):
 
 @pytest.mark.slow
 def test_chart_8_runs_on_a_tiny_run(run_dir, tmp_path):
-    report = bench_module("chart_refine").refine_chart(run_dir, tmp_path, latent_steps=(2,), full_latent_steps=2,
+    report = script_module("chart_refine").refine_chart(run_dir, tmp_path, latent_steps=(2,), full_latent_steps=2,
                                                        weight_steps=(2,), fit_epochs=(), max_materials=1,
                                                        resolution=32, progress=False)
     assert {row["family"] for row in report["points"]} == {"encoder", "latent", "full"}
@@ -397,11 +397,11 @@ def test_chart_8_runs_on_a_tiny_run(run_dir, tmp_path):
 
 @pytest.mark.slow
 def test_chart_8c_measures_every_schedule(run_dir, tmp_path):
-    schedules = bench_module("chart_refine_schedules")
+    schedules = script_module("chart_refine_schedules")
     points = [(family, label, dataclasses.replace(config, latent_steps=min(config.latent_steps, 2),
                                                   weight_steps=min(config.weight_steps, 2)))
               for family, label, config in schedules.POINTS]
-    report = bench_module("chart_refine").refine_chart(run_dir, tmp_path, max_materials=1, resolution=32,
+    report = script_module("chart_refine").refine_chart(run_dir, tmp_path, max_materials=1, resolution=32,
                                                        progress=False, points=points, draw_chart=schedules.draw,
                                                        name="chart8c")
     assert [row["budget"] for row in report["points"]] == [label for _, label, _ in schedules.POINTS]
@@ -411,7 +411,7 @@ def test_chart_8c_measures_every_schedule(run_dir, tmp_path):
 def test_real_measurement_study_runs_on_a_bsdf(run_dir, tmp_path):
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
-    study = bench_module("real_measurements")
+    study = script_module("real_measurements")
     assert study.main([str(measurement), "--model", str(run_dir), "--samples", "300", "--resolution", "16",
                        "--fit-epochs", "0", "--out", str(tmp_path / "out")]) == 0
     report = json.loads((tmp_path / "out" / "real.json").read_text())
@@ -426,7 +426,7 @@ def test_latent_reach_study_splits_the_error_at_the_published_fit(run_dir, tmp_p
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
     write_keras_h5(tmp_path / "flat_rgb.h5", random_layers([6, 8, 3], seed=1))
-    study = bench_module("latent_reach")
+    study = script_module("latent_reach")
     assert study.main([str(measurement), "--fits", str(tmp_path), "--model", str(run_dir), "--samples", "300",
                        "--steps", "3", "--draws", "0", "1", "--resolution", "16", "--out", str(tmp_path / "out")]) == 0
     rows = json.loads((tmp_path / "out" / "reach.json").read_text())["rows"]
@@ -442,7 +442,7 @@ def test_latent_reach_study_splits_the_error_at_the_published_fit(run_dir, tmp_p
 def test_full_limits_study_measures_every_variant_and_the_table(run_dir, toy_materials, tmp_path):
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
-    study = bench_module("full_limits")
+    study = script_module("full_limits")
     assert study.main([str(measurement), "--model", str(run_dir), "--samples", "200", "400", "--weight-steps", "2",
                        "5", "--widths", "0", "40", "--draws", "0", "1", "--resolution", "16",
                        "--out", str(tmp_path / "out")]) == 0
@@ -470,7 +470,7 @@ def test_refine_timing_times_this_tree_against_a_commit(run_dir, toy_materials, 
         pytest.skip("not a git checkout: the timing study reads earlier commits with git show")
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
-    study = bench_module("refine_timing")
+    study = script_module("refine_timing")
     table = sorted(toy_materials.glob("*.binary"))[0]
     assert study.main([str(measurement), str(table), "--model", str(run_dir), "--budget", "latent", "--samples",
                        "200", "--repeats", "2", "--against", "HEAD"]) == 0
@@ -487,7 +487,7 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
     measurement = tmp_path / "flat_rgb.bsdf"
     measurement.write_bytes(tensor_file(flat_material()))
     tables = sorted(toy_materials.glob("*.binary"))[:2]
-    study = bench_module("compare_models")
+    study = script_module("compare_models")
     config = tmp_path / "config.json"  # the second table comes as a training config's held-out material
     config.write_text(json.dumps({"holdout": [tables[1].stem]}))
     assert study.main(["--models", str(run_dir), str(run_dir), "--labels", "base", "same/0", "--measurements",
@@ -513,7 +513,7 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
 def test_model_comparison_takes_a_baseline_of_several_runs(run_dir, toy_materials, tmp_path):
     """A baseline labelled NAME/RUN is its runs' mean per material (it once compared with no rows: NaN)."""
     table = sorted(toy_materials.glob("*.binary"))[0]
-    study = bench_module("compare_models")
+    study = script_module("compare_models")
     assert study.main(["--models", str(run_dir), str(run_dir), str(run_dir), "--labels", "base/0", "base/1", "other/0",
                        "--tables", str(table), "--samples", "300", "--resolution", "16", "--budgets", "none",
                        "--out", str(tmp_path / "out")]) == 0
@@ -529,7 +529,7 @@ def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
                                   "cache_dir": str(tmp_path / "cache"), "loss": {"eta": 0},
                                   "model": {"nbrdf": {"hidden": [8]}, "encoder": {"hidden": [16], "latent": 4},
                                             "decoder": {"hidden": [16]}}}))
-    card = bench_module("pretrained").build(str(config), [toy_materials], tmp_path / "work", tmp_path / "packed",
+    card = script_module("pretrained").build(str(config), [toy_materials], tmp_path / "work", tmp_path / "packed",
                                             tmp_path / "card.md", progress=False)
     assert frenbrdf.Model.pretrained(tmp_path / "packed").card["held_out"] == card["held_out"]
     assert abs(card["held_out"]["packed"]["psnr"] - card["held_out"]["float32"]["psnr"]) < 0.1
@@ -546,13 +546,13 @@ SHIPPED_QUALITY = {"none": (25.0, 5.0), "latent": (33.0, 2.0), "full": (38.0, 1.
 def test_pretrained_model_ships_and_reconstructs(tmp_path):
     """The packaged model loads, is the documented version and gives an unseen purple plastic back purple."""
     from frenbrdf.data.synth import write_bank
+    from frenbrdf.evaluation.evaluate import image_metrics
     from frenbrdf.render.renderer import Scene, material_mask, render
-    from frenbrdf.study.evaluation import image_metrics
 
     missing = [name for name in (pretrained.MODEL_FILE, pretrained.MAPPING_FILE, pretrained.CARD_FILE)
                if not (pretrained.PACKAGE_DIR / name).exists()]
     assert not missing, (f"the package ships no pretrained model ({pretrained.PACKAGE_DIR} lacks {missing}): "
-                         "run benches/pretrained.py and commit its files (docs/pretrained.md)")
+                         "run release/train_shipped_model.py and commit its files (docs/pretrained.md)")
     model = frenbrdf.Model.pretrained()
     assert model.card["version"] == pretrained.VERSION
     path = write_bank(tmp_path, n=4, seed=7, progress=False)[0]

@@ -12,12 +12,12 @@ import torch
 from frenbrdf import cli
 from frenbrdf.data import analytic
 from frenbrdf.data.fitting import save_nbrdf
+from frenbrdf.evaluation.spectrum import SpectrumAnalyser, relative_error_by_band
 from frenbrdf.io.merl import write_merl
 from frenbrdf.io.outputs import MARKER
 from frenbrdf.models import NBRDF, NBRDFConfig
 from frenbrdf.models.losses import SPHERE_AREA, frequency_variant
 from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.study.spectrum import SpectrumAnalyser, relative_error_by_band
 
 PLASTIC = analytic.AnalyticMaterial("plastic", diffuse=(0.3, 0.2, 0.1), specular=0.04, roughness=0.2)
 

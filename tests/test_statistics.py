@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from frenbrdf.study.statistics import compare_seeds, markdown, paired_interval
+from frenbrdf.evaluation.statistics import compare_seeds, markdown, paired_interval
 
 
 def summaries(nbrdf_offsets, hyper_offsets):
@@ -58,7 +58,7 @@ def test_seeds_must_hold_the_same_methods():
 def test_colour_difference_is_compared_like_rmse():
     """ΔE is lower-is-better like RMSE: its row is labelled ↓, and a steadily lower ΔE of a method is a
     significant negative difference, shown exactly as the same RMSE numbers would be."""
-    from frenbrdf.study.evaluation import ROWS
+    from frenbrdf.evaluation.evaluate import ROWS
 
     labels = dict(ROWS)
     assert labels["delta_e"].endswith("↓") and labels["edit_delta_e"].endswith("↓") and labels["rmse_x100"].endswith("↓")

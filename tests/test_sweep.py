@@ -8,14 +8,14 @@ from pathlib import Path
 import pytest
 
 from frenbrdf import cli
+from frenbrdf.evaluation.select import select_config
+from frenbrdf.evaluation.variants import MeasureSettings, Variant, capacity_variants
 from frenbrdf.models.losses import FrequencyLossConfig
-from frenbrdf.study.select import select_config
-from frenbrdf.study.variants import MeasureSettings, Variant, capacity_variants
 from frenbrdf.training import load_config
 
-from .conftest import bench_module, tiny
+from .conftest import script_module, tiny
 
-sweeps = bench_module("sweeps")
+sweeps = script_module("sweeps")
 combine_seeds, frequency_variants, pareto_front, save_chart, spread_slices = (
     sweeps.combine_seeds, sweeps.frequency_variants, sweeps.pareto_front, sweeps.save_chart, sweeps.spread_slices)
 

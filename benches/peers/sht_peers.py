@@ -40,7 +40,7 @@ This file plans the runs and measures (main process and workers); the grids, the
 libraries and the reference check are in sht_setup.py, the tables and charts in
 sht_report.py. Results go to --out: sht_peers.md, sht_peers.json,
 sht_timings.csv, sht_errors.csv, sht_time_vs_lmax.png and sht_error_vs_lmax.png (chart 1 of
-docs/charts: ``python benches/peers/sht_peers.py --out docs/charts/sht``).
+research/figures: ``python benches/peers/sht_peers.py --out research/figures/sht``).
 """
 
 from __future__ import annotations

@@ -17,10 +17,10 @@ from pathlib import Path
 import torch
 
 from ._native import __version__
+from .evaluation.evaluate import EvaluateConfig, evaluate_runs, report_markdown
 from .io.atomic import write_text
 from .io.outputs import OutputFolder
 from .presets import TRAINING, method_names
-from .study.evaluation import EvaluateConfig, evaluate_runs, report_markdown
 from .training import Run, config_for, train
 
 #: Evaluation settings of the demo: the full reconstruction table, a shorter editing table, and the rows of test-time

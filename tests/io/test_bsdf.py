@@ -119,7 +119,7 @@ def test_reconstruct_a_bsdf_reports_metrics_against_the_measurement(tmp_path, ca
     report = json.loads((out / "reconstruction.json").read_text())
     assert report["input"]["kind"] == "bsdf" and report["input"]["samples"] == 1000
     assert {"psnr", "delta_e", "lfre"} <= set(report["metrics"]) and (out / "comparison.png").exists()
-    # The shipped model gives the white paper back white (its cause: docs/measurements.md).
+    # The shipped model gives the white paper back white (its cause: research/measurements.md).
     assert report["metrics"]["delta_e"] < 6
 
 
@@ -127,7 +127,7 @@ def test_reconstruct_a_bsdf_reports_metrics_against_the_measurement(tmp_path, ca
 @pytest.mark.parametrize("name", ["acrylic_felt_green_rgb", "cg_sunflower_rgb", PAPER, "vch_golden_yellow_rgb"])
 def test_the_shipped_encoder_loses_no_measurements_hue(tmp_path, name):
     """Issue 28's goal: from the encoder alone no real measurement's hue is lost (ΔE ≤ 6), at the 4000 samples of
-    docs/measurements.md. Version 4 measured: felt 1.59, sunflower 2.18, paper 2.08, golden yellow 5.67 (version 3:
+    research/measurements.md. Version 4 measured: felt 1.59, sunflower 2.18, paper 2.08, golden yellow 5.67 (version 3:
     6.42, its glows copper)."""
     out = tmp_path / name
     assert cli.main(["reconstruct", str(rgl_file(name)), "--out", str(out), "--refine", "none", "--quiet",
@@ -202,7 +202,7 @@ def test_folders_may_mix_merl_files_and_measurements(tmp_path, toy_materials, ca
 
 
 def test_the_measurements_are_not_reciprocal_near_grazing(paper):
-    """Why a measurement is sampled in both orders of each pair (docs/measurements.md, "The measurements are not
+    """Why a measurement is sampled in both orders of each pair (research/measurements.md, "The measurements are not
     reciprocal"): the white paper seen at grazing is up to twice as bright as lit at grazing, while away from
     grazing the two orders agree to a few per cent."""
     rng = np.random.default_rng(1)
@@ -223,7 +223,7 @@ def test_the_measurements_are_not_reciprocal_near_grazing(paper):
 @pytest.mark.pretrained
 def test_full_gains_from_both_orders_of_a_measurement():
     """The golden yellow car paint is the least reciprocal of the four: ``full`` on samples in both orders gives it
-    back closer than on its table's one order, and closer still as an ordered NBRDF (docs/measurements.md, three
+    back closer than on its table's one order, and closer still as an ordered NBRDF (research/measurements.md, three
     draws at 256²: 35.15 → 36.98 dB reciprocal → 41.10 ordered)."""
     import dataclasses
 

@@ -135,7 +135,7 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
 
 
 def evaluate(args: argparse.Namespace) -> int:
-    from ..study.evaluation import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
+    from ..evaluation.evaluate import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
 
     config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
                             max_materials=args.max_materials, all_materials=args.all_materials,
@@ -172,7 +172,7 @@ def render(args: argparse.Namespace) -> int:
 
 
 def spectrum(args: argparse.Namespace) -> int:
-    from ..study.spectrum import spectrum_report, summary_text
+    from ..evaluation.spectrum import spectrum_report, summary_text
 
     report = spectrum_report(args.materials, args.out, truth=args.truth, variant=args.variant, lmax=args.lmax,
                              overwrite=args.overwrite)
@@ -182,8 +182,8 @@ def spectrum(args: argparse.Namespace) -> int:
 
 
 def select(args: argparse.Namespace) -> int:
-    from ..study.select import select_config
-    from ..study.variants import base_config
+    from ..evaluation.select import select_config
+    from ..evaluation.variants import base_config
     from ..training import load_config
 
     if args.front and (args.config or args.epochs is not None):

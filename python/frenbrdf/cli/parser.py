@@ -76,7 +76,7 @@ def _train(subparsers) -> None:
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")
     train.add_argument("--render-every", type=options.count, metavar="N",
-                       help="render the validation materials every N epochs and log their PSNR and ΔE (docs/charts: "
+                       help="render the validation materials every N epochs and log their PSNR and ΔE (research/figures: "
                        "chart 7)")
     train.add_argument("--select", choices=SELECTION_RULES,
                        help="what picks best.pt: the validation loss (default) or the validation render PSNR "
@@ -159,7 +159,7 @@ def _select(subparsers) -> None:
                         help="validation render PSNR to reach, in dB")
     select.add_argument("--out", required=True, help="folder for config.json and the selection report: a new or "
                         "empty one, or an earlier selection's (its trained candidates are reused)")
-    select.add_argument("--front", help="a chart-3 JSON (docs/charts/chart3_capacity.json): choose from its "
+    select.add_argument("--front", help="a chart-3 JSON (research/figures/chart3_capacity.json): choose from its "
                         "measurements, train nothing")
     select.add_argument("--config", help="without --front: JSON training config of the candidates "
                         "(default: FreNBRDF with the sweeps' short training)")

@@ -15,7 +15,7 @@ folder, all of it or nothing:
     ``truth.png`` and ``comparison.png`` (truth | reconstruction); a ``.bsdf`` truth renders as measured.
 ``spectrum.png``
     With a MERL or ``.bsdf`` input: the per-degree power spectra of the truth and of the reconstruction and the
-    error's, per θ_h slice (:mod:`frenbrdf.study.spectrum`): where the reconstruction loses its frequencies.
+    error's, per θ_h slice (:mod:`frenbrdf.evaluation.spectrum`): where the reconstruction loses its frequencies.
 ``reconstruction.json``
     The input, the model, the refinement, the latent, seconds and loss per stage, and with a MERL or
     ``.bsdf`` input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
@@ -99,7 +99,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         images["truth"] = render(measurements.truth, scene)
         images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
         report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
-        from ..study.spectrum import SpectrumSummary
+        from ..evaluation.spectrum import SpectrumSummary
 
         spectrum = SpectrumSummary()
         spectrum.add(measurements.table, {"reconstruction": result.nbrdf})

@@ -36,7 +36,7 @@ class ModelConfig:
     mapping: MappingConfig = field(default_factory=MappingConfig)
     extra_encoders: tuple[EncoderConfig, ...] = ()
     """More set encoders of the same latent space: z is then the mean of every encoder's latent
-    (:class:`~.encoder.EncoderMean`; ``benches/encoder_mean.py`` builds one from encoders trained for one decoder)."""
+    (:class:`~.encoder.EncoderMean`; ``release/pack_encoder_mean.py`` builds one from encoders trained for one decoder)."""
 
     def __post_init__(self):
         self.extra_encoders = tuple(self.extra_encoders)

@@ -3,7 +3,7 @@
 DeepSets is z = ρ(mean φ(sample)). The paper's encoder (the default) has no ρ: z is the mean of
 per-sample codes, a linear functional of the samples' distribution. ``EncoderConfig.pooled`` gives it
 a ρ, an MLP after the mean, so that z can depend non-linearly on what the samples show together
-(docs/measurements.md measures what that does to the encoder's gap on real materials).
+(research/measurements.md measures what that does to the encoder's gap on real materials).
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ class EncoderMean(nn.Module):
     """Several set encoders of one latent space; z is the mean of their latents.
 
     Encoders trained for one decoder agree on the materials they trained near, and give an unseen
-    saturated one different hues, depending on their seed (docs/results/encoder-refit); their mean
+    saturated one different hues, depending on their seed (research/results/encoder-refit); their mean
     depends on the seed less."""
 
     def __init__(self, configs: list[EncoderConfig]):

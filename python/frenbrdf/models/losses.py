@@ -109,7 +109,7 @@ class FrequencyLossConfig:
     slices: tuple[int, ...] = (0, 24, 48, 72)
     """θ_h slices as MERL θ_h bin indices (0 … 89, θ_h = (i/90)² · 90°: 0°, 6.4°, 25.6°, 57.6°).
     The cost of L_fre grows linearly with their number: four keep it within 30 % of a
-    training step at the default sizes (``benches/studies/train_step.py``; eight cost 53 %)."""
+    training step at the default sizes (``research/studies/train_step.py``; eight cost 53 %)."""
     k: int = 2
     """Neighbours of the kNN interpolation of the truth."""
     sigma: float = 0.05

@@ -90,7 +90,7 @@ class RefineConfig:
     """Least hidden width of the NBRDF that stage 2 refines: narrower layers of the decoded NBRDF are first widened to
     it without changing its output (:func:`frenbrdf.models.nbrdf.widen_params`), giving the weights more to fit with;
     the result is an NBRDF that wide. None: the decoder's widths (32 for the shipped model). Costs time: 48 about
-    1.2×, 64 about 1.45× the whole ``full`` (docs/measurements.md, "What limits full")."""
+    1.2×, 64 about 1.45× the whole ``full`` (research/measurements.md, "What limits full")."""
     keep_order: bool = True
     """Stage 2: where the samples hold pairs in both orders, (ω_i, ω_o) and its reverse kind (as a measurement
     sampled by :func:`frenbrdf.render.scoring.truth_samples` does), refine an ordered NBRDF
@@ -125,12 +125,12 @@ class RefineConfig:
             raise ValueError("invalid refinement: " + "; ".join(problems))
 
 
-#: The named budgets of ``refine=`` (docs/charts/README.md, charts 8, 8b and 8c; CPU seconds of one thread per
+#: The named budgets of ``refine=`` (research/figures/README.md, charts 8, 8b and 8c; CPU seconds of one thread per
 #: material, 4000 samples). Latent: 100 steps take 0.2–0.4 s and give +6–9 dB; 200 steps with a cosine schedule
 #: from 3e-2 (chart 8c) add 0.3–0.7 dB for 0.25 s more. Full: after 100 latent steps, the NBRDF's weights at
 #: 3e-3 (chart 8c: +1.9 dB over 1e-3 on 7 RGL fits version 2 never saw); a cosine schedule did not help there.
 #: Since the weight stage runs natively, 1500 steps in an NBRDF widened to 64 units: +1.1 dB [+0.4, +1.8] over
-#: 48 units and 1000 steps on those RGL fits, 1.56 s on 2 threads (docs/measurements.md, "What limits full").
+#: 48 units and 1000 steps on those RGL fits, 1.56 s on 2 threads (research/measurements.md, "What limits full").
 #: Each was chosen by a rule fixed before measuring, on materials other than the four real measurements.
 BUDGETS = {
     "none": RefineConfig(),

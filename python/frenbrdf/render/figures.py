@@ -1,4 +1,4 @@
-"""The figures of an evaluation (:func:`frenbrdf.study.evaluation.evaluate_runs`): histograms, renders, an edit.
+"""The figures of an evaluation (:func:`frenbrdf.evaluation.evaluate.evaluate_runs`): histograms, renders, an edit.
 
 - ``histograms.png``: per method, the per-material RMSE, PSNR, SSIM and ΔE, with the mean
   (solid) and ± one standard deviation (dashed).

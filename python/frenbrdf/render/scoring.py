@@ -7,7 +7,7 @@ the render of the true table (:func:`image_metrics`: RMSE, PSNR, SSIM and the co
 over the lit material pixels, and PSNR and ΔE over its highlights, :func:`highlight_mask`), and its frequency
 loss measured (:class:`FrequencyMetric`).
 :func:`reconstruction_rows` does all of it for a list of MERL files; ``frenbrdf evaluate``
-(:mod:`frenbrdf.study.evaluation`), the chart sweeps and the validation renders of training use it.
+(:mod:`frenbrdf.evaluation.evaluate`), the chart sweeps and the validation renders of training use it.
 """
 
 from __future__ import annotations
@@ -182,7 +182,7 @@ def truth_samples(truth, bins: np.ndarray,
     directions and draws nothing from ``rng``. A measurement (a callable ``m(ω_i, ω_o)``, e.g.
     :class:`frenbrdf.io.bsdf.MeasuredBSDF`) is evaluated at each bin's pair in an order drawn from ``rng``: as the
     bin gives it or reversed (ω_i ↔ ω_o), each with probability ½. A table keeps one order of each pair, as
-    reciprocity allows; a real measurement is not reciprocal near grazing (docs/measurements.md, "The
+    reciprocity allows; a real measurement is not reciprocal near grazing (research/measurements.md, "The
     measurements are not reciprocal"), so its other order is a measurement the table lost.
     """
     wi, wo = bin_directions(bins)

@@ -1,7 +1,7 @@
 """The model shipped inside the package, and how a run folder is packed into one.
 
 This folder holds, beside this module, the packed model that :meth:`frenbrdf.Model.pretrained`
-and ``frenbrdf reconstruct --model pretrained`` load (``benches/pretrained.py`` trains and
+and ``frenbrdf reconstruct --model pretrained`` load (``release/train_shipped_model.py`` trains and
 packs it; ``docs/pretrained.md`` is its model card):
 
 ``model.pt``
@@ -118,7 +118,7 @@ def pack_pretrained(run_dir: str | os.PathLike, dest: str | os.PathLike | None =
 def pack_checkpoint(checkpoint: dict, mapping: dict, dest: str | os.PathLike | None = None, *,
                     card: dict | None = None, half: bool = True) -> dict[str, int]:
     """Packs a checkpoint (``method``, ``config``, ``model``) and its mapping's state: :func:`pack_pretrained`
-    without a run folder (e.g. a model assembled from others, ``benches/encoder_mean.py``)."""
+    without a run folder (e.g. a model assembled from others, ``release/pack_encoder_mean.py``)."""
     dest = Path(dest) if dest is not None else PACKAGE_DIR
     dtype = torch.float16 if half else torch.float32
     packed = {"format": FORMAT, "method": checkpoint["method"], "config": checkpoint["config"],
@@ -151,7 +151,7 @@ def load_packed(folder: str | os.PathLike | None = None) -> tuple[dict, dict, di
     if missing:
         raise FileNotFoundError(f"no pretrained model: {folder} lacks {', '.join(missing)}. This installation of "
                                 "frenbrdf ships without one; train one and pass its run folder with --model RUN_DIR, "
-                                "or pack one with benches/pretrained.py (docs/pretrained.md)")
+                                "or pack one with release/train_shipped_model.py (docs/pretrained.md)")
     path = folder / MODEL_FILE
     packed = torch_load(path, "packed model")
     if not isinstance(packed, dict) or not {"format", "model", "config", "method"} <= set(packed):

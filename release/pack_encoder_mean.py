@@ -1,0 +1,92 @@
+"""Packs the mean of several encoders of one decoder as the shipped model (research/results/encoder-refit).
+
+    python release/pack_encoder_mean.py --members local/refit/plain-s0 local/refit/plain-s1 ... \\
+        --work local/v2 --version 3
+
+The base (``--base``: ``pretrained`` or a packed model's folder) gives the decoder, the mapping, the
+training config and the first encoder; each member (a run trained with ``--decoder-from`` the base)
+adds its encoder, after a check that its decoder and mapping are exactly the base's. The card is the
+base's with the members named, the version given, and the held-out test split (``WORK/split.json``'s
+``test``, files in ``WORK/data``; by source: ``WORK/merl``, ``WORK/bank``, ``WORK/rgl-train``) measured
+anew, encoder only and refined, as assembled (float32) and as packed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from frenbrdf import Model
+from frenbrdf.configs import to_dict
+from frenbrdf.io.atomic import write_text
+from frenbrdf.models import pretrained
+from frenbrdf.models.autoencoder import load_model
+from frenbrdf.render.scoring import reconstruction_rows
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))  # benches/
+from pretrained import ROOT, by_source, card_markdown, summary  # noqa: E402
+
+from common import run_metadata  # noqa: E402
+
+
+def assemble(base: str | None, members: list[str]) -> tuple[dict, dict, dict]:
+    """The checkpoint of the base's decoder with every encoder (the base's first), its mapping and its card."""
+    packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
+    base_decoder = {name: value.float() for name, value in packed["model"].items() if name.startswith("decoder.")}
+    weights = dict(base_decoder)
+    first = {name[len("encoder."):]: value.float() for name, value in packed["model"].items()
+             if name.startswith("encoder.")}
+    config = json.loads(packed["config"])
+    extras = []
+    for index, spec in enumerate([None, *members]):
+        if spec is None:
+            encoder = first
+        else:
+            member = load_model(spec)
+            decoder = member.network.decoder.state_dict()
+            if any(not torch.equal(decoder[name[len("decoder."):]], value) for name, value in base_decoder.items()) or \
+                    not np.array_equal(member.mapping.state()["reference"], mapping["reference"].astype(np.float32)):
+                raise ValueError(f"{spec}: its decoder or mapping is not the base's (train it with --decoder-from)")
+            encoder = member.network.encoder.state_dict()
+            extras.append(to_dict(member.config.encoder))
+        weights.update({f"encoder.members.{index}.{name}": value for name, value in encoder.items()})
+    config["model"]["extra_encoders"] = extras
+    return {"method": packed["method"], "config": json.dumps(config), "model": weights}, mapping, card
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
+    parser.add_argument("--members", nargs="+", required=True, help="run folders of encoders for the base's decoder")
+    parser.add_argument("--work", required=True, help="release/train_shipped_model.sh's folder (data/, split.json, sources)")
+    parser.add_argument("--version", required=True, help="the packed model's version, for its card")
+    parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR))
+    parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"))
+    args = parser.parse_args(argv)
+    checkpoint, mapping, card = assemble(args.base, args.members)
+    work = Path(args.work)
+    test = [work / "data" / f"{name}.binary" for name in sorted(json.loads((work / "split.json").read_text())["test"])]
+    folders = [work / name for name in ("merl", "bank", "rgl-train")]
+    model = Model.from_checkpoint(checkpoint, mapping)
+    held_out = reconstruction_rows(model, test, frequency_metric=False)
+    refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
+    card.update({"version": args.version,  # "command" stays the one that trained and packed the base
+                 "encoders": {"base": args.base, "members": args.members, "command": run_metadata()["command"]},
+                 "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
+                 "held_out_refined_by_source": by_source(refined, folders)})
+    card.pop("bytes", None)
+    pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
+    card["held_out"]["packed"] = summary(reconstruction_rows(Model.pretrained(args.dest), test, frequency_metric=False))
+    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
+    write_text(args.card, card_markdown(card))
+    print(json.dumps(card["held_out"], indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,175 @@
+"""Regenerates the model shipped in the package (python/frenbrdf/models/pretrained/) and its card (docs/pretrained.md).
+
+    frenbrdf import-nbrdf ../shared/data/merl-nbrdf/*.h5 merl/
+    frenbrdf synth bank/
+    python release/train_shipped_model.py --merl merl/ --bank bank/ --config pretrained.json --work pretrained-work/
+
+Trains one model (``frenbrdf train`` with ``--config``: any TrainConfig keys over the
+method's preset; ``data``, ``out`` and ``seed`` are set here) on the MERL files and the
+bank together (a folder of links to both), evaluates its held-out test split
+(:func:`frenbrdf.render.scoring.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
+material pixels, encoder only), packs it (:func:`frenbrdf.models.pretrained.pack_pretrained`:
+float16 weights, compact f_ref), measures what float16 costs (the same test split through
+the packed model), and writes the card (``card.json`` beside the files, ``docs/pretrained.md``).
+``--dest`` and ``--card`` default to the package folder and docs/pretrained.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from frenbrdf import Model, Run
+from frenbrdf.data.folders import list_materials
+from frenbrdf.io.atomic import write_text
+from frenbrdf.models import pretrained
+from frenbrdf.render.scoring import reconstruction_rows
+from frenbrdf.training import load_config, train
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))  # benches/: `import common` also when loaded by path
+from common import run_metadata  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+METRICS = ("rmse", "psnr", "ssim", "delta_e")
+
+
+def linked_data(folders: list[Path], data: Path) -> list[str]:
+    """A folder of links to every MERL file of ``folders`` (names must not repeat)."""
+    data.mkdir(parents=True, exist_ok=True)
+    for folder in folders:
+        for path in list_materials(folder):
+            link = data / path.name
+            if link.exists() and link.resolve() != path.resolve():
+                raise ValueError(f"{path.name} is in two of the folders {[str(f) for f in folders]}")
+            if not link.exists():
+                link.symlink_to(path.resolve())
+
+
+def summary(rows: list[dict]) -> dict[str, float]:
+    return {key: float(np.mean([row[key] for row in rows])) for key in METRICS}
+
+
+def by_source(rows: list[dict], folders: list[Path]) -> dict[str, dict]:
+    """:func:`summary` of the rows of each source folder (MERL-derived and bank materials apart), and of all."""
+    names = {folder.name: {path.stem for path in list_materials(folder)} for folder in folders}
+    groups = {name: [row for row in rows if row["material"] in members] for name, members in names.items()}
+    return {"all": summary(rows), **{name: {**summary(group), "n": len(group)} for name, group in groups.items()
+                                     if group}}
+
+
+def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
+          progress: bool = True, reuse: bool = False, trained_on: str | None = None) -> dict:
+    """Trains, evaluates, packs and documents the shipped model; returns the card.
+
+    ``reuse``: a finished run in ``work`` (its ``best.pt``) is evaluated, packed and documented
+    again instead of trained anew."""
+    sources = [folder.name for folder in folders]
+    linked_data(folders, work / "data")
+    cfg = load_config(config_path, data=str(work / "data"), out=str(work / "run"), seed=seed)
+    cfg.progress = progress
+    run = Run(cfg.out) if reuse and (Path(cfg.out) / "best.pt").exists() else train(cfg, overwrite=True)
+    test = [work / "data" / f"{name}.binary" for name in sorted(run.split.test)]
+    held_out = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, progress=progress)
+    refined = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, refine="latent",
+                                  progress=progress)
+    card = {"version": pretrained.VERSION, "command": run_metadata()["command"],
+            "training_config": json.loads(Path(config_path).read_text()), "data": sources,
+            "materials": {"train": len(run.split.train), "validation": len(run.split.val), "test": len(test)},
+            "seed": seed, "best_epoch": run.best_epoch, "epochs": run.history[-1]["epoch"] + 1,
+            # Training time without the validation renders, as the run logged it (a reused run's own).
+            "training_seconds": round(run.history[-1].get("seconds", run.seconds or 0.0), 1),
+            "trained_on": trained_on or run_metadata()["cpu"],
+            "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
+            "held_out_refined_by_source": by_source(refined, folders)}
+    sizes = pretrained.pack_pretrained(run.path, dest, card=card)
+    packed = Model.pretrained(dest)
+    card["held_out"]["packed"] = summary(reconstruction_rows(packed, test, seed=seed, frequency_metric=False,
+                                                             progress=progress))
+    card["bytes"] = sizes
+    sizes = pretrained.pack_pretrained(run.path, dest, card=card)  # the card now says what packing cost
+    write_text(card_path, card_markdown({**card, "bytes": sizes}))
+    return card
+
+
+def card_markdown(card: dict) -> str:
+    """docs/pretrained.md: what the shipped model is, how it was made, how well it reconstructs."""
+    table = "\n".join(f"| {name} | {card['held_out']['float32'][key]:.4g} | {card['held_out']['packed'][key]:.4g} |"
+                      for key, name in zip(METRICS, ("RMSE", "PSNR (dB)", "SSIM", "ΔE")))
+    return f"""# The pretrained model (version {card['version']})
+
+`frenbrdf reconstruct INPUT --out DIR` and `frenbrdf.Model.pretrained()` load the model
+packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1e6:.2f} MB:
+{', '.join(f'`{k}` {v / 1e6:.2f} MB' for k, v in card['bytes'].items())}).
+
+- **Data**: {', '.join(f'`{d}`' for d in card['data'])}: {card['materials']['train']} training,
+  {card['materials']['validation']} validation and {card['materials']['test']} held-out test materials
+  (split from seed {card['seed']}).
+- **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
+  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}
+- **Regenerate**: `bash release/train_shipped_model.sh` (the MERL fits, the RGL fits but the four measured
+  materials of [measurements.md](measurements.md), the bank; then training and packing). These files
+  were packed by `{card['command']}`.
+- **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
+  compressed (relative error of f_ref + ε below 1e-4).
+
+Held-out test materials, encoder only (4000 random valid bins each), render metrics over the lit
+material pixels, as trained (float32) and as shipped (packed):
+
+| metric | float32 | packed |
+|---|---|---|
+{table}
+
+By source (float32), encoder only: {by_source_text(card['held_out_by_source'])}.
+With the latent refined on the same samples (`--refine latent`; `frenbrdf reconstruct` defaults to `full`):
+{by_source_text(card['held_out_refined_by_source'])}.
+
+Real gonio-photometer measurements that no training saw: [measurements.md](measurements.md).
+"""
+
+
+def encoders_text(card: dict) -> str:
+    """The card's line on an encoder mean (release/pack_encoder_mean.py), if the model has one."""
+    if "encoders" not in card:
+        return ""
+    members = ", ".join(f"`{m}`" for m in card["encoders"]["members"])
+    return (f"\n- **Encoders**: z is the mean of {len(card['encoders']['members']) + 1} encoders of this decoder: "
+            f"the training run's and {members}, each trained for the frozen decoder (`frenbrdf train "
+            f"--decoder-from`); why and the rule that chose it: [encoder-refit](results/encoder-refit/README.md). "
+            f"Packed by `{card['encoders']['command']}`.")
+
+
+def by_source_text(groups: dict) -> str:
+    return "; ".join(f"{name} ({s['n']}): PSNR {s['psnr']:.2f} dB, ΔE {s['delta_e']:.2f}"
+                     for name, s in groups.items() if name != "all")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--merl", help="folder of MERL files (frenbrdf import-nbrdf)")
+    parser.add_argument("--bank", help="folder of bank MERL files (frenbrdf synth)")
+    parser.add_argument("--data", action="append", default=[], metavar="DIR",
+                        help="another folder of material files (repeatable), e.g. the RGL fits")
+    parser.add_argument("--config", required=True, help="training config JSON (any TrainConfig keys)")
+    parser.add_argument("--work", default="pretrained-work", help="folder of the linked data and the run")
+    parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR), help="where the packed files go")
+    parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"), help="the model card (Markdown)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--reuse", action="store_true", help="evaluate, pack and document WORK/run again, untrained")
+    parser.add_argument("--trained-on", help="the machine the run was trained on, for the card (default: this CPU)")
+    parser.add_argument("--quiet", action="store_true")
+    args = parser.parse_args(argv)
+    folders = [Path(f) for f in (args.merl, args.bank, *args.data) if f]
+    if not folders:
+        parser.error("give --merl, --bank, --data or several")
+    card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
+                 progress=not args.quiet, reuse=args.reuse, trained_on=args.trained_on)
+    print(json.dumps(card["held_out"], indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,58 @@
+"""Real measurements beside the ``features`` bank: what each family was made to show.
+
+    python research/charts/chart_features.py ../shared/data/rgl-measured/*.bsdf --out research/results/features.png
+
+Top row: the measurements (``frenbrdf.read_bsdf``, rendered directly). Below, one column per
+kind of ``frenbrdf synth --mix features`` (car paint, retro-reflective, iridescent, fabric,
+coated), the first ``--per-kind`` materials of that kind in the bank of ``--n`` and ``--seed``
+(the shipped model's: 60, seed 1), each on the metric renderer.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import frenbrdf
+from frenbrdf.data import synth
+from frenbrdf.render.renderer import Scene, render
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benches"))  # benches/
+from common import pyplot, save_figure  # noqa: E402
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("measurements", nargs="*", help="RGL .bsdf files for the top row")
+    parser.add_argument("--n", type=int, default=60)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--per-kind", type=int, default=3)
+    parser.add_argument("--resolution", type=int, default=160)
+    parser.add_argument("--out", default="features.png")
+    args = parser.parse_args(argv)
+
+    scene = Scene(resolution=args.resolution)
+    bank = synth.material_bank(args.n, seed=args.seed, mix="features")
+    kinds = list(synth.FEATURE_SHARES)
+    columns = max(len(kinds), len(args.measurements))
+    plt = pyplot()
+    figure, axes = plt.subplots(1 + args.per_kind, columns, figsize=(3 * columns, 3 * (1 + args.per_kind)),
+                                squeeze=False)
+    for ax in axes.reshape(-1):
+        ax.set_axis_off()
+    for ax, path in zip(axes[0], args.measurements):
+        ax.imshow(render(frenbrdf.read_bsdf(path), scene))
+        ax.set_title(f"measured: {Path(path).stem}", fontsize=8)
+    for column, kind in enumerate(kinds):
+        for row, material in enumerate([m for m in bank if m.kind == kind][:args.per_kind], start=1):
+            axes[row, column].imshow(render(synth.merl_table(material), scene))
+            axes[row, column].set_title(material.name, fontsize=8)
+    figure.tight_layout()
+    save_figure(figure, args.out, dpi=55)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

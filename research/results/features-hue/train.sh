@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The features-hue study's runs (README.md beside this file) on the CPU: version 2's tables (local/v2/data,
+# as release/train_shipped_model.sh builds them) and 60 features materials, version 4's config, seeds 0 and 1 at
+# once (one thread each), then seed 3 (two threads).
+set -eu
+export PYTHONPATH=$PWD/python
+W=local/feat-hue
+frenbrdf() { python -m frenbrdf.cli "$@"; }
+[[ -d $W/features ]] || frenbrdf synth $W/features --mix features --n 60 --seed 1 --quiet
+mkdir -p $W/data
+ln -sf "$PWD"/local/v2/data/*.binary "$PWD"/$W/features/*.binary $W/data/
+echo "tables: $(ls $W/data | wc -l)"
+train() {  # seed threads
+    OMP_NUM_THREADS=$2 MKL_NUM_THREADS=$2 frenbrdf train --data $W/data --config research/results/hue-turn/config.json \
+        --seed $1 --device cpu --out $W/s$1 --quiet --json > $W/s$1.log 2>&1
+}
+train 0 1 & sleep 180; train 1 1 & wait
+train 3 2

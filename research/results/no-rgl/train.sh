@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The no-rgl study's runs (README.md beside this file) on the CPU: version 2's tables (local/v2/data, as
+# release/train_shipped_model.sh builds them) without the RGL fits, version 4's config, seeds 0 and 1 at once (one thread
+# each; seed 1 once seed 0 has loaded its tables), then seed 3 (two threads).
+set -eu
+export PYTHONPATH=$PWD/python
+W=local/no-rgl
+mkdir -p $W/data
+for f in "$PWD"/local/v2/data/*.binary; do [[ $f == *_rgb.binary ]] || ln -sf "$f" $W/data/; done
+echo "tables: $(ls $W/data | wc -l)"
+train() {  # seed threads
+    OMP_NUM_THREADS=$2 MKL_NUM_THREADS=$2 python -m frenbrdf.cli train --data $W/data \
+        --config research/results/hue-turn/config.json --seed $1 --device cpu --out $W/s$1 --quiet --json > $W/s$1.log 2>&1
+}
+train 0 1 & sleep 300; train 1 1 & wait
+train 3 2

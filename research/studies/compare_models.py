@@ -1,0 +1,202 @@
+"""Models compared on the same samples of materials no training saw: measurements and tables.
+
+    python research/studies/compare_models.py --models pretrained local/refit/rho-s0 local/refit/rho-s1 \\
+        --labels v2 rho/0 rho/1 --measurements ../shared/data/rgl-measured/*.bsdf \\
+        --tables local/v2/test/*.binary --draws 0 1 2 --out research/results/encoder-refit
+
+Every model encodes every material from ``--samples`` random valid MERL bins of each draw (the same
+bins for every model), then refines the latent on them (``latent``: today's budget); each result is
+rendered and compared with the render of the truth (a ``.bsdf`` measurement itself, or a table). A
+label ``NAME/RUN`` puts runs of one variant together: the report gives each variant's mean over its
+runs, the spread between its runs, and the difference from the first model (the baseline) per
+material, with a 95 % t-interval over the materials. ``--trained-on LABEL=MATERIAL`` leaves out a
+material that model trained on (a fold of a cross-validation is then judged on its held-out materials
+only); ``--group NAME=MATERIAL,...`` summarises some of the scored materials apart as well. Writes
+``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth, then each variant's
+first run that was scored on it, under the first of ``--budgets``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.io.measured import as_table, is_bsdf, read_truth
+from frenbrdf.models.autoencoder import Model, load_model
+from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
+from common import render_sheet, run_metadata  # noqa: E402
+
+BUDGETS = ("none", "latent")
+"""The refinement budgets measured unless ``--budgets`` says others."""
+METRICS = ("psnr", "delta_e")
+
+
+def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene,
+          trained_on: set[tuple[str, str]], budgets=BUDGETS):
+    """Rows ``{model, material, group, draw, budget, psnr, delta_e}`` and the draw-0 encoder images; no row for a
+    ``(label, material)`` pair of ``trained_on``."""
+    mask, rows, images = material_mask(scene), [], defaultdict(dict)
+    for path in tqdm(paths, desc="materials"):
+        truth = read_truth(path)
+        table, truth_image = as_table(truth), tonemap(render_linear(truth, scene))
+        group = "measured" if is_bsdf(path) else "tables"
+        images[path.stem]["truth"] = truth_image
+        for draw in draws:
+            rng = np.random.default_rng(draw)
+            drawn = truth_samples(truth, sample_bins(table, rng, samples), rng)
+            for label, model in models.items():
+                if (label, path.stem) in trained_on:
+                    continue
+                for budget in budgets:
+                    config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
+                    _, image, _ = refined_reconstruction(model, drawn, scene, config)
+                    metrics = image_metrics(truth_image, image, mask)
+                    rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
+                                 "budget": budget, **{key: metrics[key] for key in METRICS}})
+                    if draw == draws[0] and budget == budgets[0] and group == "measured":
+                        images[path.stem][label] = image
+    return rows, images
+
+
+def variant(label: str) -> str:
+    return label.split("/")[0]
+
+
+def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], budgets=BUDGETS) -> dict:
+    """Per group of materials, budget and variant: the mean and the spread over its runs, and the per-material
+    difference from the baseline with its interval."""
+    def mean_of(selected, key):
+        return float(np.mean([r[key] for r in selected]))
+
+    out = {}
+    for group, materials in groups.items():
+        for budget in budgets:
+            chosen = [r for r in rows if r["budget"] == budget and r["material"] in materials]
+            for name in dict.fromkeys(variant(r["model"]) for r in chosen):
+                mine = [r for r in chosen if variant(r["model"]) == name]
+                runs = sorted({r["model"] for r in mine})
+                scored = [m for m in materials if any(r["material"] == m for r in mine)]
+                entry = {"runs": runs}
+                # Runs judged on other materials (folds) have no spread between them.
+                same_materials = len({frozenset(r["material"] for r in mine if r["model"] == run) for run in runs}) == 1
+                for key in METRICS:
+                    per_run = [mean_of([r for r in mine if r["model"] == run], key) for run in runs]
+                    entry[key] = float(np.mean(per_run))
+                    spread = len(per_run) > 1 and same_materials
+                    entry[f"{key}_run_sd"] = float(np.std(per_run, ddof=1)) if spread else None
+                    if name != baseline:
+                        base = [r for r in chosen if variant(r["model"]) == baseline]  # its runs' mean
+                        differences = [mean_of([r for r in mine if r["material"] == m], key)
+                                       - mean_of([r for r in base if r["material"] == m], key) for m in scored]
+                        entry[f"{key}_change"] = paired_interval(differences)
+                per_material = {m: mean_of([r for r in mine if r["material"] == m], "psnr") for m in scored}
+                entry["materials"] = len(scored)
+                entry["worst_material"] = min(per_material, key=per_material.get)
+                entry["max_delta_e"] = max(mean_of([r for r in mine if r["material"] == m], "delta_e")
+                                           for m in scored)
+                out.setdefault(group, {}).setdefault(budget, {})[name] = entry
+    return out
+
+
+def markdown(summary: dict) -> str:
+    lines = ["PSNR dB / ΔE: each variant's mean over its runs (sd between runs); change: per-material difference from "
+             "the baseline, mean [95 % interval over the materials].", ""]
+    for group, budgets in summary.items():
+        for budget, variants in budgets.items():
+            lines += [f"**{group}, {'encoder only' if budget == 'none' else budget}**", "",
+                      "| variant | runs | materials | PSNR | ΔE | ΔE max | PSNR change | ΔE change |",
+                      "|---|---|---|---|---|---|---|---|"]
+            for name, e in variants.items():
+                def spread(key):
+                    return f" ({e[f'{key}_run_sd']:.2f})" if e[f"{key}_run_sd"] is not None else ""
+
+                def change(key):
+                    c = e.get(f"{key}_change")
+                    if c is None:
+                        return "–"
+                    interval = f" [{c['low']:+.2f}, {c['high']:+.2f}]" if c["low"] is not None else ""
+                    return f"{c['mean']:+.2f}{interval}"
+                lines.append(f"| {name} | {len(e['runs'])} | {e['materials']} | {e['psnr']:.2f}{spread('psnr')} | "
+                             f"{e['delta_e']:.2f}{spread('delta_e')} | {e['max_delta_e']:.2f} | {change('psnr')} | "
+                             f"{change('delta_e')} |")
+            lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--models", nargs="+", required=True, help="the baseline first")
+    parser.add_argument("--labels", nargs="+", required=True, help="one per model; NAME/SEED groups runs")
+    parser.add_argument("--measurements", nargs="*", default=[], help=".bsdf files")
+    parser.add_argument("--tables", nargs="*", default=[], help="MERL files (e.g. a test split)")
+    parser.add_argument("--held-out", nargs=2, metavar=("CONFIG", "DIR"),
+                        help="also the tables a training config holds out (its `holdout`), as DIR/NAME.binary")
+    parser.add_argument("--draws", type=int, nargs="+", default=[0])
+    parser.add_argument("--budgets", nargs="+", default=list(BUDGETS), choices=("none", "latent", "full"))
+    parser.add_argument("--samples", type=int, default=4000)
+    parser.add_argument("--resolution", type=int, default=256)
+    parser.add_argument("--trained-on", nargs="*", default=[], metavar="LABEL=MATERIAL",
+                        help="a material that model trained on: not scored for it")
+    parser.add_argument("--group", nargs="*", default=[], metavar="NAME=MATERIAL,...",
+                        help="also summarise these of the scored materials apart (e.g. the real ones of a test split)")
+    parser.add_argument("--out", required=True, help="folder for compare.json, compare.md, compare.png")
+    args = parser.parse_args(argv)
+    if len(args.models) != len(args.labels):
+        parser.error("give one label per model")
+    trained_on = {tuple(pair.split("=", 1)) for pair in args.trained_on}
+    if any(len(pair) != 2 or pair[0] not in args.labels for pair in trained_on):
+        parser.error("--trained-on takes LABEL=MATERIAL pairs with a LABEL of --labels")
+    extra_groups = {name: members.split(",") for name, _, members in (g.partition("=") for g in args.group)}
+    if any(not name or not all(members) for name, members in extra_groups.items()):
+        parser.error("--group takes NAME=MATERIAL,MATERIAL,... with no empty name")
+    models = {label: load_model(spec) for label, spec in zip(args.labels, args.models)}
+    measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
+    if args.held_out:
+        config, folder = map(Path, args.held_out)
+        tables += [folder / f"{name}.binary" for name in json.loads(config.read_text())["holdout"]]
+    scored = {p.stem for p in measured + tables}
+    for name, members in extra_groups.items():
+        if missing := set(members) - scored:
+            parser.error(f"--group {name}: not among the scored materials: {sorted(missing)}")
+    rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
+                         trained_on, args.budgets)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    report = {"run": run_metadata(), "models": dict(zip(args.labels, args.models)), "trained_on": sorted(args.trained_on),
+              "draws": args.draws, "samples": args.samples, "rows": rows}
+    save_json(out / "compare.json", report)  # the scores are kept whatever the summary does
+    groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
+    groups |= extra_groups
+    summary = summarise(rows, variant(args.labels[0]), groups, args.budgets)
+    save_json(out / "compare.json", report | {"summary": summary})
+    write_text(out / "compare.md", markdown(summary))
+    if measured:
+        names = list(dict.fromkeys(map(variant, models)))
+        sheet, labels = {}, {}
+        for path in measured:  # the truth, then each variant's first run scored on the material
+            shown = images[path.stem]
+            sheet[path.stem] = {"truth": shown["truth"]}
+            for name in names:
+                if label := next((label for label in shown if variant(label) == name), None):
+                    sheet[path.stem][name], labels[path.stem, name] = shown[label], label
+        render_sheet(sheet, out / "compare.png", columns=["truth", *names],
+                     title=lambda m, name: f"{labels[m, name]}, {args.budgets[0]}" if (m, name) in labels else name)
+    print(markdown(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
