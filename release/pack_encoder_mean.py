@@ -28,10 +28,9 @@ from frenbrdf.models import pretrained
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.render.scoring import reconstruction_rows
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))  # benches/
-from pretrained import ROOT, by_source, card_markdown, summary  # noqa: E402
-
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/
 from common import run_metadata  # noqa: E402
+from train_shipped_model import ROOT, by_source, card_markdown, summary  # noqa: E402
 
 
 def assemble(base: str | None, members: list[str]) -> tuple[dict, dict, dict]:

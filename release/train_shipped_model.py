@@ -30,7 +30,7 @@ from frenbrdf.models import pretrained
 from frenbrdf.render.scoring import reconstruction_rows
 from frenbrdf.training import load_config, train
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))  # benches/: `import common` also when loaded by path
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/ (`import common`), also when loaded by path
 from common import run_metadata  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -98,7 +98,7 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
 def card_markdown(card: dict) -> str:
     """docs/pretrained.md: what the shipped model is, how it was made, how well it reconstructs."""
     table = "\n".join(f"| {name} | {card['held_out']['float32'][key]:.4g} | {card['held_out']['packed'][key]:.4g} |"
-                      for key, name in zip(METRICS, ("RMSE", "PSNR (dB)", "SSIM", "ΔE")))
+                      for key, name in zip(METRICS, ("RMSE", "PSNR (dB)", "SSIM", "ΔE"), strict=True))
     return f"""# The pretrained model (version {card['version']})
 
 `frenbrdf reconstruct INPUT --out DIR` and `frenbrdf.Model.pretrained()` load the model

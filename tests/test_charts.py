@@ -31,7 +31,7 @@ def read_csv(path: Path) -> list[dict]:
 
 def test_samples_chart_writes_png_csv_and_json(toy_materials, tmp_path):
     chart = load_script("chart_samples")
-    runs = [train(tiny(method, toy_materials, tmp_path / method, epochs=1)).run_dir for method in ("frenbrdf", "nbrdf")]
+    runs = [train(tiny(method, toy_materials, tmp_path / method, epochs=1)).path for method in ("frenbrdf", "nbrdf")]
     report = chart.samples_chart(runs, tmp_path / "charts", counts=(20, None), seeds=2, resolution=16,
                                  max_materials=1, name="samples", progress=False)
     rows = read_csv(tmp_path / "charts" / "samples.csv")

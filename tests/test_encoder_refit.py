@@ -108,7 +108,7 @@ def test_an_encoder_mean_averages_its_members_and_packs_and_loads(toy_materials,
     cfg = tiny("nbrdf", toy_materials, tmp_path / "member", epochs=1, decoder_from=str(packed))
     cfg.model.encoder.pooled = (16,)
     member = train(cfg)
-    checkpoint, mapping, _ = script_module("encoder_mean").assemble(str(packed), [str(member.path)])
+    checkpoint, mapping, _ = script_module("pack_encoder_mean").assemble(str(packed), [str(member.path)])
     mean = frenbrdf.Model.from_checkpoint(checkpoint, mapping)
     assert mean.config.extra_encoders[0].pooled == (16,)
     rng = np.random.default_rng(1)
@@ -122,4 +122,4 @@ def test_an_encoder_mean_averages_its_members_and_packs_and_loads(toy_materials,
     np.testing.assert_allclose(reloaded.encode(values, (wi, wo)), expected, rtol=1e-5, atol=1e-6)
     other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=3))  # another decoder
     with pytest.raises(ValueError, match="not the base's"):
-        script_module("encoder_mean").assemble(str(packed), [str(other.path)])
+        script_module("pack_encoder_mean").assemble(str(packed), [str(other.path)])

@@ -106,7 +106,7 @@ def tiny_runs(toy_materials, tmp_path_factory):
     runs = []
     for method in ("frenbrdf", "nbrdf"):
         result = train(tiny(method, toy_materials, root / method, epochs=2))
-        runs.append(result.run_dir)
+        runs.append(result.path)
     return runs
 
 
@@ -194,7 +194,7 @@ def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp
     model = Run(tiny_runs[0]).model()
     rng = np.random.default_rng(config.seed)  # bins are drawn per material, in name order, from the seed
     scene = Scene(resolution=config.resolution)
-    for name, row in zip(report["test_materials"], report["reconstruction"][model.method]):
+    for name, row in zip(report["test_materials"], report["reconstruction"][model.method], strict=True):
         table = read_merl(Path(report["data"]) / f"{name}.binary")
         bins = sample_bins(table, rng, config.samples)
         result = reconstruct(model, table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins),
@@ -241,7 +241,7 @@ def test_the_render_grid_shows_the_first_materials_and_the_worst_colours():
 
 
 def test_evaluate_refuses_runs_of_different_splits(tiny_runs, toy_materials, tmp_path):
-    other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=5)).run_dir
+    other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=5)).path
     with pytest.raises(ValueError, match="different splits"):
         evaluate_runs([tiny_runs[0], other], tmp_path / "eval", config=EvaluateConfig(progress=False))
     with pytest.raises(FileNotFoundError, match="not a training run folder"):

@@ -99,7 +99,7 @@ def test_nothing_below_the_horizon_is_compared_by_the_measured_fit():
 def test_truth_and_prediction_agree_for_the_same_brdf(variant):
     """The same BRDF as a table (kNN truth, the bins above the horizon) and as a prediction: what is left is the
     interpolation of the truth (a smooth random NBRDF extrapolates smoothly, so the paper's floor is small here
-    too; on MERL-derived materials it is not: docs/frequency.md)."""
+    too; on MERL-derived materials it is not: research/frequency.md)."""
     valid = merl_above_horizon().reshape(-1)
     params, other = smooth_params(0), smooth_params(1)
     config = frequency_variant(variant, lmax=15)
@@ -146,7 +146,7 @@ def test_training_with_a_variant_caches_its_truth_and_logs_its_strength(toy_mate
     cfg = tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=1)
     cfg.loss.frequency = frequency_variant("tone", lmax=11, slices=(0, 30, 60))
     run = train(cfg)
-    assert (run.run_dir / "best.pt").exists()
+    assert (run.path / "best.pt").exists()
     cached = list((tmp_path / "cache" / "frequency").glob("*.npy"))
     assert len(cached) == len(run.split.train) + len(run.split.val)  # the training and validation materials
     assert any(entry.get("train_gradient_ratio", 0) > 0 for entry in run.history)

@@ -115,7 +115,7 @@ def test_widening_keeps_what_the_nbrdf_gives_back(hidden):
     coords = torch.randn(2, 300, 6, generator=generator)
     torch.testing.assert_close(nbrdf_forward(wide, coords), nbrdf_forward(params, coords), rtol=1e-5, atol=1e-5)
     narrow = widen_params(params, 1, generator)  # layers already as wide are kept as they are
-    assert all(torch.equal(a, b) for a, b in zip(narrow, params))
+    assert all(torch.equal(a, b) for a, b in zip(narrow, params, strict=True))
 
 
 def test_a_wider_full_refinement_fits_further(model, material):
@@ -157,7 +157,7 @@ def test_the_weight_decays_are_the_penalty_gradients(kind):
     params = [torch.randn(1, *shape, generator=generator, requires_grad=True) for shape in [(32, 6), (32,), (3, 32), (3,)]]
     loss = LossConfig(lambda_weights=0.01, weight_penalty=kind)
     (loss.lambda_weights * weight_penalty(params, kind)).backward()
-    for param, decay in zip(params, _weight_decays(params, loss)):
+    for param, decay in zip(params, _weight_decays(params, loss), strict=True):
         torch.testing.assert_close(param.grad, decay * param.detach())
 
 
@@ -202,8 +202,8 @@ def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind, hidd
     losses = fit.run(rates.astype(np.float32), rows.numpy())
 
     reference = [p.clone().requires_grad_(True) for p in params]
-    optimizer = torch.optim.Adam([{"params": [p], "weight_decay": d} for p, d in zip(reference, decays)])
-    for batch, rate, loss in zip(rows, rates, losses):
+    optimizer = torch.optim.Adam([{"params": [p], "weight_decay": d} for p, d in zip(reference, decays, strict=True)])
+    for batch, rate, loss in zip(rows, rates, losses, strict=True):
         value = reconstruction_loss(nbrdf_forward(reference, coords[:, batch]), values[:, batch], cos_in[:, batch], kind)
         assert loss == pytest.approx(float(value.detach()), rel=1e-5)
         for group in optimizer.param_groups:
@@ -211,7 +211,7 @@ def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind, hidd
         optimizer.zero_grad()
         value.backward()
         optimizer.step()
-    for got, want in zip(fit.tensors(), reference):
+    for got, want in zip(fit.tensors(), reference, strict=True):
         np.testing.assert_allclose(got, want.detach().reshape(-1).numpy(), rtol=1e-4, atol=1e-6)
 
 
@@ -529,7 +529,7 @@ def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
                                   "cache_dir": str(tmp_path / "cache"), "loss": {"eta": 0},
                                   "model": {"nbrdf": {"hidden": [8]}, "encoder": {"hidden": [16], "latent": 4},
                                             "decoder": {"hidden": [16]}}}))
-    card = script_module("pretrained").build(str(config), [toy_materials], tmp_path / "work", tmp_path / "packed",
+    card = script_module("train_shipped_model").build(str(config), [toy_materials], tmp_path / "work", tmp_path / "packed",
                                             tmp_path / "card.md", progress=False)
     assert frenbrdf.Model.pretrained(tmp_path / "packed").card["held_out"] == card["held_out"]
     assert abs(card["held_out"]["packed"]["psnr"] - card["held_out"]["float32"]["psnr"]) < 0.1

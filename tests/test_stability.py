@@ -136,7 +136,7 @@ def test_coordinates_and_lookups_at_and_near_the_horizon(theta):
              (direction(0.3), direction(0.3)),  # both, the same direction
              (direction(0.3), direction(0.3 + np.pi)),  # mirror pair; at 90° exactly ω_i = −ω_o
              (direction(0.3), direction(0.3 + np.pi / 2))]
-    wi, wo = (np.array(column) for column in zip(*pairs))
+    wi, wo = (np.array(column) for column in zip(*pairs, strict=True))
     angles = frenbrdf.directions_to_rusinkiewicz(wi, wo)
     assert np.isfinite(angles).all()
     assert angles[:, [0, 2]].min() >= 0 and angles[:, [0, 2]].max() <= np.pi / 2 + 1e-15
@@ -311,7 +311,7 @@ def test_training_with_a_spiky_material_stays_finite(spiky, spiky_folder, tmp_pa
     assert len(result.history) == 2
     assert all(math.isfinite(value) for epoch in result.history for value in epoch.values())
     # Encoding the spiky material (its spikes among the samples) and rendering the decoded NBRDF.
-    model = frenbrdf.Model.load(result.run_dir)
+    model = frenbrdf.Model.load(result.path)
     wi, wo = (d.reshape(-1, 3) for d in frenbrdf.merl_bin_directions())
     flat = table.reshape(3, -1).T
     valid = np.flatnonzero(np.all(flat >= 0, axis=1))

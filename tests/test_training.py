@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -42,14 +43,14 @@ def test_every_method_writes_a_loadable_run(method, toy_materials, tmp_path):
     result = train(cfg)
     assert ("train_fre" in result.history[-1]) == (method == "frenbrdf")
     for name in ("config.json", "split.json", "history.json", "mapping.npz", "best.pt", "last.pt"):
-        assert (result.run_dir / name).exists(), name
-    assert [p.name for p in result.run_dir.glob(".*")] == [MARKER], "temporary files left behind"
-    split = json.loads((result.run_dir / "split.json").read_text())
+        assert (result.path / name).exists(), name
+    assert [p.name for p in result.path.glob(".*")] == [MARKER], "temporary files left behind"
+    split = json.loads((result.path / "split.json").read_text())
     assert len(split["train"]) + len(split["val"]) + len(split["test"]) == 8
-    model = frenbrdf.Model.load(result.run_dir)
+    model = frenbrdf.Model.load(result.path)
     assert model.method == method and model.config.nbrdf.hidden == cfg.model.nbrdf.hidden
     # The run folder, reopened, is the one training returned.
-    run = Run(result.run_dir)
+    run = Run(result.path)
     assert run.config == cfg and run.split.to_json() == split and run.history == result.history
     assert run.best_epoch == load_checkpoint(run.path / "best.pt")["epoch"]
 
@@ -324,7 +325,7 @@ def test_validation_renders_are_logged_and_pick_the_best_checkpoint(toy_material
     rendered = [entry["epoch"] for entry in run.history if "val_psnr" in entry]
     assert rendered == [1, 3, 4]  # every second epoch, and the last
     seconds = [entry["seconds"] for entry in run.history[1:]]
-    assert all(0 < a < b for a, b in zip(seconds, seconds[1:]))
+    assert all(0 < a < b for a, b in itertools.pairwise(seconds))
     # best.pt is the epoch of highest validation PSNR; the loss rule's pick is kept beside it.
     by_psnr = max((e for e in run.history if "val_psnr" in e), key=lambda e: e["val_psnr"])
     by_loss = min(run.history[1:], key=lambda e: e["val_rec"])

@@ -4,7 +4,6 @@ The public API is re-exported here; ``frenbrdf._native`` is private.
 """
 
 import importlib
-import sys
 
 from ._native import __version__
 from .exceptions import BsdfFormatError, MerlFormatError
@@ -24,7 +23,7 @@ from .io.merl import (
     write_merl,
 )
 from .models import NBRDF, Model, interpolate
-from .numerics import sht, sht_torch
+from .numerics import sht
 from .numerics.coords import (
     directions_to_rusinkiewicz,
     half_diff_vectors,
@@ -33,11 +32,7 @@ from .numerics.coords import (
 )
 from .numerics.knn import KnnInterpolator, knn_interpolate
 from .render.viewer import view
-from .training import Run, TrainConfig, TrainResult, config_for, train
-
-# Module paths the README documented before the package had layer folders (docs/changelog.md).
-sys.modules[f"{__name__}.sht"] = sht
-sys.modules[f"{__name__}.sht_torch"] = sht_torch
+from .training import Run, TrainConfig, config_for, train
 
 
 def __getattr__(name: str):
@@ -58,7 +53,6 @@ __all__ = [
     "NBRDF",
     "Run",
     "TrainConfig",
-    "TrainResult",
     "config_for",
     "interpolate",
     "directions_to_rusinkiewicz",

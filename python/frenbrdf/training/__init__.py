@@ -14,9 +14,6 @@ from .prepared import Distributed, PreparedData, prepare, select_device
 from .run import Run
 from .step import LossTerms, loss_terms, optimisation_step
 
-#: What :func:`train` returns (the name of earlier versions).
-TrainResult = Run
-
-__all__ = ["Distributed", "LossTerms", "PreparedData", "Run", "TrainConfig", "TrainResult", "TrainingDiverged",
+__all__ = ["Distributed", "LossTerms", "PreparedData", "Run", "TrainConfig", "TrainingDiverged",
            "config_for", "evaluate_split", "load_config", "loss_terms", "optimisation_step", "prepare",
            "select_device", "train"]

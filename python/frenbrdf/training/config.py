@@ -45,7 +45,7 @@ def selection_score(entry: dict, rule: str) -> float | None:
 class AugmentConfig:
     """Materials the training batches hold beyond the tables (docs/data.md). The defaults are the
     ``augmented`` preset of :data:`frenbrdf.presets.AUGMENTATION` (mixes and colour gains, chosen by
-    measurement: docs/colour.md); ``paper`` is the paper's protocol, the training tables only.
+    measurement: research/colour.md); ``paper`` is the paper's protocol, the training tables only.
 
     Each material of a batch is, independently, procedural with probability ``procedural``,
     else a mix with probability ``mix``, else a gained table with probability ``gain``, else a

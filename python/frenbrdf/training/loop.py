@@ -69,28 +69,28 @@ def check_run_folder(cfg: TrainConfig, *, resume: bool = False, overwrite: bool 
 def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, data_cache: dict | None = None) -> Run:
     """Trains one model; returns its run folder (see the module docstring for what it holds).
 
-    ``resume``: continue the run in ``cfg.out`` from its ``last.pt``. Otherwise ``cfg.out`` must be new or
-    empty, unless ``overwrite``: then the files of an earlier run there are replaced (:func:`check_run_folder`).
-
-    ``data_cache``: an (initially empty) dict passed to successive calls lets runs on the
-    same data, split and mapping read and map the materials once (sweeps of many runs).
+    Parameters
+    ----------
+    cfg
+        The run's configuration; ``cfg.out`` is the run folder, ``cfg.data`` the folder of materials.
+    resume
+        Continue the run in ``cfg.out`` from its ``last.pt``. Otherwise ``cfg.out`` must be new or empty, unless
+        ``overwrite``: then the files of an earlier run there are replaced (:func:`check_run_folder`).
+    overwrite
+        See ``resume``.
+    data_cache
+        An (initially empty) dict passed to successive calls lets runs on the same data, split and mapping read
+        and map the materials once (sweeps of many runs).
     """
     start = time.perf_counter()
     folder = check_run_folder(cfg, resume=resume, overwrite=overwrite)
-    run_dir = folder.target
     files = {path.stem: path for path in list_materials(cfg.data)}
     device = select_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")))
     ranks = Distributed.start(device)
-
-    checkpoint = checked_resume(run_dir, cfg) if resume else None  # a damaged last.pt fails here, before any write
-    split = _resumed_split(checkpoint, cfg, files, run_dir) if checkpoint else split_materials(files, cfg.seed,
-                                                                                               cfg.split, cfg.holdout)
-    # Full batches only (the last partial one is dropped; each epoch reshuffles), so that
-    # every step's batch splits evenly across ranks.
-    batch_size = min(cfg.batch_materials, len(split.train))
-    if batch_size % ranks.world:
-        raise ValueError(f"a batch of {batch_size} materials does not split evenly across {ranks.world} ranks; "
-                         "choose batch_materials divisible by the number of ranks")
+    checkpoint = checked_resume(folder.target, cfg) if resume else None  # a damaged last.pt fails here, before any write
+    split = (_resumed_split(checkpoint, cfg, files, folder.target) if checkpoint
+             else split_materials(files, cfg.seed, cfg.split, cfg.holdout))
+    batch_size = _batch_size(cfg, split, ranks)
     source_spec = cfg.decoder_from or cfg.init_from  # at most one of them (TrainConfig checks)
     source = load_model(source_spec) if source_spec else None
     if source is not None:
@@ -99,107 +99,160 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     if ranks.main:
         if not resume:  # overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's)
             folder.begin(RUN_FILES)
-        save_json(run_dir / "config.json", to_dict(cfg))
-        save_json(run_dir / "split.json", split.to_json())
-        checkpoints.save_mapping(run_dir, data.mapping.state())
+        save_json(folder.target / "config.json", to_dict(cfg))
+        save_json(folder.target / "split.json", split.to_json())
+        checkpoints.save_mapping(folder.target, data.mapping.state())
 
-    torch.manual_seed(cfg.seed)
-    network = AutoEncoder(cfg.model)
-    if cfg.init_from:  # fine-tuning: every weight starts where the source's ended
-        network.load_state_dict(source.network.state_dict())
-    elif cfg.decoder_from:  # the trained decoder, frozen: only the encoder learns
-        network.decoder.load_state_dict(source.network.decoder.state_dict())
-        network.decoder.requires_grad_(False)
-    network = network.to(device)
-    frequency = FrequencyLoss(cfg.loss.frequency, data.mapping).to(device) if data.truth is not None else None
-    optimizer = make_optimizer(network, cfg)
-    drawer = BatchDrawer(cfg, data, with_truth=cfg.loss.eta > 0)
-    generator = torch.Generator().manual_seed(cfg.seed)
-    history: list[dict] = []
-    # The best epoch by each rule measured (best.pt holds cfg.select's pick): score, lower is better.
-    bests = {rule: {"epoch": -1, "val": math.inf} for rule in (SELECTION_RULES if cfg.render_every else ("loss",))}
-    first_epoch = 0
-    if checkpoint is not None:
-        network.load_state_dict(checkpoint["model"])
-        optimizer.load_state_dict(checkpoint["optimizer"])
-        generator.set_state(checkpoint["generator"])
-        history, first_epoch = checkpoint["history"], checkpoint["epoch"] + 1
-        bests.update(checkpoint.get("bests", {cfg.select: checkpoint["best"]}))
-    trained = torch.nn.parallel.DistributedDataParallel(network) if ranks.world > 1 else network
-
-    def state(epoch: int) -> dict:
-        return {"method": cfg.method, "config": json.dumps(to_dict(cfg)), "split": split.to_json(),
-                "model": network.state_dict(), "optimizer": optimizer.state_dict(),
-                "generator": generator.get_state(), "epoch": epoch, "best": bests[cfg.select], "bests": bests,
-                "history": history}
-
-    if not history:  # the untrained model's validation loss: the baseline every epoch improves on
-        initial = evaluate_split(network, frequency, cfg, data, data.validation, device)
-        history.append({"epoch": -1, **{f"val_{k}": v for k, v in initial.items()}})
-    # Read and rendered once; each render_every epochs then costs only the model's own renders.
+    trainer = Trainer(cfg, folder.target, ranks, device, split, data, batch_size, source, checkpoint)
     validation_renders = (ScoringSet([files[name] for name in split.val], resolution=cfg.render_resolution,
                                      seed=cfg.seed) if cfg.render_every else None)
-    # Training wall time, carried over a resume; the validation renders are measurement, not training.
-    clock_start, render_seconds = time.perf_counter(), 0.0
-    seconds_before = history[-1].get("seconds", 0.0)
-    steps_per_epoch = data.n_train // batch_size
-    bar = tqdm(total=(cfg.epochs - first_epoch) * steps_per_epoch, desc=f"train {cfg.method}",
-               disable=not (cfg.progress and ranks.main))
-    for epoch in range(first_epoch, cfg.epochs):
-        network.train()
+    trainer.run(validation_renders)
+    if ranks.main:
+        folder.finish()
+    ranks.barrier()
+    return Run(folder.target, seconds=time.perf_counter() - start)
+
+
+class Trainer:
+    """One run's network, optimiser and record while it trains, and the steps of an epoch.
+
+    Built from a fresh start or a resumed checkpoint; :meth:`run` then trains epoch by epoch: a pass over the
+    training materials (:meth:`train_epoch`), the validation loss (and renders every ``render_every`` epochs),
+    the checkpoints (:meth:`record`), and the schedule: the learning rate halved on a plateau, early stopping
+    (:meth:`should_stop`).
+    """
+
+    def __init__(self, cfg: TrainConfig, run_dir: Path, ranks: Distributed, device: torch.device, split: Split,
+                 data: PreparedData, batch_size: int, source: Model | None, checkpoint: dict | None):
+        self.cfg, self.run_dir, self.ranks, self.device, self.split, self.data = cfg, run_dir, ranks, device, split, data
+        self.batch_size, self.steps_per_epoch = batch_size, data.n_train // batch_size
+        torch.manual_seed(cfg.seed)
+        network = AutoEncoder(cfg.model)
+        if cfg.init_from:  # fine-tuning: every weight starts where the source's ended
+            network.load_state_dict(source.network.state_dict())
+        elif cfg.decoder_from:  # the trained decoder, frozen: only the encoder learns
+            network.decoder.load_state_dict(source.network.decoder.state_dict())
+            network.decoder.requires_grad_(False)
+        self.network = network.to(device)
+        self.frequency = FrequencyLoss(cfg.loss.frequency, data.mapping).to(device) if data.truth is not None else None
+        self.optimizer = make_optimizer(self.network, cfg)
+        self.drawer = BatchDrawer(cfg, data, with_truth=cfg.loss.eta > 0)
+        self.generator = torch.Generator().manual_seed(cfg.seed)
+        self.history: list[dict] = []
+        # The best epoch by each rule measured (best.pt holds cfg.select's pick): score, lower is better.
+        self.bests = {rule: {"epoch": -1, "val": math.inf}
+                      for rule in (SELECTION_RULES if cfg.render_every else ("loss",))}
+        self.first_epoch = 0
+        if checkpoint is not None:
+            self.network.load_state_dict(checkpoint["model"])
+            self.optimizer.load_state_dict(checkpoint["optimizer"])
+            self.generator.set_state(checkpoint["generator"])
+            self.history, self.first_epoch = checkpoint["history"], checkpoint["epoch"] + 1
+            self.bests.update(checkpoint.get("bests", {cfg.select: checkpoint["best"]}))
+        self.trained = torch.nn.parallel.DistributedDataParallel(self.network) if ranks.world > 1 else self.network
+
+    def run(self, validation_renders: ScoringSet | None) -> None:
+        """Trains from :attr:`first_epoch` to ``cfg.epochs`` or an early stop. ``validation_renders``: the
+        validation materials read and rendered once (each ``render_every`` epochs then costs only the model's own
+        renders), or None without ``render_every``."""
+        cfg = self.cfg
+        if not self.history:  # the untrained model's validation loss: the baseline every epoch improves on
+            initial = self.validate()
+            self.history.append({"epoch": -1, **{f"val_{k}": v for k, v in initial.items()}})
+        # Training wall time, carried over a resume; the validation renders are measurement, not training.
+        clock_start, render_seconds = time.perf_counter(), 0.0
+        seconds_before = self.history[-1].get("seconds", 0.0)
+        bar = tqdm(total=(cfg.epochs - self.first_epoch) * self.steps_per_epoch, desc=f"train {cfg.method}",
+                   disable=not (cfg.progress and self.ranks.main))
+        for epoch in range(self.first_epoch, cfg.epochs):
+            entry = {"epoch": epoch, **self.train_epoch(epoch, bar),
+                     **{f"val_{k}": v for k, v in self.validate().items()}}
+            if cfg.render_every and ((epoch + 1) % cfg.render_every == 0 or epoch == cfg.epochs - 1):
+                render_start = time.perf_counter()
+                entry.update(render_validation(self.network, self.data, cfg, validation_renders))
+                render_seconds += time.perf_counter() - render_start
+            entry["seconds"] = seconds_before + time.perf_counter() - clock_start - render_seconds
+            entry["lr"] = self.optimizer.param_groups[0]["lr"]
+            self.record(epoch, entry)
+            if self.should_stop(epoch):
+                break
+        bar.close()
+
+    def train_epoch(self, epoch: int, bar: tqdm) -> dict:
+        """One pass over the training materials in a new random order; the mean of each logged term
+        (``train_*``) and the gradient ratio of the epoch's first step."""
+        self.network.train()
         sums: dict[str, float] = {}
         gradient_ratio = None
-        order = torch.randperm(data.n_train, generator=generator)
-        for step_in_epoch in range(steps_per_epoch):
-            batch = order[step_in_epoch * batch_size:(step_in_epoch + 1) * batch_size].tolist()
+        order = torch.randperm(self.data.n_train, generator=self.generator)
+        ranks, size = self.ranks, self.batch_size
+        for step in range(self.steps_per_epoch):
+            batch = order[step * size:(step + 1) * size].tolist()
             # Every rank draws the whole batch's samples (same generator), then keeps its share:
             # the run equals a single-process run on the same seed.
             share = slice(ranks.rank * len(batch) // ranks.world, (ranks.rank + 1) * len(batch) // ranks.world)
-            mine = drawer.draw(batch, generator).take(share).to(device)
-            terms = optimisation_step(trained, frequency, optimizer, cfg.loss, cfg.grad_clip, mine.context, mine.query,
-                                      mine.truth, measure_gradients=step_in_epoch == 0, truth_mask=mine.truth_mask)
+            mine = self.drawer.draw(batch, self.generator).take(share).to(self.device)
+            terms = optimisation_step(self.trained, self.frequency, self.optimizer, self.cfg.loss, self.cfg.grad_clip,
+                                      mine.context, mine.query, mine.truth, measure_gradients=step == 0,
+                                      truth_mask=mine.truth_mask)
             if terms.gradient_ratio is not None:
                 gradient_ratio = terms.gradient_ratio
             if terms.not_finite:
                 raise TrainingDiverged(
-                    f"step {epoch * steps_per_epoch + step_in_epoch}: loss term(s) {terms.not_finite} became NaN/inf; "
-                    f"training stopped, the last good checkpoint is kept in {run_dir} (lr {cfg.lr:g}, eta "
-                    f"{cfg.loss.eta:g}: lower them, or set grad_clip)")
+                    f"step {epoch * self.steps_per_epoch + step}: loss term(s) {terms.not_finite} became NaN/inf; "
+                    f"training stopped, the last good checkpoint is kept in {self.run_dir} (lr {self.cfg.lr:g}, "
+                    f"eta {self.cfg.loss.eta:g}: lower them, or set grad_clip)")
             for name, value in terms.logged.items():
-                sums[name] = sums.get(name, 0.0) + value / steps_per_epoch
+                sums[name] = sums.get(name, 0.0) + value / self.steps_per_epoch
             bar.update()
             bar.set_postfix({name: f"{value:.3g}" for name, value in terms.logged.items()}, refresh=False)
-        validation = evaluate_split(network, frequency, cfg, data, data.validation, device)
-        entry = {"epoch": epoch, **{f"train_{k}": v for k, v in sums.items()},
-                 **({"train_gradient_ratio": gradient_ratio} if gradient_ratio is not None else {}),
-                 **{f"val_{k}": v for k, v in validation.items()}}
-        if cfg.render_every and ((epoch + 1) % cfg.render_every == 0 or epoch == cfg.epochs - 1):
-            render_start = time.perf_counter()
-            entry.update(render_validation(network, data, cfg, validation_renders))
-            render_seconds += time.perf_counter() - render_start
-        entry["seconds"] = seconds_before + time.perf_counter() - clock_start - render_seconds
-        entry["lr"] = optimizer.param_groups[0]["lr"]
-        history.append(entry)
-        for rule, best in bests.items():
+        return {**{f"train_{k}": v for k, v in sums.items()},
+                **({"train_gradient_ratio": gradient_ratio} if gradient_ratio is not None else {})}
+
+    def validate(self) -> dict:
+        """The validation split's mean loss terms (:func:`evaluate_split`)."""
+        return evaluate_split(self.network, self.frequency, self.cfg, self.data, self.data.validation, self.device)
+
+    def record(self, epoch: int, entry: dict) -> None:
+        """Adds the epoch's entry to the history; writes the best checkpoint of each rule it improves,
+        ``last.pt`` and ``history.json`` (the main rank only)."""
+        self.history.append(entry)
+        for rule, best in self.bests.items():
             score = selection_score(entry, rule)
             if score is not None and score < best["val"]:
-                bests[rule] = {"epoch": epoch, "val": score}
-                if ranks.main:
-                    checkpoints.save(run_dir / best_checkpoint(rule, cfg), state(epoch))
-        if ranks.main:
-            checkpoints.save(run_dir / "last.pt", state(epoch))
-            save_json(run_dir / "history.json", history)
-        since_best = epoch - bests[cfg.select]["epoch"]
-        if cfg.lr_plateau and since_best and since_best % cfg.lr_plateau == 0:
-            for group in optimizer.param_groups:  # a plateau: halve the rate (kept in last.pt for a resume)
+                self.bests[rule] = {"epoch": epoch, "val": score}
+                if self.ranks.main:
+                    checkpoints.save(self.run_dir / best_checkpoint(rule, self.cfg), self.state(epoch))
+        if self.ranks.main:
+            checkpoints.save(self.run_dir / "last.pt", self.state(epoch))
+            save_json(self.run_dir / "history.json", self.history)
+
+    def should_stop(self, epoch: int) -> bool:
+        """The schedule after ``epoch``: halves the learning rate every ``lr_plateau`` epochs without a better
+        selection score (kept in last.pt for a resume); True once ``patience`` epochs passed without one."""
+        since_best = epoch - self.bests[self.cfg.select]["epoch"]
+        if self.cfg.lr_plateau and since_best and since_best % self.cfg.lr_plateau == 0:
+            for group in self.optimizer.param_groups:
                 group["lr"] *= 0.5
-        if cfg.patience and since_best >= cfg.patience:
-            break  # early stopping: the selection measure has not improved for `patience` epochs
-    bar.close()
-    if ranks.main:
-        folder.finish()
-    ranks.barrier()
-    return Run(run_dir, seconds=time.perf_counter() - start)
+        return bool(self.cfg.patience and since_best >= self.cfg.patience)
+
+    def state(self, epoch: int) -> dict:
+        """What a checkpoint holds after ``epoch`` (:mod:`frenbrdf.io.checkpoints`)."""
+        cfg = self.cfg
+        return {"method": cfg.method, "config": json.dumps(to_dict(cfg)), "split": self.split.to_json(),
+                "model": self.network.state_dict(), "optimizer": self.optimizer.state_dict(),
+                "generator": self.generator.get_state(), "epoch": epoch, "best": self.bests[cfg.select],
+                "bests": self.bests, "history": self.history}
+
+
+def _batch_size(cfg: TrainConfig, split: Split, ranks: Distributed) -> int:
+    """Materials a step: full batches only (the last partial one is dropped; each epoch reshuffles), so that
+    every step's batch splits evenly across ranks."""
+    batch_size = min(cfg.batch_materials, len(split.train))
+    if batch_size % ranks.world:
+        raise ValueError(f"a batch of {batch_size} materials does not split evenly across {ranks.world} ranks; "
+                         "choose batch_materials divisible by the number of ranks")
+    return batch_size
 
 
 def best_checkpoint(rule: str, cfg: TrainConfig) -> str:

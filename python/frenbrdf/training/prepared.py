@@ -26,7 +26,7 @@ from ..models.mapping import LogRelativeMapping
 from .config import TrainConfig
 
 
-@dataclass
+@dataclass(frozen=True)  # immutable: ``Distributed()`` is a default argument (pyproject.toml, extend-immutable-calls)
 class Distributed:
     """This process's rank among ``world`` (1 without ``torchrun``)."""
 

@@ -43,11 +43,6 @@ class Run:
     def __repr__(self) -> str:
         return f"Run({str(self.path)!r})"
 
-    @property
-    def run_dir(self) -> Path:
-        """The folder (the name :class:`TrainResult` had)."""
-        return self.path
-
     @functools.cached_property
     def config(self) -> TrainConfig:
         saved = self._json("config.json")
