@@ -14,7 +14,7 @@ defaults (:func:`frenbrdf.training.config_for` applies them). Methods (docs/meth
 Training lengths are top-level overrides for a whole comparison, the same for every
 method, so that every method takes the same number of optimisation steps: the paper's
 protocol uses the defaults; ``demo`` fits ``frenbrdf demo`` in minutes on 2 cores;
-``sweep`` is half the demo, for the many runs of the chart sweeps and ``frenbrdf select``.
+``sweep`` is half the demo, for the many runs of sweeps and ``frenbrdf select``.
 
 Augmentations (:data:`AUGMENTATION`) say what data a comparison trained on, the same for every
 method: the tables only (``paper``) or with mixes, gains and procedural materials.
@@ -46,7 +46,7 @@ TRAINING: dict[str, dict] = {
 
 AUGMENTATION: dict[str, dict] = {
     "paper": {"mix": 0.0, "gain": 0.0, "procedural": 0.0},
-    # The default (AugmentConfig's): chosen by measurement, docs/colour.md. Procedural materials
+    # The default (AugmentConfig's): chosen by measurement, research/colour.md. Procedural materials
     # made steps 1.7x slower and did not help at the demo's length, so they are off here.
     "augmented": {"mix": 0.25, "gain": 0.5, "procedural": 0.0, "gain_range": [0.5, 2.0]},
     "procedural": {"mix": 0.25, "gain": 0.25, "procedural": 0.25, "gain_range": [0.5, 2.0]},
@@ -62,7 +62,7 @@ FREQUENCY_VARIANTS: dict[str, dict] = {
     "tone": {"fit": "measured", "values": "log1p", "degree_power": 0.0, "slices": [0, 24, 48, 72]},
     "highlights": {"fit": "measured", "values": "log1p", "degree_power": 0.0, "slices": [1, 4, 10, 21]},
 }
-"""L_fre variant → its :class:`~frenbrdf.models.losses.FrequencyLossConfig` values (docs/frequency.md,
+"""L_fre variant → its :class:`~frenbrdf.models.losses.FrequencyLossConfig` values (research/frequency.md,
 "Variants"). ``paper`` is the paper's reading (the default). Each next one removes one more measured
 reason why L_fre is inert: ``no-floor`` fits the coefficients to the measured nodes only (no floor
 below the horizon); ``tone`` also takes the spectrum of ln(1 + f) instead of the log-relative

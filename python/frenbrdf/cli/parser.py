@@ -76,8 +76,7 @@ def _train(subparsers) -> None:
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")
     train.add_argument("--render-every", type=options.count, metavar="N",
-                       help="render the validation materials every N epochs and log their PSNR and ΔE (research/figures: "
-                       "chart 7)")
+                       help="render the validation materials every N epochs and log their PSNR and ΔE")
     train.add_argument("--select", choices=SELECTION_RULES,
                        help="what picks best.pt: the validation loss (default) or the validation render PSNR "
                        "(needs --render-every)")
@@ -152,15 +151,15 @@ def _render(subparsers) -> None:
 
 
 def _select(subparsers) -> None:
-    select = subparsers.add_parser("select", help="the smallest NBRDF/latent configuration (chart 3) whose "
+    select = subparsers.add_parser("select", help="the smallest NBRDF/latent configuration whose "
                                  "validation render PSNR reaches a target")
     select.add_argument("--data", required=True, help="folder of MERL files")
     select.add_argument("--target-psnr", required=True, type=options.decibels, metavar="DB",
                         help="validation render PSNR to reach, in dB")
     select.add_argument("--out", required=True, help="folder for config.json and the selection report: a new or "
                         "empty one, or an earlier selection's (its trained candidates are reused)")
-    select.add_argument("--front", help="a chart-3 JSON (research/figures/chart3_capacity.json): choose from its "
-                        "measurements, train nothing")
+    select.add_argument("--front", help="a measured capacity front (JSON, as research/charts/chart_capacity.py "
+                        "writes it): choose from its measurements, train nothing")
     select.add_argument("--config", help="without --front: JSON training config of the candidates "
                         "(default: FreNBRDF with the sweeps' short training)")
     select.add_argument("--epochs", type=options.positive_count, help="without --front: training epochs per candidate")
@@ -186,7 +185,7 @@ def _reconstruct(subparsers) -> None:
                      help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
-                     "space, for editing), full (then the NBRDF's weights; the default: charts 8–8c)")
+                     "space, for editing), full (then the NBRDF's weights; the default)")
     rec.add_argument("--width", type=options.nbrdf_width, metavar="N",
                      help="with --refine full: widen the NBRDF to at least N hidden "
                      "units per layer before refining its weights (default 64; wider: more fidelity for more "
@@ -237,7 +236,7 @@ def _spectrum(subparsers) -> None:
     spectrum.add_argument("--truth", help="a material file every material is compared with (its error spectrum)")
     spectrum.add_argument("--variant", choices=sorted(FREQUENCY_VARIANTS), default="tone",
                           help="the L_fre settings the spectra are taken at (default tone: ln(1 + f), fitted to the "
-                          "measured nodes only; docs/frequency.md)")
+                          "measured nodes only; research/frequency.md)")
     spectrum.add_argument("--lmax", type=options.lmax, help="band limit (default: the variant's, 49)")
     spectrum.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files "
                           "(they are kept)")

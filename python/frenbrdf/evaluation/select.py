@@ -1,7 +1,7 @@
 """``frenbrdf select``: the smallest NBRDF/latent configuration that reaches a validation PSNR.
 
-Candidates are chart 3's configurations (:func:`frenbrdf.evaluation.variants.capacity_variants`),
-from the smallest material to the largest; they are read from a measured chart-3 JSON or
+Candidates are the capacity variants (:func:`frenbrdf.evaluation.variants.capacity_variants`),
+from the smallest material to the largest; they are read from a measured capacity front (JSON) or
 trained and measured smallest first until one reaches the target.
 """
 
@@ -47,13 +47,13 @@ def by_size(rows: list[dict]) -> list[dict]:
 
 
 def read_front(path: str | os.PathLike) -> dict:
-    """A chart-3 JSON (``chart3_capacity.json``), checked."""
+    """A measured capacity front (JSON rows of configurations and their validation PSNR), checked."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"front file {path} does not exist")
-    chart = read_json(path, "chart-3 file")
+    chart = read_json(path, "capacity front")
     if chart.get("chart") != "capacity" or not isinstance(chart.get("rows"), list):
-        raise ValueError(f"{path}: not a chart-3 (capacity) file; make one with research/charts/chart_capacity.py")
+        raise ValueError(f"{path}: not a capacity front; make one with research/charts/chart_capacity.py")
     needed = ("name", "psnr", "bytes_per_material", "latent_bytes", "config")
     for i, row in enumerate(chart["rows"]):
         missing = [k for k in needed if not isinstance(row, dict) or k not in row]
@@ -78,10 +78,10 @@ SELECT_FILES = ("runs", "cache", "config.json", "selection.json", "selection.md"
 def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfig | None = None,
                   variants: list[Variant] | None = None, measure: MeasureSettings | None = None,
                   progress: bool = True, overwrite: bool = False) -> Selection:
-    """The smallest chart-3 configuration whose validation render PSNR reaches ``target_psnr``.
+    """The smallest capacity configuration whose validation render PSNR reaches ``target_psnr``.
 
     Candidates go from the smallest material (NBRDF bytes, then latent bytes) to the
-    largest. With ``front`` (a chart-3 JSON) the measured rows decide, nothing is trained;
+    largest. With ``front`` (a measured capacity front, :func:`read_front`) the measured rows decide, nothing is trained;
     without it each candidate (``variants``, default :func:`capacity_variants`, over
     ``base``, default :func:`base_config`) is trained and measured in ``OUT/runs/`` in that
     order until one reaches the target. If one does, ``OUT/config.json`` holds its

@@ -1,4 +1,4 @@
-"""Variants of the FreNBRDF preset, trained and measured: what chart sweeps and ``select`` run.
+"""Variants of the FreNBRDF preset, trained and measured: what ``select`` (and the research sweeps) run.
 
 A :class:`Variant` is the FreNBRDF preset with a few keys overridden; all variants of a
 sweep train on the same data, seed and split with the same short training (the ``sweep``
@@ -15,8 +15,7 @@ it) and measures it:
 
 Every run lives in ``WORK/runs/<name>-<key>/`` (``key``: a hash of the run's config) with
 its measurements in ``result.json``; a sweep started again skips variants that hold one
-and resumes interrupted training, so sweeps can be stopped and restarted at will. The
-chart sweeps (charts 2 and 3) are in ``research/charts/sweeps.py``.
+and resumes interrupted training, so sweeps can be stopped and restarted at will.
 """
 
 from __future__ import annotations
@@ -106,7 +105,7 @@ class MeasureSettings:
     timing_materials: int = 16
     """Materials of the data folder the step timing reads (enough for one batch)."""
     throughput_queries: int = 1 << 18
-    """Queries of the throughput measurement (chart 3, :func:`add_throughput`; 0: not measured)."""
+    """Queries of the decoded NBRDFs' throughput measurement (0: not measured)."""
     lfre: bool = True
     """Measure L_fre on validation (``select`` needs only the PSNR)."""
     progress: bool = True
@@ -145,8 +144,10 @@ SUMMARY_KEYS = ("psnr", "ssim", "rmse", "delta_e", "lfre")
 
 
 def run_variant(variant: Variant, base: TrainConfig, work: str | os.PathLike,
-                measure: MeasureSettings = MeasureSettings(), caches: SweepCaches | None = None) -> dict:
-    """Trains one variant (or resumes it) in ``WORK/runs/`` and measures it; returns its result row."""
+                measure: MeasureSettings | None = None, caches: SweepCaches | None = None) -> dict:
+    """Trains one variant (or resumes it) in ``WORK/runs/`` and measures it (default :class:`MeasureSettings`);
+    returns its result row."""
+    measure = MeasureSettings() if measure is None else measure
     work = Path(work)
     caches = caches or SweepCaches()
     cfg = variant.config(base)
@@ -201,8 +202,10 @@ def run_variant(variant: Variant, base: TrainConfig, work: str | os.PathLike,
 
 
 def run_sweep(variants: list[Variant], base: TrainConfig, work: str | os.PathLike,
-              measure: MeasureSettings = MeasureSettings(), *, on_row=None) -> list[dict]:
-    """Runs (or skips, when measured already) every variant in order; ``on_row(rows)`` after each."""
+              measure: MeasureSettings | None = None, *, on_row=None) -> list[dict]:
+    """Runs (or skips, when measured already) every variant in order, measured as ``measure`` says (default
+    :class:`MeasureSettings`); ``on_row(rows)`` after each."""
+    measure = MeasureSettings() if measure is None else measure
     caches, rows = SweepCaches(), []
     names = [v.name for v in variants]
     if len(set(names)) != len(names):

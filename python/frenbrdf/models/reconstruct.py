@@ -125,13 +125,9 @@ class RefineConfig:
             raise ValueError("invalid refinement: " + "; ".join(problems))
 
 
-#: The named budgets of ``refine=`` (research/figures/README.md, charts 8, 8b and 8c; CPU seconds of one thread per
-#: material, 4000 samples). Latent: 100 steps take 0.2–0.4 s and give +6–9 dB; 200 steps with a cosine schedule
-#: from 3e-2 (chart 8c) add 0.3–0.7 dB for 0.25 s more. Full: after 100 latent steps, the NBRDF's weights at
-#: 3e-3 (chart 8c: +1.9 dB over 1e-3 on 7 RGL fits version 2 never saw); a cosine schedule did not help there.
-#: Since the weight stage runs natively, 1500 steps in an NBRDF widened to 64 units: +1.1 dB [+0.4, +1.8] over
-#: 48 units and 1000 steps on those RGL fits, 1.56 s on 2 threads (research/measurements.md, "What limits full").
-#: Each was chosen by a rule fixed before measuring, on materials other than the four real measurements.
+#: The named budgets of ``refine=``: ``latent`` optimises z only (the result stays in the latent space, so it can
+#: be edited), ``full`` then fits the NBRDF's own weights, widened to 64 units. Each setting was chosen by a rule
+#: fixed before measuring; the measurements are in research/README.md ("Test-time refinement").
 BUDGETS = {
     "none": RefineConfig(),
     "latent": RefineConfig(latent_steps=200, latent_lr=3e-2, schedule="cosine"),
@@ -274,9 +270,9 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
 
     The stage's penalty (a mean square of each tensor, times λ) is not in ``objective``: it enters as Adam's
     weight decay, ``decays`` per tensor (its gradient 2·λ·p / n is the decay times p), the same steps as
-    differentiating it for ~30 fewer small ops a step (docs/performance.md)."""
-    groups = [{"params": [p], "weight_decay": decay} for p, decay in zip(parameters, decays)]
-    optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel per group (docs/performance.md)
+    differentiating it for ~30 fewer small ops a step (research/performance.md)."""
+    groups = [{"params": [p], "weight_decay": decay} for p, decay in zip(parameters, decays, strict=True)]
+    optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel per group (research/performance.md)
     rates = _learning_rates(lr, steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
     start, taken = time.perf_counter(), 0
@@ -320,7 +316,7 @@ def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossCon
             bar.update(count)
     result.timings["weights"] = time.perf_counter() - start
     result.steps["weights"] = taken
-    return [torch.from_numpy(t).reshape(p.shape) for t, p in zip(fit.tensors(), params)]
+    return [torch.from_numpy(t).reshape(p.shape) for t, p in zip(fit.tensors(), params, strict=True)]
 
 
 def _learning_rates(lr: float, steps: int, schedule: str) -> np.ndarray:
@@ -358,5 +354,5 @@ def _frozen(module: torch.nn.Module):
     try:
         yield
     finally:
-        for parameter, flag in zip(module.parameters(), flags):
+        for parameter, flag in zip(module.parameters(), flags, strict=True):
             parameter.requires_grad_(flag)
