@@ -223,8 +223,8 @@ def render_sheet(rows: dict[str, dict[str, np.ndarray]], path: str | os.PathLike
     plt = pyplot()
     columns = columns or list(dict.fromkeys(column for images in rows.values() for column in images))
     figure, axes = plt.subplots(len(rows), len(columns), figsize=(2 * len(columns), 2.1 * len(rows)), squeeze=False)
-    for row, (name, images) in zip(axes, rows.items()):
-        for axis, column in zip(row, columns):
+    for row, (name, images) in zip(axes, rows.items(), strict=True):
+        for axis, column in zip(row, columns, strict=True):
             if column in images:
                 axis.imshow(images[column])
             axis.set_xticks([]), axis.set_yticks([])

@@ -29,7 +29,7 @@ fn inputs() -> (Vec<Vec3>, Vec<Vec3>) {
         .unzip()
 }
 
-/// One kernel call takes a good fraction of a second on two cores (docs/performance.md),
+/// One kernel call takes a good fraction of a second on two cores (research/performance.md),
 /// so flat sampling with a few iterations per sample; criterion's default of 100 linear
 /// samples would take minutes.
 fn configure(group: &mut BenchmarkGroup<'_, WallTime>) {

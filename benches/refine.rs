@@ -2,7 +2,7 @@
 //! (6 → w → w → 3, the widths `full` refines) against 4000 samples, the budget's sample
 //! count. The PyTorch loop it replaced is timed against it, in the whole of `full`, by
 //! `research/studies/refine_timing.py ../shared/data/rgl-measured/*.bsdf --against 1940711
-//! --width 48 --weight-steps 1000` (docs/performance.md).
+//! --width 48 --weight-steps 1000` (research/performance.md).
 
 use std::hint::black_box;
 use std::time::Duration;

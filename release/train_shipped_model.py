@@ -111,7 +111,7 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
   {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}
 - **Regenerate**: `bash release/train_shipped_model.sh` (the MERL fits, the RGL fits but the four measured
-  materials of [measurements.md](measurements.md), the bank; then training and packing). These files
+  materials of [research/measurements.md](../research/measurements.md), the bank; then training and packing). These files
   were packed by `{card['command']}`.
 - **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
   compressed (relative error of f_ref + ε below 1e-4).
@@ -127,7 +127,7 @@ By source (float32), encoder only: {by_source_text(card['held_out_by_source'])}.
 With the latent refined on the same samples (`--refine latent`; `frenbrdf reconstruct` defaults to `full`):
 {by_source_text(card['held_out_refined_by_source'])}.
 
-Real gonio-photometer measurements that no training saw: [measurements.md](measurements.md).
+Real gonio-photometer measurements that no training saw: [research/measurements.md](../research/measurements.md).
 """
 
 
@@ -138,7 +138,7 @@ def encoders_text(card: dict) -> str:
     members = ", ".join(f"`{m}`" for m in card["encoders"]["members"])
     return (f"\n- **Encoders**: z is the mean of {len(card['encoders']['members']) + 1} encoders of this decoder: "
             f"the training run's and {members}, each trained for the frozen decoder (`frenbrdf train "
-            f"--decoder-from`); why and the rule that chose it: [encoder-refit](results/encoder-refit/README.md). "
+            f"--decoder-from`); why and the rule that chose it: [encoder-refit](../research/results/encoder-refit/README.md). "
             f"Packed by `{card['encoders']['command']}`.")
 
 

@@ -10,7 +10,7 @@ const SCAN_CHUNK: usize = 1 << 14;
 /// and wait for it.
 ///
 /// With a one-thread global pool even the single hand-over and the wake-ups around it cost
-/// a large share of one small transform (docs/performance.md). The calling thread is then
+/// a large share of one small transform (research/performance.md). The calling thread is then
 /// made, once, the worker of a one-thread pool of its own (rayon's `use_current_thread`)
 /// and runs the work itself. Every later parallel loop it calls runs in place as well,
 /// which is what the one-thread global pool would have done on its one worker.
@@ -36,7 +36,7 @@ fn adopt_calling_thread() -> bool {
 /// Index of the first item for which `bad` holds, searched in parallel.
 ///
 /// Rayon's `par_iter().position_first` splits down to single items and pays for a task
-/// per item (docs/performance.md); scanning fixed-size chunks costs what a sequential loop
+/// per item (research/performance.md); scanning fixed-size chunks costs what a sequential loop
 /// does, per core.
 pub fn position_first<T: Sync>(items: &[T], bad: impl Fn(&T) -> bool + Sync) -> Option<usize> {
     items

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import itertools
 import os
 import sys
 from pathlib import Path
@@ -144,7 +145,7 @@ def write_keras_h5(path: Path, layers, names=None) -> Path:
 
     names = names or [f"dense_{i + 1}" for i in range(len(layers))]
     with h5py.File(path, "w") as file:
-        for name, (kernel, bias) in zip(names, layers):
+        for name, (kernel, bias) in zip(names, layers, strict=True):
             group = file.create_group(f"{name}/{name}")
             group["kernel:0"] = np.asarray(kernel, dtype=np.float32)
             group["bias:0"] = np.asarray(bias, dtype=np.float32)
@@ -155,7 +156,8 @@ def write_keras_h5(path: Path, layers, names=None) -> Path:
 def random_layers(sizes, seed=0):
     """Random Keras-layout layers ``(kernel (in, out), bias (out,))`` of the given widths."""
     rng = np.random.default_rng(seed)
-    return [(rng.normal(0, 0.5, (n_in, n_out)), rng.normal(0, 0.1, n_out)) for n_in, n_out in zip(sizes, sizes[1:])]
+    return [(rng.normal(0, 0.5, (n_in, n_out)), rng.normal(0, 0.1, n_out))
+            for n_in, n_out in itertools.pairwise(sizes)]
 
 
 def constant_table(value: float) -> np.ndarray:

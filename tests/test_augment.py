@@ -18,13 +18,14 @@ from frenbrdf.data.folders import (
     split_materials,
 )
 from frenbrdf.io.merl import merl_above_horizon
+from frenbrdf.io.sampling import bin_directions
 from frenbrdf.models.autoencoder import AutoEncoder
 from frenbrdf.models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
 from frenbrdf.training import config_for, loss_terms, prepare
 from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, draw_gains, hue_turn
 from frenbrdf.training.config import AugmentConfig
-from frenbrdf.training.procedural import NodeTruth, bin_directions, draw_procedural
+from frenbrdf.training.procedural import NodeTruth, draw_procedural
 
 from .conftest import tiny
 
@@ -187,7 +188,7 @@ def test_turned_tables_change_hue_stay_physical_and_earlier_batches_are_unchange
     plain = _drawer(prepared, gain=1.0, mix=0.0, procedural=0.0)[0]
     turned_off = _drawer(prepared, gain=1.0, mix=0.0, procedural=0.0, hue_turn=0.0)[0]
     for first, second in zip(plain.gained(0, 500, torch.Generator().manual_seed(4)),
-                             turned_off.gained(0, 500, torch.Generator().manual_seed(4))):
+                             turned_off.gained(0, 500, torch.Generator().manual_seed(4)), strict=True):
         assert torch.equal(first, second)
     drawer, _ = _drawer(prepared, gain=1.0, mix=0.0, procedural=0.0, hue_turn=1.0, gain_range=(1.0, 1.0))
     # The most coloured training material (toy tables: a coloured Lambertian base under a white lobe).

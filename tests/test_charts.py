@@ -119,7 +119,8 @@ def test_lfre_floor_evaluates_the_exact_brdf_where_the_loss_evaluates_a_predicti
 
     import torch
 
-    from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf
+    from frenbrdf.data.nbrdf_import import keras_nbrdf
+    from frenbrdf.io.keras import read_keras_nbrdf
     from frenbrdf.models.losses import FrequencyLossConfig
     from frenbrdf.models.mapping import LogRelativeMapping
     from frenbrdf.render.scoring import FrequencyMetric
@@ -135,7 +136,7 @@ def test_lfre_floor_evaluates_the_exact_brdf_where_the_loss_evaluates_a_predicti
     model = types.SimpleNamespace(mapping=LogRelativeMapping(np.zeros(3), epsilon=1.0))  # log(1 + f)
     exact = chart.exact_coefficients(metric, model, path)
     with torch.no_grad():
-        predicted = metric.loss.predicted_coefficients(keras_nbrdf(load_keras_nbrdf(path)).params)[0].numpy()
+        predicted = metric.loss.predicted_coefficients(keras_nbrdf(read_keras_nbrdf(path)).params)[0].numpy()
     np.testing.assert_allclose(exact, predicted, rtol=1e-4, atol=1e-4)
     degrees = metric.loss.sht.plan(torch.float64).degrees_orders()[:, 0]
     shares = chart.shares(exact ** 2, degrees)

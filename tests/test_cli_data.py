@@ -10,7 +10,8 @@ import pytest
 import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data import synth
-from frenbrdf.data.fitting import FitConfig, fit_nbrdf, load_nbrdf
+from frenbrdf.data.fitting import FitConfig, fit_nbrdf
+from frenbrdf.io import read_material
 from frenbrdf.io.outputs import MARKER
 
 from .conftest import SHARED_DATA, toy_table
@@ -97,7 +98,7 @@ def test_fit_nbrdf_on_samples_is_the_fit_of_a_table_holding_them():
     """fit_nbrdf_samples takes scattered samples (a measurement in both orders, which no table holds); on a table's
     own bins, in the table's order, it takes the same steps as fit_nbrdf on a table holding only those bins."""
     from frenbrdf.data.fitting import fit_nbrdf_samples
-    from frenbrdf.render.scoring import bin_directions, sample_bins
+    from frenbrdf.io.sampling import bin_directions, sample_bins
 
     table = toy_table(np.random.default_rng(3))
     bins = np.sort(sample_bins(table, np.random.default_rng(4), 1500))
@@ -106,7 +107,7 @@ def test_fit_nbrdf_on_samples_is_the_fit_of_a_table_holding_them():
     config = FitConfig(epochs=2, hidden=(8, 8))
     from_table = fit_nbrdf(sparse, config, progress=False)
     from_samples = fit_nbrdf_samples(table.reshape(3, -1)[:, bins].T, bin_directions(bins), config, progress=False)
-    for a, b in zip(from_table.params, from_samples.params):
+    for a, b in zip(from_table.params, from_samples.params, strict=True):
         np.testing.assert_allclose(a.numpy(), b.numpy(), rtol=1e-4, atol=1e-6)
     with pytest.raises(ValueError, match="finite"):
         fit_nbrdf_samples(np.full((10, 3), np.nan), bin_directions(bins[:10]), config, progress=False)
@@ -117,13 +118,13 @@ def test_fit_nbrdf_command_saves_a_loadable_nbrdf(tmp_path, capsys):
     frenbrdf.write_merl(path, toy_table(np.random.default_rng(4)))
     assert cli.main(["fit-nbrdf", str(path), "--out", str(tmp_path / "fits"), "--epochs", "1", "--hidden", "8,8",
                      "--merl", "--quiet"]) == 0
-    nbrdf = load_nbrdf(tmp_path / "fits" / "toy.pt")
+    nbrdf = frenbrdf.NBRDF.from_weights(read_material(tmp_path / "fits" / "toy.pt"))
     assert [tuple(p.shape[1:]) for p in nbrdf.params][:2] == [(8, 6), (8,)]
     written = frenbrdf.read_merl(tmp_path / "fits" / "toy.binary")
     np.testing.assert_allclose(written, nbrdf.merl_table(), rtol=1e-12)
     with pytest.raises(ValueError, match="not a (readable )?saved NBRDF"):
         (tmp_path / "bad.pt").write_bytes(b"junk")
-        load_nbrdf(tmp_path / "bad.pt")
+        read_material(tmp_path / "bad.pt")
 
 
 def test_fit_nbrdf_replaces_a_fit_only_when_asked_and_checks_before_any_work(tmp_path, capsys):

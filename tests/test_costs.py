@@ -149,7 +149,7 @@ def test_the_largest_context_a_message_allows_is_accepted():
 
 @pytest.mark.slow
 def test_reconstruct_at_the_largest_accepted_sample_count_runs_in_a_few_gb(tmp_path):
-    from frenbrdf.material.measurements import FORMS, MAX_SAMPLES
+    from frenbrdf.io.samples import FORMS, MAX_SAMPLES
 
     rng = np.random.default_rng(0)
 
@@ -159,7 +159,7 @@ def test_reconstruct_at_the_largest_accepted_sample_count_runs_in_a_few_gb(tmp_p
         return v / np.linalg.norm(v, axis=1, keepdims=True)
 
     columns = np.concatenate([directions(), directions(), rng.uniform(0.01, 0.5, size=(MAX_SAMPLES, 3))], axis=1)
-    np.savez(tmp_path / "samples.npz", **dict(zip(FORMS["vectors"], columns.T)))
+    np.savez(tmp_path / "samples.npz", **dict(zip(FORMS["vectors"], columns.T, strict=True)))
     del columns
     cap = 6 << 30  # address space: the process's resident peak is about half of it
 

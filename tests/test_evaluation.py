@@ -184,9 +184,9 @@ def test_refined_rows_appear_only_when_refinement_runs(tiny_runs, tmp_path):
 def test_refined_rows_are_what_reconstruct_gives_on_the_same_bins(tiny_runs, tmp_path):
     """Each refined row is :func:`frenbrdf.models.reconstruct.reconstruct` run on the bins the encoder was given."""
     from frenbrdf.io.merl import N_BINS, read_merl
+    from frenbrdf.io.sampling import bin_directions, sample_bins
     from frenbrdf.models.reconstruct import BUDGETS, reconstruct
     from frenbrdf.render.renderer import render_linear, tonemap
-    from frenbrdf.render.scoring import bin_directions, sample_bins
 
     config = EvaluateConfig(samples=250, edits=3, resolution=32, edit_resolution=16, progress=False, seed=3,
                             refine="full")

@@ -22,12 +22,11 @@ from hypothesis import strategies as st
 
 import frenbrdf
 from frenbrdf import cli
-from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
-from frenbrdf.data.materials import load_material_file
-from frenbrdf.io import checkpoints, outputs
+from frenbrdf.io import checkpoints, outputs, read_material, read_samples, write_material
 from frenbrdf.io.merl import N_BINS
-from frenbrdf.material.measurements import read_measurements
+from frenbrdf.io.nbrdf import read_nbrdf
 from frenbrdf.models.autoencoder import MAX_PARAMETERS
+from frenbrdf.models.nbrdf import NBRDF, as_brdf
 from frenbrdf.training import config_for, load_config
 
 from .io.test_bsdf_native import flat_material, tensor_file
@@ -90,11 +89,16 @@ def _reads_or_names(reader, path: Path) -> None:
         assert "allow_pickle" not in text and "weights_only" not in text  # never advice to load unsafely
 
 
-READERS = {".csv": [read_measurements], ".npz": [read_measurements],
-           ".pt": [load_nbrdf, load_material_file, checkpoints.load],
-           ".binary": [read_measurements, load_material_file, frenbrdf.read_merl],
-           ".h5": [load_material_file], ".json": [load_config],
-           ".bsdf": [frenbrdf.read_bsdf, read_measurements, load_material_file]}
+def _network(path):
+    """A material file as what renders: the network of an NBRDF file, checked whole."""
+    return as_brdf(read_material(path))
+
+
+READERS = {".csv": [read_samples], ".npz": [read_samples],
+           ".pt": [read_nbrdf, _network, checkpoints.load],
+           ".binary": [read_samples, _network, frenbrdf.read_merl],
+           ".h5": [_network], ".json": [load_config],
+           ".bsdf": [frenbrdf.read_bsdf, read_samples, _network]}
 
 
 @FAST
@@ -124,7 +128,7 @@ def test_generated_csv_tables(folder, cells, header):
         file.write(",".join(header) + "\n")
         for row in cells:
             file.write(",".join(cell.replace("\n", " ") for cell in row) + "\n")
-    _reads_or_names(read_measurements, path)
+    _reads_or_names(read_samples, path)
 
 
 JSON = st.recursive(st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats(allow_nan=False)
@@ -225,7 +229,7 @@ def test_a_ten_million_row_csv_reads_in_memory_near_its_size(tmp_path):
         for _ in range(10_000):
             file.write(block)
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-    measured = read_measurements(path)
+    measured = read_samples(path)
     grown = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 - before
     data = 10_000_000 * 9 * 8
     assert len(measured) == 10_000_000
@@ -246,11 +250,11 @@ def test_a_real_zip_bomb_and_huge_counts_are_refused_before_allocating(tmp_path,
                 member.write(zeros)
     assert path.stat().st_size < 20_000_000
     with pytest.raises(ValueError, match="declares .* bytes uncompressed"):
-        read_measurements(path)
+        read_samples(path)
     with pytest.raises(ValueError, match="context_samples must be ≤"):
         config_for("frenbrdf", context_samples=10**9)
     source = sorted(toy_materials.glob("*.binary"))[0]
-    assert len(read_measurements(source, samples=10**9)) <= N_BINS
+    assert len(read_samples(source, samples=10**9)) <= N_BINS
 
 
 @pytest.mark.slow
@@ -273,6 +277,6 @@ def test_the_cli_reports_fuzzed_inputs_with_exit_2(folder, capsys):
 def test_a_saved_nbrdf_round_trips(folder):
     path = folder / "round.pt"
     path.write_bytes(VALID[".pt"])
-    nbrdf = load_nbrdf(path)
-    save_nbrdf(folder / "again.pt", nbrdf)
-    assert torch.equal(load_nbrdf(folder / "again.pt").params[0], nbrdf.params[0])
+    nbrdf = NBRDF.from_weights(read_material(path))
+    write_material(folder / "again.pt", nbrdf.weights())
+    assert torch.equal(NBRDF.from_weights(read_material(folder / "again.pt")).params[0], nbrdf.params[0])

@@ -16,11 +16,12 @@ import pytest
 
 import frenbrdf
 from frenbrdf import cli
-from frenbrdf.data.materials import load_material_file
-from frenbrdf.data.nbrdf_import import import_nbrdf, load_keras_nbrdf
+from frenbrdf.data.nbrdf_import import import_nbrdf
+from frenbrdf.io import read_material, read_samples
 from frenbrdf.io.atomic import NAME_MAX, atomic_path, temporary_name
+from frenbrdf.io.keras import read_keras_nbrdf
 from frenbrdf.io.outputs import OutputFolder
-from frenbrdf.material.measurements import FORMS, read_measurements
+from frenbrdf.io.samples import FORMS
 
 from .conftest import constant_table, random_layers, write_keras_h5
 from .io.test_bsdf_native import flat_material, tensor_file
@@ -112,11 +113,12 @@ def test_a_staged_writers_error_names_the_output_not_the_hidden_staging_folder(t
 
 
 def test_every_single_file_reader_takes_upper_case_suffixes(tmp_path):
-    """render, view and spectrum read through load_material_file, which once matched suffixes case-sensitively."""
+    """render, view and spectrum read through frenbrdf.io.read_material, whose forerunner once matched suffixes
+    case-sensitively."""
     (tmp_path / "M.BSDF").write_bytes(tensor_file(flat_material()))
     write_keras_h5(tmp_path / "K.H5", random_layers([6, 8, 3]))
-    assert callable(load_material_file(tmp_path / "M.BSDF"))
-    assert callable(load_material_file(tmp_path / "K.H5"))
+    assert callable(read_material(tmp_path / "M.BSDF"))
+    assert read_material(tmp_path / "K.H5").what == "Keras NBRDF"
 
 
 def _npz(path: Path, convert) -> Path:
@@ -136,11 +138,11 @@ def test_npz_arrays_must_be_real_numbers(tmp_path, kind, convert):
     """numpy once turned these into numbers without a word (text parsed, an imaginary part dropped)."""
     path = _npz(tmp_path / "samples.npz", convert)
     with pytest.raises(ValueError, match=re.escape(f"{path}: array wi_x holds {kind} values; the arrays must be real")):
-        read_measurements(path)
+        read_samples(path)
 
 
 def test_npz_of_integers_or_half_floats_is_still_read(tmp_path):
-    assert len(read_measurements(_npz(tmp_path / "samples.npz", lambda c: c.astype(np.float16)))) == 60
+    assert len(read_samples(_npz(tmp_path / "samples.npz", lambda c: c.astype(np.float16)))) == 60
 
 
 @pytest.mark.parametrize(("header", "row", "message"), [
@@ -154,13 +156,13 @@ def test_angles_outside_the_hemisphere_or_in_the_wrong_unit_are_refused(tmp_path
     path = tmp_path / "samples.csv"
     path.write_text(header + "\n" + "\n".join([row] * 60) + "\n")
     with pytest.raises(ValueError, match=message):
-        read_measurements(path)
+        read_samples(path)
 
 
 def test_a_zero_wide_keras_layer_is_refused_by_the_reader(tmp_path):
     path = write_keras_h5(tmp_path / "w.h5", [(np.zeros((6, 0)), np.zeros(0)), (np.zeros((0, 3)), np.zeros(3))])
     with pytest.raises(ValueError, match=rf"{path}: layer 'dense_1' is 0 wide; an NBRDF's layers are 1 … \d+ wide"):
-        load_keras_nbrdf(path)
+        read_keras_nbrdf(path)
 
 
 def test_an_overflowing_keras_network_is_named_and_nothing_is_written(tmp_path):

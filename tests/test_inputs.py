@@ -15,9 +15,9 @@ import torch
 
 import frenbrdf
 from frenbrdf import cli
-from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
+from frenbrdf.io import read_material, read_samples, write_material
+from frenbrdf.io.nbrdf import read_nbrdf
 from frenbrdf.io.outputs import MARKER
-from frenbrdf.material.measurements import read_measurements
 
 from .conftest import tiny
 from .test_measurements import VECTORS, samples, write_csv
@@ -221,6 +221,11 @@ def _poison_first_weight(checkpoint):
     checkpoint["model"][name] = checkpoint["model"][name] * np.nan
 
 
+def load_nbrdf(path):
+    """A saved NBRDF as its network: read, then checked whole."""
+    return frenbrdf.NBRDF.from_weights(read_material(path))
+
+
 def _saved_nbrdf(tmp_path, params, epsilon=0.002, name="m.pt", **extra):
     path = tmp_path / name
     torch.save({"params": params, "reference": torch.zeros(3), "epsilon": epsilon, "offset": 0.0, **extra}, path)
@@ -252,14 +257,14 @@ def test_saved_nbrdfs_of_wrong_shapes_or_widths_are_named(tmp_path, capsys):
 
 
 def test_a_wide_keras_file_is_refused_before_it_is_evaluated(tmp_path):
-    from frenbrdf.data.nbrdf_import import load_keras_nbrdf
+    from frenbrdf.io.keras import read_keras_nbrdf
 
     from .conftest import write_keras_h5
 
     path = write_keras_h5(tmp_path / "wide.h5", [(np.zeros((6, 20000)), np.zeros(20000)),
                                                  (np.zeros((20000, 3)), np.zeros(3))])
     with pytest.raises(ValueError, match="wide.h5: .*20000"):
-        load_keras_nbrdf(path)
+        read_keras_nbrdf(path)
 
 
 def test_train_config_types_are_named(tmp_path):
@@ -320,7 +325,7 @@ def test_a_csv_with_a_huge_field_is_named(tmp_path):
     path = tmp_path / "huge.csv"
     path.write_text(",".join(VECTORS) + "\n" + "1" * 200_000 + ",0,1,0,0,1,1,1,1\n")
     with pytest.raises(ValueError, match=r"huge.csv: row 2: not readable as CSV"):
-        read_measurements(path)
+        read_samples(path)
 
 
 # --------------------------------------------------------------------------- 10–12: time and memory
@@ -334,7 +339,7 @@ def test_csv_memory_stays_near_the_data_size(tmp_path):
     np.savetxt(path, rows, delimiter=",", header=",".join(VECTORS), comments="")
     tracemalloc.start()
     try:
-        measured = read_measurements(path)
+        measured = read_samples(path)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -343,36 +348,34 @@ def test_csv_memory_stays_near_the_data_size(tmp_path):
 
 
 def test_an_npz_zip_bomb_is_refused_from_its_declared_sizes(tmp_path, monkeypatch):
-    from frenbrdf.material import measurements
+    from frenbrdf.io import samples as sample_files
 
-    monkeypatch.setattr(measurements, "MAX_SAMPLES", 1000)
+    monkeypatch.setattr(sample_files, "MAX_SAMPLES", 1000)
     path = tmp_path / "bomb.npz"
-    np.savez_compressed(path, **{name: np.zeros(100_000) for name in measurements.FORMS["vectors"]})
+    np.savez_compressed(path, **{name: np.zeros(100_000) for name in sample_files.FORMS["vectors"]})
     assert path.stat().st_size < 20_000
     with pytest.raises(ValueError, match="bomb.npz: .*declares 800,128 bytes uncompressed"):
-        read_measurements(path)
+        read_samples(path)
 
 
 def test_counts_are_capped_at_what_the_data_hold(toy_materials):
     source = sorted(toy_materials.glob("*.binary"))[0]
-    every = read_measurements(source, samples=None)
-    assert len(read_measurements(source, samples=10**9)) == len(every)  # not a billion draws
+    every = read_samples(source, samples=None)
+    assert len(read_samples(source, samples=10**9)) == len(every)  # not a billion draws
 
 
 def test_what_is_not_a_regular_file_is_refused_by_every_reader(tmp_path):
-    from frenbrdf.data.materials import load_material_file
-
     fifo = tmp_path / "pipe.binary"
     os.mkfifo(fifo)
     loop = tmp_path / "loop.csv"
     loop.symlink_to(loop)
-    for reader in (read_measurements, load_material_file, frenbrdf.read_merl, load_nbrdf, frenbrdf.read_bsdf):
+    for reader in (read_samples, read_material, frenbrdf.read_merl, read_nbrdf, frenbrdf.read_bsdf):
         with pytest.raises(ValueError, match="pipe.binary: a FIFO"):
             reader(fifo)
         with pytest.raises(IsADirectoryError, match="got a folder"):
             reader(tmp_path)
     with pytest.raises(ValueError, match="a loop of symbolic links"):
-        read_measurements(loop)
+        read_samples(loop)
     assert stat.S_ISFIFO(fifo.stat().st_mode)
 
 
@@ -467,7 +470,7 @@ def test_a_mapping_with_epsilon_at_or_below_zero_is_refused(tmp_path, run_dir):
 def test_messages_name_what_is_wrong_and_never_advise_unsafe_loading(tmp_path, model):
     random = tmp_path / "random"
     random.write_bytes(os.urandom(4096))
-    for suffix, reader in ((".npz", read_measurements), (".pt", load_nbrdf), (".pt", frenbrdf.Model.load)):
+    for suffix, reader in ((".npz", read_samples), (".pt", read_material), (".pt", frenbrdf.Model.load)):
         path = random.with_suffix(suffix)
         path.write_bytes(random.read_bytes())
         with pytest.raises(ValueError) as error:
@@ -480,16 +483,16 @@ def test_messages_name_what_is_wrong_and_never_advise_unsafe_loading(tmp_path, m
         load_nbrdf(pickled)
     assert "weights_only" not in str(error.value)
     good = tmp_path / "good.pt"
-    save_nbrdf(good, model.decode(np.zeros(model.config.encoder.latent)))
+    write_material(good, model.decode(np.zeros(model.config.encoder.latent)).weights())
     truncated = tmp_path / "truncated.pt"
     truncated.write_bytes(good.read_bytes()[:-200])
     with pytest.raises(ValueError, match="truncated.pt: not a readable saved NBRDF") as error:
         load_nbrdf(truncated)
     assert "Errno" not in str(error.value)
     latin = tmp_path / "latin.csv"
-    latin.write_bytes("wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b\n".encode() + "é,1".encode("latin-1"))
+    latin.write_bytes(b"wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b\n" + "é,1".encode("latin-1"))
     with pytest.raises(ValueError, match="latin.csv: not UTF-8 text"):
-        read_measurements(latin)
+        read_samples(latin)
     with pytest.raises(ValueError, match=r"^z must have shape \(8,\) or \(B, 8\), got \(4,\)$"):
         model.decode(np.zeros(4))
     with pytest.raises(ValueError, match="^z must be finite"):
@@ -500,7 +503,7 @@ def test_a_merl_file_with_no_valid_bin_says_so(tmp_path):
     path = tmp_path / "empty.binary"
     frenbrdf.write_merl(path, -np.ones((3, 90, 90, 180)))
     with pytest.raises(ValueError, match="empty.binary: the MERL table holds no bin measured in every channel"):
-        read_measurements(path)
+        read_samples(path)
 
 
 def test_errors_name_the_path_given_not_a_temporary_one(tmp_path):

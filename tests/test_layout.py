@@ -21,7 +21,7 @@ LAYERS = [
     {"data"},  # material folders and splits, analytic families, material files, fitting
     {"render"},  # the metric renderer, lights, figures, image scores, mitsuba/
     {"training"},
-    {"evaluation"},  # evaluating runs, tables, statistics, spectra, selection (variants, timing)
+    {"evaluation"},  # evaluating runs, tables, statistics, spectra, selection (variants)
     {"material"},  # a user's material: measurement files in, the reconstruct folder out
     {"cli", "demo", ""},  # commands and the public face
 ]

@@ -20,7 +20,7 @@ import torch
 
 import frenbrdf
 from frenbrdf.data.analytic import METALS, AnalyticMaterial, merl_table
-from frenbrdf.data.fitting import save_nbrdf
+from frenbrdf.io import write_material
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import NBRDF, NBRDFConfig, fold_difference
 from frenbrdf.render import mitsuba as fm
@@ -160,7 +160,7 @@ def test_an_ordered_nbrdf_takes_the_light_first(mi):
 
 
 def test_keras_h5_file_eval_equals_the_reference(mi, tmp_path):
-    """A Keras .h5 read by the plugin (frenbrdf.data.materials) evaluates as its NBRDF (the reference forward pass)."""
+    """A Keras .h5 read by the plugin (frenbrdf.io.read_material) evaluates as its NBRDF (the reference forward pass)."""
     from frenbrdf.data.nbrdf_import import keras_nbrdf
 
     from .conftest import random_layers, write_keras_h5
@@ -291,7 +291,7 @@ def test_render_small_sphere_from_files(mi, gold_table, tmp_path):
     """A saved NBRDF and a MERL file render to finite, non-black images; the PNG is written."""
     nbrdf_path, merl_path, png = tmp_path / "tiny.pt", tmp_path / "gold.binary", tmp_path / "gold.png"
     handles = dict(fm._HANDLES)
-    save_nbrdf(nbrdf_path, tiny_nbrdf())
+    write_material(nbrdf_path, tiny_nbrdf().weights())
     frenbrdf.write_merl(merl_path, gold_table)
     for path, out in ((nbrdf_path, None), (merl_path, png)):
         image = fm.render_material(path, out, spp=16, resolution=32)
@@ -310,7 +310,7 @@ def test_render_cli_accepts_a_saved_nbrdf(mi, tmp_path, capsys):
     from frenbrdf.cli import main
 
     nbrdf, path, png = tiny_nbrdf(seed=5), tmp_path / "material.pt", tmp_path / "material.png"
-    save_nbrdf(path, nbrdf)
+    write_material(path, nbrdf.weights())
     assert main(["render", str(path), "--mitsuba", "--out", str(png), "--resolution", "16", "--spp", "4"]) == 0
     assert "wrote" in capsys.readouterr().out
     written = matplotlib.image.imread(png)[..., :3]
@@ -338,7 +338,7 @@ def test_plugin_refuses_bad_properties(mi, tmp_path):
     with pytest.raises(Exception, match="lookup must be"):
         mi.load_dict(fm.bsdf_dict(tiny_nbrdf(), lookup="cubic"))
     (tmp_path / "junk.bin").write_bytes(b"not a material")
-    with pytest.raises(ValueError, match="neither a MERL file"):
+    with pytest.raises(ValueError, match=r"junk.bin: read_material reads \.binary .*; this file has the suffix"):
         fm.load_material(tmp_path / "junk.bin")
     with pytest.raises(FileNotFoundError):
         fm.load_material(tmp_path / "missing.binary")

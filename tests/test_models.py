@@ -73,7 +73,7 @@ def test_hypernetwork_heads_produce_every_tensor():
         spreads[last_layer_scale] = max(float((p[0] - p[1]).abs().max()) for p in params)
         scales[last_layer_scale] = max(float(p.abs().max()) for p in params)
     # At 0.1 latents decode to nearly the same NBRDF at first (HyperBRDF's start); at 1, the default,
-    # the latent steers the NBRDF from the start (docs/colour.md): ten times the spread.
+    # the latent steers the NBRDF from the start (research/colour.md): ten times the spread.
     assert spreads[0.1] < 0.5 * scales[0.1]
     assert spreads[1.0] == pytest.approx(10 * spreads[0.1], rel=1e-4)
 
@@ -150,8 +150,8 @@ def test_decoded_materials_are_isotropic():
 
 
 def test_nbrdf_coordinates_at_the_bins_are_the_training_inputs():
+    from frenbrdf.io.sampling import bin_directions
     from frenbrdf.models.nbrdf import bin_geometry
-    from frenbrdf.render.scoring import bin_directions
 
     bins = np.random.default_rng(0).choice(90 * 90 * 180, 2000)
     wi, wo = bin_directions(bins)

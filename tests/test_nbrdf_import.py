@@ -13,10 +13,10 @@ import frenbrdf
 from frenbrdf.data.nbrdf_import import (
     evaluate_keras_nbrdf,
     import_nbrdf,
+    keras_merl_table,
     keras_nbrdf,
-    load_keras_nbrdf,
-    nbrdf_merl_table,
 )
+from frenbrdf.io.keras import read_keras_nbrdf
 from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.models.nbrdf import nbrdf_coordinates
 
@@ -32,7 +32,7 @@ def reference_rgb(kernels, biases, i: int, j: int, k: int) -> np.ndarray:
     phi_d = k / 180 * math.pi
     x = np.array([math.sin(theta_h), 0.0, math.cos(theta_h),
                   math.sin(theta_d) * math.cos(phi_d), math.sin(theta_d) * math.sin(phi_d), math.cos(theta_d)])
-    for layer, (kernel, bias) in enumerate(zip(kernels, biases)):
+    for layer, (kernel, bias) in enumerate(zip(kernels, biases, strict=True)):
         x = np.matmul(x, kernel) + bias
         x = np.exp(x) - 1 if layer == len(kernels) - 1 else np.maximum(x, 0)
     return x
@@ -68,7 +68,7 @@ def test_import_matches_a_direct_evaluation_of_the_network(imported):
 
     rng = np.random.default_rng(7)
     checked = 0
-    for i, j, k in zip(rng.integers(0, 90, 400), rng.integers(0, 90, 400), rng.integers(0, 180, 400)):
+    for i, j, k in zip(rng.integers(0, 90, 400), rng.integers(0, 90, 400), rng.integers(0, 180, 400), strict=True):
         if not both_above_horizon(i, j, k):
             continue
         expected = np.maximum(reference_rgb(kernels, biases, i, j, k), 0)
@@ -91,7 +91,7 @@ def test_missing_bins_are_exactly_those_below_the_horizon(imported):
     np.testing.assert_array_equal(frenbrdf.valid_mask(stored), above)
     # merl_above_horizon agrees with the horizon written out by hand.
     rng = np.random.default_rng(3)
-    for i, j, k in zip(rng.integers(0, 90, 300), rng.integers(0, 90, 300), rng.integers(0, 180, 300)):
+    for i, j, k in zip(rng.integers(0, 90, 300), rng.integers(0, 90, 300), rng.integers(0, 180, 300), strict=True):
         assert above[i, j, k] == both_above_horizon(i, j, k), (i, j, k)
 
 
@@ -99,7 +99,7 @@ def test_missing_bins_are_exactly_those_below_the_horizon(imported):
 def test_every_published_file_loads_as_6_21_21_3():
     assert len(PUBLISHED) == 80, f"expected the 80 published materials in {PUBLISHED_DIR}"
     for path in PUBLISHED:
-        layers = load_keras_nbrdf(path)
+        layers = read_keras_nbrdf(path)
         assert [kernel.shape for kernel, _ in layers] == [(6, 21), (21, 21), (21, 3)], path
         assert [bias.shape for _, bias in layers] == [(21,), (21,), (3,)], path
         assert all(kernel.dtype == bias.dtype == np.float64 for kernel, bias in layers)
@@ -124,9 +124,9 @@ def test_load_and_evaluate_round_trip_a_deeper_network(tmp_path):
               for k, b in random_layers([6, 8, 8, 8, 3])]
     path = write_keras_h5(tmp_path / "deep.h5", layers, names=["dense_8", "dense_9", "dense_10", "dense_11"])
 
-    loaded = load_keras_nbrdf(path)
+    loaded = read_keras_nbrdf(path)
     assert len(loaded) == 4
-    for (kernel, bias), (expected_kernel, expected_bias) in zip(loaded, layers):
+    for (kernel, bias), (expected_kernel, expected_bias) in zip(loaded, layers, strict=True):
         np.testing.assert_array_equal(kernel, expected_kernel)
         np.testing.assert_array_equal(bias, expected_bias)
 
@@ -142,7 +142,7 @@ def test_load_and_evaluate_round_trip_a_deeper_network(tmp_path):
 
 def test_table_of_a_synthetic_network(tmp_path):
     layers = random_layers([6, 8, 8, 3], seed=2)
-    table = nbrdf_merl_table(layers)
+    table = keras_merl_table(layers)
     assert table.shape == SHAPE and table.dtype == np.float64
     above = frenbrdf.merl_above_horizon()
     for channel, scale in enumerate(CHANNEL_SCALES):
@@ -190,7 +190,7 @@ def _replace(key, value, *more):
     """Replaces dataset ``key`` by ``value`` (and further key, value pairs)."""
     def edit(path):
         with h5py.File(path, "a") as file:
-            for k, v in zip((key, *more[::2]), (value, *more[1::2])):
+            for k, v in zip((key, *more[::2]), (value, *more[1::2]), strict=True):
                 del file[k]
                 file[k] = v
     return edit
@@ -238,13 +238,13 @@ def test_bad_weight_files_give_clear_errors(tmp_path, edit, message):
     path = _good(tmp_path)
     edit(path)
     with pytest.raises(ValueError, match=message) as error:
-        load_keras_nbrdf(path)
+        read_keras_nbrdf(path)
     assert str(path) in str(error.value)
 
 
 def test_missing_weight_file(tmp_path):
     with pytest.raises(FileNotFoundError, match="absent.h5"):
-        load_keras_nbrdf(tmp_path / "absent.h5")
+        read_keras_nbrdf(tmp_path / "absent.h5")
 
 
 def test_one_bad_file_stops_the_import_before_writing(tmp_path):
@@ -283,4 +283,4 @@ def test_keras_network_as_an_nbrdf_agrees_with_the_float64_evaluation():
     expected = np.maximum(evaluate_keras_nbrdf(layers, coords[:, :3], coords[:, 3:]), 0)
     np.testing.assert_allclose(nbrdf(wi, wo), expected, rtol=1e-4, atol=1e-6)
     # The same table writer for both: the NBRDF object's table equals the import's to float32 accuracy.
-    np.testing.assert_allclose(nbrdf.merl_table(), nbrdf_merl_table(layers), rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(nbrdf.merl_table(), keras_merl_table(layers), rtol=1e-4, atol=1e-6)

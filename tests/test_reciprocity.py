@@ -11,7 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import frenbrdf
-from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf
+from frenbrdf.data.nbrdf_import import keras_nbrdf
+from frenbrdf.io.keras import read_keras_nbrdf
 from frenbrdf.models import ModelConfig
 from frenbrdf.models.autoencoder import AutoEncoder, Model
 from frenbrdf.models.mapping import LogRelativeMapping
@@ -82,7 +83,7 @@ def test_imported_networks_are_reciprocal():
 def test_published_networks_lose_nothing_by_the_fold(path):
     """The published fits learned φ_d over the whole circle (from a table mirrored by
     reciprocity): their value at a folded D is their value at D, to their fitting accuracy."""
-    layers = load_keras_nbrdf(path)
+    layers = read_keras_nbrdf(path)
     nbrdf = keras_nbrdf(layers)
     rng = np.random.default_rng(0)
     wi, wo = upper_hemisphere(rng, 4000), upper_hemisphere(rng, 4000)

@@ -12,8 +12,8 @@ import torch
 
 import frenbrdf
 from frenbrdf import cli
+from frenbrdf.io import read_material, read_samples, write_material
 from frenbrdf.io.outputs import MARKER
-from frenbrdf.material.measurements import read_measurements
 from frenbrdf.models import pretrained
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig, reconstruct, refine_config
 
@@ -35,7 +35,7 @@ def model(run_dir):
 
 @pytest.fixture(scope="module")
 def material(toy_materials):
-    return read_measurements(sorted(toy_materials.glob("*.binary"))[0], samples=2000, seed=1)
+    return read_samples(sorted(toy_materials.glob("*.binary"))[0], samples=2000, seed=1)
 
 
 def _params(result):
@@ -272,7 +272,7 @@ def test_the_command_end_to_end(run_dir, toy_materials, tmp_path, capsys):
 
 
 def test_the_command_on_a_csv_and_all_bins(run_dir, toy_materials, tmp_path):
-    material = read_measurements(sorted(toy_materials.glob("*.binary"))[2], samples=300)
+    material = read_samples(sorted(toy_materials.glob("*.binary"))[2], samples=300)
     rows = np.concatenate([material.wi, material.wo, material.values], axis=1)
     csv = tmp_path / "measured.csv"
     csv.write_text("wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b\n" + "\n".join(",".join(str(float(v)) for v in r) for r in rows))
@@ -302,11 +302,9 @@ def test_the_command_widens_on_request_and_names_a_width_without_full(run_dir, t
     out = tmp_path / "wide"
     assert _reconstruct(source, "--out", out, "--model", run_dir, "--samples", 300, "--width", 40) == 0
     assert cli.main(["render", str(out / "material.pt"), "--out", str(tmp_path / "x.png"), "--resolution", "16"]) == 0
-    from frenbrdf.data.materials import load_material_file
-
-    assert load_material_file(out / "material.pt").params[0].shape[1] == 40  # saved 40 wide, and it renders
+    assert read_material(out / "material.pt").params[0].shape[0] == 40  # saved 40 wide, and it renders
     assert _reconstruct(source, "--out", tmp_path / "default", "--model", run_dir, "--samples", 300) == 0
-    assert load_material_file(tmp_path / "default" / "material.pt").params[0].shape[1] == 64  # full's default
+    assert read_material(tmp_path / "default" / "material.pt").params[0].shape[0] == 64  # full's default
     with pytest.raises(SystemExit) as exit_info:
         _reconstruct(source, "--out", tmp_path / "latent", "--model", run_dir, "--refine", "latent", "--width", 40)
     assert exit_info.value.code == 2 and "--width sets the NBRDF that --refine full fits" in capsys.readouterr().err
@@ -557,7 +555,7 @@ def test_pretrained_model_ships_and_reconstructs(tmp_path):
     assert model.card["version"] == pretrained.VERSION
     path = write_bank(tmp_path, n=4, seed=7, progress=False)[0]
     assert path.stem == "synth-000-purple-plastic"
-    material = read_measurements(path, samples=4000)
+    material = read_samples(path, samples=4000)
     scene = Scene(resolution=128)
     truth = render(material.table, scene)
     for budget, (least_psnr, most_delta_e) in SHIPPED_QUALITY.items():
@@ -611,16 +609,16 @@ def test_samples_in_one_order_keep_the_nbrdf_reciprocal(model, material):
 
 
 def test_an_ordered_nbrdf_saves_renders_and_writes_its_table_order(model, material, tmp_path):
-    from frenbrdf.data.fitting import load_nbrdf, save_nbrdf
+    from frenbrdf.io.sampling import bin_directions
+    from frenbrdf.models.nbrdf import NBRDF
     from frenbrdf.render import Scene, render_linear
-    from frenbrdf.render.scoring import bin_directions
 
     wi, wo = _in_both_orders(material, 3)
     nbrdf = model.reconstruct(_lit_from_above(material.values, wi, wo), (wi, wo),
                               refine=RefineConfig(latent_steps=2, weight_steps=100, weight_lr=3e-3)).nbrdf
     assert nbrdf.ordered
-    save_nbrdf(tmp_path / "m.pt", nbrdf)
-    again = load_nbrdf(tmp_path / "m.pt")
+    write_material(tmp_path / "m.pt", nbrdf.weights())
+    again = NBRDF.from_weights(read_material(tmp_path / "m.pt"))
     assert again.ordered
     np.testing.assert_array_equal(again(wi, wo), nbrdf(wi, wo))
     # Its table holds each pair in the table's order; in_table_order is the reciprocal NBRDF that agrees there.

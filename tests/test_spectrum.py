@@ -11,8 +11,8 @@ import torch
 
 from frenbrdf import cli
 from frenbrdf.data import analytic
-from frenbrdf.data.fitting import save_nbrdf
 from frenbrdf.evaluation.spectrum import SpectrumAnalyser, relative_error_by_band
+from frenbrdf.io import write_material
 from frenbrdf.io.merl import write_merl
 from frenbrdf.io.outputs import MARKER
 from frenbrdf.models import NBRDF, NBRDFConfig
@@ -46,7 +46,7 @@ def test_the_spectrum_command_writes_plot_csv_and_json_of_materials_and_of_error
     write_merl(inputs / "plastic.binary", analytic.merl_table(PLASTIC))
     generator = torch.Generator().manual_seed(0)
     params = [torch.randn(1, *shape, generator=generator) * 0.3 for shape in NBRDFConfig((8, 8)).shapes()]
-    save_nbrdf(inputs / "guess.pt", NBRDF(params, LogRelativeMapping(np.full(3, 0.05))))
+    write_material(inputs / "guess.pt", NBRDF(params, LogRelativeMapping(np.full(3, 0.05))).weights())
     out = tmp_path / "spectrum"
     argv = ["spectrum", str(inputs / "guess.pt"), "--truth", str(inputs / "plastic.binary"), "--out", str(out),
             "--lmax", "11"]

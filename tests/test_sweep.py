@@ -21,7 +21,7 @@ combine_seeds, frequency_variants, pareto_front, save_chart, spread_slices = (
 
 
 def _row(name, hidden, latent, psnr, **extra):
-    weights = sum(a * b + b for a, b in zip((6, *hidden), (*hidden, 3)))
+    weights = sum(a * b + b for a, b in zip((6, *hidden), (*hidden, 3), strict=True))
     return {"name": name, "axis": "hidden", "value": list(hidden), "hidden": list(hidden), "latent": latent,
             "nbrdf_weights": weights, "bytes_per_material": 4 * weights, "latent_bytes": 4 * latent, "psnr": psnr,
             "psnr_std": 1.0, "val_materials": 10, "ssim": 0.9, "rmse": 0.05, "lfre": 1e-3,
@@ -118,8 +118,7 @@ def test_select_trains_candidates_smallest_first_and_writes_a_loadable_config(to
     base = tiny("nbrdf", data, tmp_path / "unused", epochs=1)
     variants = [Variant("big", "hidden", [24, 24], {"model": {"nbrdf": {"hidden": [24, 24]}}}),
                 Variant("small", "hidden", [8, 8], {"model": {"nbrdf": {"hidden": [8, 8]}}})]
-    measure = MeasureSettings(samples=200, resolution=16, timing_steps=0, throughput_queries=0, lfre=False,
-                              progress=False)
+    measure = MeasureSettings(samples=200, resolution=16, lfre=False, progress=False)
     selection = select_config(data, 1.0, tmp_path / "sel", base=base, variants=variants, measure=measure,
                               progress=False)
     assert selection.reached and selection.chosen["name"] == "small" and len(selection.considered) == 1
@@ -143,7 +142,7 @@ def test_select_trains_candidates_smallest_first_and_writes_a_loadable_config(to
     (["--target-psnr", "-3"], "a finite number of dB > 0"),
     (["--target-psnr", "inf"], "a finite number of dB > 0"),
     (["--target-psnr", "30", "--front", "{tmp}/absent.json"], "does not exist"),
-    (["--target-psnr", "30", "--front", "{tmp}/bad.json"], "not a chart-3"),
+    (["--target-psnr", "30", "--front", "{tmp}/bad.json"], "not a capacity front"),
     (["--target-psnr", "30", "--front", "{tmp}/bad.json", "--epochs", "3"], "nothing is trained"),
 ])
 def test_cli_select_rejects_bad_input(argv, message, data_dir, tmp_path, capsys):
@@ -159,3 +158,27 @@ def test_cli_select_rejects_a_missing_data_folder(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         cli.main(["select", "--data", str(tmp_path / "absent"), "--target-psnr", "30", "--out", str(tmp_path / "o")])
     assert exit_info.value.code == 2 and "does not exist" in capsys.readouterr().err
+
+
+def test_sweeps_time_a_variants_step_on_a_small_folder_and_reuse_the_time(toy_materials, tmp_path, monkeypatch):
+    """Chart 2's step time (benches/step_timing.py, from research/charts/sweeps.py): with and without L_fre, on a
+    folder of the first few materials; a sweep started again reads it back from the run's folder."""
+    from frenbrdf.configs import to_dict
+
+    work = tmp_path / "work"
+    cfg = tiny("frenbrdf", toy_materials, work / "runs" / "default-abc")
+    Path(cfg.out).mkdir(parents=True)
+    config = to_dict(cfg)
+    row = {"name": "default", "key": "abc", "run": cfg.out, "config": config}
+    timing = sweeps.TimingSettings(steps=2, materials=4)
+    assert sweeps.add_step_time(row, work, timing) is row
+    assert row["step_ms"] > 0 and row["step_without_fre_ms"] > 0 and row["fre_share"] > -1  # not NaN: L_fre is on
+    assert row["timing_threads"] >= 1
+    assert len(list((work / "timing-data").glob("*.binary"))) == 4
+
+    def untimed(*args, **kwargs):
+        raise AssertionError("timed again")
+
+    monkeypatch.setattr(sweeps, "time_training_step", untimed)
+    again = sweeps.add_step_time({"name": "default", "key": "abc", "run": cfg.out, "config": config}, work, timing)
+    assert {k: again[k] for k in sweeps.STEP_KEYS} == {k: row[k] for k in sweeps.STEP_KEYS}

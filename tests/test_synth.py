@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import re
 from collections import Counter
@@ -134,7 +135,7 @@ def test_a_bank_of_100_holds_every_kind_in_its_share(bank):
     assert len(set(names)) == 100
     assert all(re.fullmatch(r"synth-\d{3}-[a-z-]+-(" + "|".join(KINDS) + ")", name) for name in names)
     assert [int(name.split("-")[1]) for name in names] == list(range(100))
-    changes = sum(a.kind != b.kind for a, b in zip(bank, bank[1:]))
+    changes = sum(a.kind != b.kind for a, b in itertools.pairwise(bank))
     assert changes > 50  # shuffled, not grouped by kind
 
 
@@ -415,7 +416,7 @@ def test_write_bank_writes_merl_files_and_a_manifest(tmp_path):
     bank = synth.material_bank(3, seed=7)
     assert paths == [out / f"{m.name}.binary" for m in bank]
     assert sorted(p.name for p in out.iterdir() if p.name != MARKER) == sorted([*(p.name for p in paths), synth.MANIFEST_NAME])
-    for path, material in zip(paths, bank):
+    for path, material in zip(paths, bank, strict=True):
         assert path.stat().st_size == frenbrdf.io.merl.FILE_BYTES
         np.testing.assert_allclose(frenbrdf.read_merl(path), synth.merl_table(material), rtol=1e-15)
 
@@ -423,6 +424,6 @@ def test_write_bank_writes_merl_files_and_a_manifest(tmp_path):
     assert manifest["n"] == 3 and manifest["seed"] == 7
     assert [entry["file"] for entry in manifest["materials"]] == [p.name for p in paths]
     field_names = {field.name for field in dataclasses.fields(AnalyticMaterial)}
-    for entry, material in zip(manifest["materials"], bank):
+    for entry, material in zip(manifest["materials"], bank, strict=True):
         assert entry["kind"] == material.kind
         assert AnalyticMaterial(**{key: entry[key] for key in field_names}) == material

@@ -262,9 +262,9 @@ def test_damaged_run_folder_records_are_named(run, tmp_path):
     (folder / "split.json").write_text('{"train": "abc", "val": [], "test": [], "seed": 0}')
     opened = frenbrdf.training.Run(folder)
     with pytest.raises(ValueError, match="history.json: not a training history"):
-        opened.history
+        _ = opened.history
     with pytest.raises(ValueError, match="split.json: train must be a list of material names"):
-        opened.split
+        _ = opened.split
 
 
 # --------------------------------------------------------------------------- options

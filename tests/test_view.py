@@ -9,6 +9,7 @@ that fix the light, exposure and edit position, and compare a screenshot of the 
 from __future__ import annotations
 
 import io
+import itertools
 import json
 import math
 import re
@@ -19,7 +20,7 @@ import torch
 
 import frenbrdf
 from frenbrdf.cli import main
-from frenbrdf.data.fitting import save_nbrdf
+from frenbrdf.io import write_material
 from frenbrdf.models.nbrdf import NBRDF
 from frenbrdf.render import Scene, material_mask, render
 from frenbrdf.render.lighting import KEY_LIGHT
@@ -97,7 +98,7 @@ def _swapped(nbrdf: NBRDF) -> NBRDF:
     values, (wi, wo) = nbrdf_samples(nbrdf, 300)
     best, chosen = -1.0, None
     for unit in range(nbrdf.params[0].shape[1]):
-        for i, j in ((i, j) for i in range(6) for j in range(i + 1, 6)):
+        for i, j in itertools.combinations(range(6), 2):
             params = [p.clone() for p in nbrdf.params]
             first = params[0][0]
             first[unit, i], first[unit, j] = first[unit, j].clone(), first[unit, i].clone()
@@ -126,7 +127,7 @@ def test_page_is_self_contained_and_carries_the_material(material):
 
 def test_cli_writes_a_page_and_refuses_bad_input(tmp_path, material, capsys):
     saved = tmp_path / "a.pt"
-    save_nbrdf(saved, material)
+    write_material(saved, material.weights())
     out = tmp_path / "a.html"
     assert main(["view", str(saved), "--out", str(out), "--quiet"]) == 0
     assert out.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")

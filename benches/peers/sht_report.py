@@ -157,19 +157,19 @@ def plot(data: dict, out: Path) -> list[str]:
     size_threads = data["meta"]["size_threads"]
     rows = [r for r in data["timings"] if r["threads"] in size_threads and r["grid"] == "gauss"]
     styles = {"float64": "-", "float32": "--"}
-    colours = dict(zip(LIBRARIES, ("C3", "C0", "C2", "C1")))
+    colours = dict(zip(LIBRARIES, ("C3", "C0", "C2", "C1"), strict=True))
     written = []
     if not rows:
         return ["time chart skipped: no size-sweep timings"]
 
     fig, axes = plt.subplots(len(size_threads), 2, figsize=(11, 4.2 * len(size_threads)), sharey=True, squeeze=False)
-    for row_axes, threads in zip(axes, size_threads):
-        for ax, single in zip(row_axes, (True, False)):
+    for row_axes, threads in zip(axes, size_threads, strict=True):
+        for ax, single in zip(row_axes, (True, False), strict=True):
             subset = [r for r in rows if (r["batch"] == 1) == single and r["threads"] == threads]
             for key in sorted({key_of(r) for r in subset}, key=key_order):
                 points = sorted((r["lmax"], r["per_map_s"] * 1e3) for r in subset if key_of(r) == key)
                 library, dtype = key.split()
-                ax.plot(*zip(*points), styles[dtype], marker="o", color=colours[library], label=key)
+                ax.plot(*zip(*points, strict=True), styles[dtype], marker="o", color=colours[library], label=key)
             lmax_axis(ax, sorted({r["lmax"] for r in rows}))
             ax.set_yscale("log")
             ax.set_xlabel("lmax (Gauss-Legendre, nlat = lmax + 1, nlon = 2 nlat)")
@@ -188,13 +188,13 @@ def plot(data: dict, out: Path) -> list[str]:
         check_threads = max(c["threads"] for c in checks)
         checks = [c for c in checks if c["threads"] == check_threads]
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
-        for ax, field, title in zip(axes, ("analysis_err", "synthesis_err"), ("analysis: max |â - a| / max |a|", "synthesis: max |f̂ - f| / max |f|")):
+        for ax, field, title in zip(axes, ("analysis_err", "synthesis_err"), ("analysis: max |â - a| / max |a|", "synthesis: max |f̂ - f| / max |f|"), strict=True):
             for key in sorted({key_of(c) for c in checks}, key=key_order):
                 points = sorted((c["lmax"], max(c[field], 1e-17)) for c in checks if key_of(c) == key)
                 library, dtype = key.split()
                 exact = field == "synthesis_err" and all(y <= 1e-17 for _, y in points)
                 label = key + (" (is the reference: 0, drawn at 1e-17)" if exact else "")
-                ax.plot(*zip(*points), styles[dtype], marker="o", color=colours[library], label=label)
+                ax.plot(*zip(*points, strict=True), styles[dtype], marker="o", color=colours[library], label=label)
             lmax_axis(ax, sorted({c["lmax"] for c in checks}))
             ax.set_yscale("log")
             ax.set_xlabel("lmax (Gauss-Legendre)")

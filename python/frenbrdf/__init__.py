@@ -8,6 +8,7 @@ import importlib
 from ._native import __version__
 from .exceptions import BsdfFormatError, MerlFormatError
 from .io.bsdf import MeasuredBSDF, read_bsdf
+from .io.formats import read_material, read_samples
 from .io.merl import (
     merl_above_horizon,
     merl_angles_to_bin,
@@ -68,7 +69,9 @@ __all__ = [
     "merl_lookup",
     "merl_lookup_directions",
     "read_bsdf",
+    "read_material",
     "read_merl",
+    "read_samples",
     "rusinkiewicz_to_directions",
     "rusinkiewicz_to_half_diff",
     "train",

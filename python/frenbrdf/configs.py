@@ -52,7 +52,7 @@ def checked_value(value, hint, where: str):
     A config read from a file meets here what the code assumes, before any work is done.
     """
     origin, args = typing.get_origin(hint), typing.get_args(hint)
-    if dataclasses.is_dataclass(hint):  # e.g. an item of tuple[EncoderConfig, ...]
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):  # e.g. an item of tuple[EncoderConfig, ...]
         return value if isinstance(value, hint) else from_dict(hint, value, where)
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
@@ -64,11 +64,14 @@ def checked_value(value, hint, where: str):
             return (value,)  # one glob pattern for tuple[str, ...]
         if not isinstance(value, (list, tuple)):
             raise ValueError(f"{where} must be a list, got {value!r}")
-        if args and args[-1] is Ellipsis:
+        if not args:  # a bare ``tuple``: its items unchecked
+            return tuple(value)
+        if args[-1] is Ellipsis:
             return tuple(checked_value(item, args[0], f"{where}[{i}]") for i, item in enumerate(value))
-        if args and len(value) != len(args):
+        if len(value) != len(args):
             raise ValueError(f"{where} must be a list of {len(args)} values, got {value!r}")
-        return tuple(checked_value(item, arg, f"{where}[{i}]") for i, (item, arg) in enumerate(zip(value, args)))
+        return tuple(checked_value(item, arg, f"{where}[{i}]")
+                     for i, (item, arg) in enumerate(zip(value, args, strict=True)))
     if hint is bool:
         if not isinstance(value, bool):
             raise ValueError(f"{where} must be true or false, got {value!r}")

@@ -13,6 +13,7 @@ import json
 import platform
 import time
 from pathlib import Path
+from typing import Any
 
 import torch
 
@@ -49,8 +50,9 @@ def run_demo(out: str | Path = "frenbrdf-demo", data: str | Path | None = None, 
     for method in method_names():
         begin = time.perf_counter()
         # The report folder holds everything the demo made, the coefficient cache too.
+        overrides: dict[str, Any] = {"epochs": epochs} if epochs is not None else {}
         cfg = config_for(method, training="demo", augmentation=augmentation, data=str(data), out=str(out / "runs" / method),
-                         cache_dir=str(out / "cache"), progress=progress, **({"epochs": epochs} if epochs is not None else {}))
+                         cache_dir=str(out / "cache"), progress=progress, **overrides)
         runs.append(train(cfg, overwrite=True))  # the demo folder is its own: a rerun trains afresh
         timings[f"train {method}"] = time.perf_counter() - begin
     begin = time.perf_counter()

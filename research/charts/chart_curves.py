@@ -169,7 +169,8 @@ def regulariser_markdown(runs: dict, report: dict) -> str:
 def draw(runs: dict, path: Path, caption: str) -> None:
     plt = pyplot()
     figure, axes = plt.subplots(1, 3, figsize=(16, 4.6))
-    colours = dict(zip(VARIANTS, ("#c44e52", "#4c72b0", "#55a868", "#dd8452", "#8172b3", "#937860", "#da8bc3")))
+    colours = dict(zip(VARIANTS, ("#c44e52", "#4c72b0", "#55a868", "#dd8452", "#8172b3", "#937860", "#da8bc3"),
+                       strict=True))
     for variant, by_seed in runs.items():
         c = [r["curves"] for r in by_seed.values()]
         style = {"color": colours[variant], "lw": 1.8 if variant in METHODS else 1.0,

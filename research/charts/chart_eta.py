@@ -110,10 +110,12 @@ def draw(rows: list[dict], path: Path, caption: str) -> None:
     labels = [f"{r['eta']:g}" for r in rows]
     panels = (("psnr", "reconstruction PSNR − η=0 (dB)"), ("delta_e", "reconstruction ΔE − η=0"),
               ("lfre", "L_fre − η=0"), ("edit_psnr", "editing PSNR − η=0 (dB)"))
-    for ax, (key, label) in zip(axes, panels):
+    for ax, (key, label) in zip(axes, panels, strict=False):  # the fifth axis is drawn below
         mean = np.array([r[f"{key}_vs_0"] for r in rows])
-        low = np.array([r[f"{key}_vs_0_low"] if r[f"{key}_vs_0_low"] is not None else m for r, m in zip(rows, mean)])
-        high = np.array([r[f"{key}_vs_0_high"] if r[f"{key}_vs_0_high"] is not None else m for r, m in zip(rows, mean)])
+        low = np.array([r[f"{key}_vs_0_low"] if r[f"{key}_vs_0_low"] is not None else m
+                        for r, m in zip(rows, mean, strict=True)])
+        high = np.array([r[f"{key}_vs_0_high"] if r[f"{key}_vs_0_high"] is not None else m
+                         for r, m in zip(rows, mean, strict=True)])
         ax.errorbar(x, mean, yerr=[mean - low, high - mean], fmt="o", capsize=4, color="#4c72b0")
         ax.axhline(0, color="k", lw=0.8)
         ax.set_xticks(x, labels)

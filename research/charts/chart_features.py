@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
                                 squeeze=False)
     for ax in axes.reshape(-1):
         ax.set_axis_off()
-    for ax, path in zip(axes[0], args.measurements):
+    for ax, path in zip(axes[0], args.measurements, strict=False):  # as many columns as kinds, or more
         ax.imshow(render(frenbrdf.read_bsdf(path), scene))
         ax.set_title(f"measured: {Path(path).stem}", fontsize=8)
     for column, kind in enumerate(kinds):

@@ -128,8 +128,8 @@ def measure_key(settings: dict) -> str:
 
 def measure_one(spec: dict, settings: dict) -> dict:
     """The run's metrics on each set (means over materials and edits), cached in ``WORK/measured``."""
+    from frenbrdf.io import read_material
     from frenbrdf.io.atomic import save_json
-    from frenbrdf.io.measured import read_truth
     from frenbrdf.render.renderer import Scene, material_mask, render_linear
     from frenbrdf.render.scoring import edit_metrics, reconstruction_rows
     from frenbrdf.training import Run
@@ -153,7 +153,7 @@ def measure_one(spec: dict, settings: dict) -> dict:
         latents: dict = {}
         rows = reconstruction_rows(model, files, samples=settings["samples"], resolution=settings["resolution"],
                                    progress=False, latents=latents)
-        truth = {p.stem: render_linear(read_truth(p), scene) for p in files}
+        truth = {p.stem: render_linear(read_material(p), scene) for p in files}
         pairs = list(itertools.combinations(sorted(truth), 2))
         edits = list(itertools.product(pairs, EDIT_WEIGHTS))
         if len(edits) > settings["edits"]:
@@ -301,7 +301,7 @@ def draw(rows: list[dict], path: Path, caption: str) -> None:
     x = np.arange(len(compared))
     variants = list(dict.fromkeys(r["variant"] for r in compared))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for ax, column in zip(axes[0], panels):
+    for ax, column in zip(axes[0], panels, strict=False):  # one empty axis without panels
         for i, r in enumerate(compared):
             mean = r.get(f"{column}_vs_0", np.nan)
             low, high = r.get(f"{column}_vs_0_low"), r.get(f"{column}_vs_0_high")

@@ -34,7 +34,7 @@ from tqdm.auto import tqdm
 from frenbrdf import Run
 from frenbrdf.data.fitting import FitConfig, fit_nbrdf
 from frenbrdf.data.folders import list_materials
-from frenbrdf.material.measurements import merl_measurements
+from frenbrdf.io import read_samples
 from frenbrdf.models.reconstruct import RefineConfig, reconstruct
 from frenbrdf.render.renderer import Scene, material_mask, render
 from frenbrdf.render.scoring import image_metrics
@@ -57,7 +57,7 @@ def settings(latent_steps, full_latent_steps: int, weight_steps, fit_epochs) -> 
 
 def measure(model, path: Path, points, samples: int, seed: int, scene: Scene) -> list[dict]:
     """Every point of one material: seconds, PSNR and ΔE."""
-    measured = merl_measurements(path, samples=samples, seed=seed)
+    measured = read_samples(path, samples=samples, seed=seed)
     truth, mask = render(measured.table, scene), material_mask(scene)
     rows = []
     for family, budget, config in points:
@@ -115,9 +115,10 @@ def refine_chart(run_dir, out_dir, *, ood: str | None = None, samples: int = 400
 def draw(rows: list[dict], path: Path) -> None:
     plt = pyplot()
     figure, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    colours = dict(zip(FAMILIES, ("#444444", "#4c72b0", "#dd8452", "#55a868")))
+    colours = dict(zip(FAMILIES, ("#444444", "#4c72b0", "#dd8452", "#55a868"), strict=True))
     for axis, metric, label in ((axes[0], "psnr", "render PSNR (dB) ↑"), (axes[1], "delta_e", "ΔE (CIEDE2000) ↓")):
-        for style, set_label in zip(("-o", "--s"), dict.fromkeys(r["set"] for r in rows)):
+        # One or two sets (in and out of distribution), a style each.
+        for style, set_label in zip(("-o", "--s"), dict.fromkeys(r["set"] for r in rows), strict=False):
             for family in FAMILIES:
                 chosen = [r for r in rows if r["set"] == set_label and r["family"] == family]
                 if chosen:

@@ -65,13 +65,14 @@ def analytic_materials() -> dict[str, np.ndarray]:
 def decoded_nbrdf(run: str | os.PathLike, merl_file: str | os.PathLike, samples: int = 4000):
     """The NBRDF that a run's model decodes from ``samples`` random measured bins of a MERL file."""
     from frenbrdf import Model, read_merl
+    from frenbrdf.io.sampling import sample_bins, truth_samples
     from frenbrdf.render.renderer import Scene
-    from frenbrdf.render.scoring import reconstruct, sample_bins, truth_samples
+    from frenbrdf.render.scoring import encode_and_render
 
     model = Model.load(run)
     table = read_merl(merl_file)
     rng = np.random.default_rng(0)
-    z, _ = reconstruct(model, truth_samples(table, sample_bins(table, rng, samples), rng), Scene(resolution=8))
+    z, _ = encode_and_render(model, *truth_samples(table, sample_bins(table, rng, samples), rng), Scene(resolution=8))
     return model.decode(z)[0]
 
 
@@ -123,7 +124,7 @@ def rendering_chart(materials: dict, out_dir, *, spps=DEFAULT_SPP, reference_spp
             for spp in spps:
                 last = {}
 
-                def render():
+                def render(material=material, spp=spp, sampling=sampling, last=last):  # bound now, not late
                     last["image"] = fm.render_material(material, spp=spp, resolution=resolution, seed=0,
                                                        sampling=sampling)
 
@@ -153,16 +154,16 @@ def plot(rows: list[dict], path: Path, title: str = "") -> None:
     materials = list(dict.fromkeys(r["material"] for r in rows))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     figure, axes = plt.subplots(1, 2, figsize=(11, 5.6))
-    for colour, material in zip(colours, materials):
-        for sampling, style in zip(SAMPLINGS, ("-", "--")):
+    for colour, material in zip(colours, materials, strict=False):  # the colour cycle is longer
+        for sampling, style in zip(SAMPLINGS, ("-", "--"), strict=True):
             mine = [r for r in rows if r["material"] == material and r["sampling"] == sampling]
-            for axis, key in zip(axes, ("spp", "seconds")):
+            for axis, key in zip(axes, ("spp", "seconds"), strict=True):
                 axis.plot([r[key] for r in mine], [r["display_rmse"] for r in mine], style, marker="o",
                           color=colour, label=f"{material}, {sampling}")
     spps = sorted({r["spp"] for r in rows})
     top = max(r["display_rmse"] for r in rows if r["spp"] == spps[0])
     axes[0].plot(spps, [top * (s / spps[0]) ** -0.5 for s in spps], ":", color="grey", label="∝ spp^-1/2")
-    for axis, label in zip(axes, ("samples per pixel", "seconds per render (median)")):
+    for axis, label in zip(axes, ("samples per pixel", "seconds per render (median)"), strict=True):
         axis.set_xscale("log")
         axis.set_yscale("log")
         axis.set_xlabel(label)

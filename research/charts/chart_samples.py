@@ -12,8 +12,8 @@ split), ``--data DIR`` (default: the folder recorded in the runs' ``config.json`
 
 Each test material of the runs' common split is encoded from N random measured bins,
 decoded, rendered and compared with the render of its true table, exactly as
-``frenbrdf evaluate`` does it (:func:`frenbrdf.render.scoring.sample_bins`,
-:func:`~frenbrdf.render.scoring.reconstruct`, :func:`~frenbrdf.render.scoring.image_metrics`:
+``frenbrdf evaluate`` does it (:func:`frenbrdf.io.sampling.sample_bins`,
+:func:`~frenbrdf.render.scoring.encode_and_render`, :func:`~frenbrdf.render.scoring.image_metrics`:
 PSNR, SSIM and RMSE of the tone-mapped sphere renders over the lit material pixels).
 Every N below ``all`` is drawn ``--seeds`` times, with the same bins for every method. A point of the chart is the mean
 over the test materials, averaged over the draws; the band is ± one standard deviation
@@ -37,8 +37,9 @@ from tqdm.auto import tqdm
 
 from frenbrdf.evaluation.evaluate import load_runs
 from frenbrdf.io.merl import read_merl, valid_mask
+from frenbrdf.io.sampling import sample_bins, truth_samples
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, reconstruct, sample_bins, truth_samples
+from frenbrdf.render.scoring import encode_and_render, image_metrics
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import pyplot, run_metadata, save_chart, save_figure  # noqa: E402
@@ -98,7 +99,7 @@ def samples_chart(run_dirs, out_dir, *, data: str | None = None, counts=DEFAULT_
                     bins = np.flatnonzero(valid_mask(table)) if count is None else sample_bins(table, rng, count)
                     drawn = truth_samples(table, bins, rng)
                     for method, model in runs.models.items():
-                        _, image = reconstruct(model, drawn, scene)
+                        _, image = encode_and_render(model, *drawn, scene)
                         rows.append({"method": method, "samples": label(count), "seed": seed, "material": material,
                                      **image_metrics(truth, image, mask)})
                 bar.update()
@@ -136,7 +137,7 @@ def plot(summary: list[dict], path: Path, title: str = "") -> None:
     plt = pyplot()
     methods = list(dict.fromkeys(r["method"] for r in summary))
     figure, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for axis, metric, name in zip(axes, ("psnr", "ssim"), ("PSNR (dB) ↑", "SSIM ↑")):
+    for axis, metric, name in zip(axes, ("psnr", "ssim"), ("PSNR (dB) ↑", "SSIM ↑"), strict=True):
         for method in methods:
             mine = [r for r in summary if r["method"] == method]
             x = np.array([r["n_samples"] for r in mine])

@@ -3,8 +3,10 @@
 Each chart trains a list of :class:`~frenbrdf.evaluation.variants.Variant` s — the FreNBRDF preset
 with one setting varied at a time around the default — with
 :func:`frenbrdf.evaluation.variants.run_sweep`, which trains (or resumes, or skips when measured
-already) and measures each one; this module adds the chart variants, the combination of
-seeds, the Pareto front, the throughput of the decoded NBRDFs, and the figures.
+already) and measures each one; this module adds the chart variants, the training-step
+time of each variant (:func:`add_step_time`) and the throughput of the decoded NBRDFs
+(:func:`add_throughput`), both timed with ``benches/step_timing.py`` as :class:`TimingSettings`
+says, the combination of seeds, the Pareto front, and the figures.
 
 A sweep may be repeated with other seeds (each seed its own split): :func:`combine_seeds`
 averages a variant over them and compares it with the default of the same seed, whose
@@ -22,23 +24,28 @@ installed package.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import sys
 import time
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from frenbrdf.evaluation.timing import nbrdf_throughput
+from frenbrdf.configs import from_dict
+from frenbrdf.data.folders import list_materials
 from frenbrdf.evaluation.variants import MeasureSettings, Variant, base_config, capacity_variants, run_sweep
+from frenbrdf.io.atomic import save_json
+from frenbrdf.io.jsonfile import read_json
 from frenbrdf.models.autoencoder import Model
 from frenbrdf.presets import TRAINING
+from frenbrdf.training import TrainConfig
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 import common  # noqa: E402
+from step_timing import nbrdf_throughput, time_training_step  # noqa: E402
 
 #: File names of the charts in the output folder (``.png``, ``.csv``, ``.json``).
 CHART_NAMES = {"frequency": "chart2_frequency", "capacity": "chart3_capacity"}
@@ -65,6 +72,69 @@ def frequency_variants(lmax=(24, 89), slices=(2, 8), k=(1, 4), sigma=(0.025, 0.1
     variants += [Variant(f"k={v}", "k", v, frequency(k=v)) for v in k]
     variants += [Variant(f"sigma={v}", "sigma", v, frequency(sigma=v)) for v in sigma]
     return variants
+
+
+@dataclass
+class TimingSettings:
+    """What a sweep times besides what :class:`~frenbrdf.evaluation.variants.MeasureSettings` measures."""
+
+    steps: int = 20
+    """Training steps timed per variant (0: no step timing), on the first seed only; the fastest counts (least
+    disturbed by other processes; ``research/studies/train_step.py`` reports the median)."""
+    materials: int = 16
+    """Materials of the data folder the step timing reads (enough for one batch)."""
+    throughput_queries: int = 1 << 18
+    """Queries of the decoded NBRDFs' throughput measurement (chart 3; 0: not measured)."""
+
+
+def timing_data(data: str | os.PathLike, work: str | os.PathLike, n: int) -> Path:
+    """A folder ``WORK/timing-data`` linking the first ``n`` materials of ``data``: enough for one timed batch,
+    fast to read."""
+    folder = Path(work) / "timing-data"
+    folder.mkdir(parents=True, exist_ok=True)
+    wanted = {path.name: path.resolve() for path in list_materials(data)[:n]}
+    for link in folder.glob("*.binary"):
+        if link.name not in wanted or link.resolve() != wanted[link.name]:
+            link.unlink()
+    for name, target in wanted.items():
+        if not (folder / name).exists():
+            (folder / name).symlink_to(target)
+    return folder
+
+
+STEP_KEYS = ("step_ms", "step_without_fre_ms", "fre_share", "timing_threads")
+
+
+def add_step_time(row: dict, work: str | os.PathLike, timing: TimingSettings | None = None,
+                  data_cache: dict | None = None) -> dict:
+    """Sets the training-step time of ``row`` (a result row of a run in ``WORK/runs/``): ``step_ms``,
+    ``step_without_fre_ms`` and ``fre_share`` (what L_fre adds; NaN without L_fre), ``timing_threads``.
+
+    The row's config steps on :func:`timing_data` (``timing.materials`` materials), timed by
+    :func:`step_timing.time_training_step` (the fastest of ``timing.steps``). The times are kept in the run's
+    ``step_time.json``: a sweep started again reuses them (same config, steps and torch threads).
+    ``data_cache``: the mapped timing materials, shared between the variants of a sweep. Returns ``row``.
+    """
+    timing = TimingSettings() if timing is None else timing
+    saved_path = Path(row["run"]) / "step_time.json"
+    wanted = {"key": row["key"], "steps": timing.steps, "materials": timing.materials,
+              "timing_threads": torch.get_num_threads()}
+    if saved_path.exists():
+        try:
+            saved = read_json(saved_path, "step time file")
+            if all(saved.get(k) == v for k, v in wanted.items()):
+                row.update({k: saved[k] for k in STEP_KEYS})
+                return row
+        except (ValueError, KeyError):
+            pass  # a damaged file is timed again
+    cfg = from_dict(TrainConfig, row["config"], f"variant {row['name']}")
+    cfg.data = str(timing_data(row["config"]["data"], work, timing.materials))
+    cfg.cache_dir, cfg.progress = cfg.cache_dir or str(Path(work) / "cache"), False
+    timed = time_training_step(cfg, timing.steps, data_cache=data_cache, statistic=min)
+    row.update(step_ms=1e3 * timed["step_s"], step_without_fre_ms=1e3 * timed.get("step_without_fre_s", math.nan),
+               fre_share=timed.get("fre_added_share", math.nan), timing_threads=wanted["timing_threads"])
+    save_json(saved_path, {**wanted, **{k: row[k] for k in STEP_KEYS}})
+    return row
 
 
 def add_throughput(rows: list[dict], queries: int = 1 << 18, repeats: int = 40) -> list[dict]:
@@ -157,7 +227,7 @@ def save_chart(kind: str, runs: list[dict], out_dir: str | os.PathLike, meta: di
     runs = [{"seed": 0, **run} for run in runs]
     rows = combine_seeds(runs)
     if kind == "capacity":
-        for row, on_front in zip(rows, pareto_front(rows)):
+        for row, on_front in zip(rows, pareto_front(rows), strict=True):
             row["front"] = on_front
     plot = _plot_frequency if kind == "frequency" else _plot_capacity
     return common.save_chart(out_dir, CHART_NAMES[kind], _csv_rows(rows),
@@ -193,7 +263,7 @@ def _plot_frequency(rows: list[dict], path: Path, meta: dict) -> None:
                 ax.plot(x, [p.get("step_without_fre_ms", math.nan) for p in points], "s--", color="#999999",
                         label="without L_fre")
                 ax.set_ylim(bottom=0)
-            for xi, p in zip(x, points):
+            for xi, p in zip(x, points, strict=True):
                 if p["axis"] == "default":
                     ax.plot(xi, p.get(metric, math.nan), "o", markersize=11, markerfacecolor="none", color="#dd8452")
             ax.set_xticks(x, [str(p[column]) for p in points])
@@ -225,7 +295,7 @@ def _plot_capacity(rows: list[dict], path: Path, meta: dict) -> None:
             for r in rows]
     figure, axes = plt.subplots(2, 2, figsize=(12, 9), squeeze=False)
     colours = {16: "#55a868", 40: "#4c72b0", 64: "#c44e52"}
-    for ax, (x_key, y_key, x_label, y_label) in zip(axes.flat, panels):
+    for ax, (x_key, y_key, x_label, y_label) in zip(axes.flat, panels, strict=True):
         if not all(r.get(x_key) is not None and r.get(y_key) is not None for r in rows):
             ax.set_visible(False)
             continue
@@ -241,7 +311,8 @@ def _plot_capacity(rows: list[dict], path: Path, meta: dict) -> None:
                 front = [r for r in rows if r.get("front")]
                 label = "Pareto front: no smaller material has a higher PSNR"
             else:  # the front of PSNR against speed
-                front = [r for r, on in zip(rows, pareto_front(rows, maximise=("psnr", x_key), minimise=())) if on]
+                on_front = pareto_front(rows, maximise=("psnr", x_key), minimise=())
+                front = [r for r, on in zip(rows, on_front, strict=True) if on]
                 label = "Pareto front: no faster NBRDF has a higher PSNR"
             ordered = sorted(front, key=lambda r: r[x_key])
             ax.step([r[x_key] for r in ordered], [r[y_key] for r in ordered],
@@ -278,32 +349,47 @@ def chart_main(kind: str, argv: list[str] | None = None, doc: str | None = None)
                         help="training seeds (default 0); each fixes its own split, and a variant's PSNR is also "
                         "given against the default of the same seed; step times are measured on the first")
     parser.add_argument("--threads", type=int, default=1, help="torch threads for training and timing (default 1)")
+    defaults = TimingSettings()
+    parser.add_argument("--timing-steps", type=int, default=defaults.steps,
+                        help=f"training steps timed per variant, the fastest counts (default {defaults.steps}; 0: "
+                        "no step timing)")
+    parser.add_argument("--timing-materials", type=int, default=defaults.materials,
+                        help=f"materials of --data the step timing reads (default {defaults.materials})")
+    parser.add_argument("--throughput-queries", type=int, default=defaults.throughput_queries,
+                        help=f"queries of the decoded NBRDFs' throughput, chart 3 (default "
+                        f"{defaults.throughput_queries}; 0: not measured)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
     variants = frequency_variants() if kind == "frequency" else capacity_variants()
-    measure = MeasureSettings(timing_steps=20, progress=not args.quiet)
+    measure = MeasureSettings(progress=not args.quiet)
+    timing = TimingSettings(steps=args.timing_steps, materials=args.timing_materials,
+                            throughput_queries=args.throughput_queries)
     start = time.perf_counter()
     base = base_config(args.data, epochs=args.epochs, seed=args.seeds[0])
     seeds = ", ".join(map(str, args.seeds))
     meta = {"data": str(args.data), "epochs": base.epochs, "seeds": args.seeds, "torch_threads": args.threads,
             "training": {k: getattr(base, k) for k in TRAINING["sweep"]},
-            "measure": {k: v for k, v in vars(measure).items() if k != "progress"},
+            "measure": {k: v for k, v in vars(measure).items() if k != "progress"}, "timing": asdict(timing),
             "caption": f"{base.epochs} epochs each, {Path(args.data).name}, validation split, seed(s) {seeds}."}
 
     def save(runs):  # after every variant: a partial chart is there to look at while the sweep runs
         save_chart(kind, runs, args.out, {**meta, "sweep_s": round(time.perf_counter() - start, 1)})
 
     runs: list[dict] = []
+    timing_cache: dict = {}  # the mapped timing materials, shared by the variants
     for i, seed in enumerate(args.seeds):
         base = base_config(args.data, epochs=args.epochs, seed=seed)
-        # Step time does not depend on the seed: timed on the first only.
-        seed_measure = measure if i == 0 else dataclasses.replace(measure, timing_steps=0)
-        runs += run_sweep(variants, base, args.work, seed_measure, on_row=lambda done, before=list(runs): save(
-            before + done))
-    if kind == "capacity" and measure.throughput_queries:
+
+        def on_row(done, before=tuple(runs), first=i == 0):
+            if first and timing.steps:  # step time does not depend on the seed: timed on the first only
+                add_step_time(done[-1], args.work, timing, timing_cache)  # the row run_sweep returns, in place
+            save([*before, *done])
+
+        runs += run_sweep(variants, base, args.work, measure, on_row=on_row)
+    if kind == "capacity" and timing.throughput_queries:
         first = [r for r in runs if r["seed"] == args.seeds[0]]
-        speeds = {r["name"]: r["throughput_qps"] for r in add_throughput(first, measure.throughput_queries)}
+        speeds = {r["name"]: r["throughput_qps"] for r in add_throughput(first, timing.throughput_queries)}
         runs = [{**r, "throughput_qps": speeds[r["name"]]} if r["seed"] == args.seeds[0] else r for r in runs]
         save(runs)
     for row in combine_seeds(runs):

@@ -19,7 +19,6 @@ from pathlib import Path
 import torch
 
 from frenbrdf.data.folders import list_materials, split_materials
-from frenbrdf.evaluation.timing import timed_seconds
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.models.autoencoder import AutoEncoder
 from frenbrdf.models.losses import FrequencyLoss
@@ -30,6 +29,7 @@ from frenbrdf.training.loop import make_optimizer
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import material_folder  # noqa: E402
+from step_timing import timed_seconds  # noqa: E402
 
 
 def step_functions(method: str, augmentation: str, data: Path, device: torch.device) -> dict:

@@ -7,7 +7,7 @@ A MERL table holds one order (ω_i, ω_o) of each pair of directions, as recipro
 measurement is not reciprocal near grazing, so the table loses the other order's value. For each
 measurement and draw, the same 4000 random valid bins are given to the shipped model twice: with the
 table's values (one order, as every figure before this study) and with the measurement evaluated at
-each bin's pair in a random order (:func:`frenbrdf.render.scoring.truth_samples`, what every command now
+each bin's pair in a random order (:func:`frenbrdf.io.sampling.truth_samples`, what every command now
 does); each budget (encoder, ``latent``, ``full``) is rendered and compared with the render of the
 measurement itself; ``full`` on both orders fits an ordered NBRDF (``RefineConfig.keep_order``), and once more a
 reciprocal one (keep_order False). Beside them, for scale, how far the measurement is from a reciprocal material: its
@@ -27,12 +27,13 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.sampling import sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -45,7 +46,7 @@ RECIPROCAL = "full, both orders, reciprocal NBRDF"
 
 def measure(path: Path, model, scene: Scene, draws: list[int]) -> tuple[dict, dict]:
     """``{column: [metrics of each draw]}`` of one measurement, and ``{column: display image}`` of the first draw."""
-    truth = read_truth(path)
+    truth = read_material(path)
     table = truth.table()
     mask = material_mask(scene)
     images = {"truth": tonemap(render_linear(truth, scene))}
@@ -57,7 +58,7 @@ def measure(path: Path, model, scene: Scene, draws: list[int]) -> tuple[dict, di
     for draw in draws:
         rng = np.random.default_rng(draw)
         bins = sample_bins(table, rng, 4000)
-        for order, source in zip(ORDERS, (table, truth)):
+        for order, source in zip(ORDERS, (table, truth), strict=True):
             drawn = truth_samples(source, bins, rng)
             columns = [(f"{budget}, {order}", refine_config(budget)) for budget in BUDGETS]
             if order == "both orders":
@@ -79,7 +80,8 @@ def summary(results: dict) -> dict:
     """Per comparison of :data:`CHANGES`: both columns' mean PSNR and ΔE, and the change over the pairs."""
     out = {}
     for label, before, after in CHANGES:
-        pairs = {key: [(a[key], b[key]) for rows in results.values() for a, b in zip(rows[before], rows[after])]
+        pairs = {key: [(a[key], b[key]) for rows in results.values()
+                       for a, b in zip(rows[before], rows[after], strict=True)]
                  for key in ("psnr", "delta_e")}
         out[label] = {key: {"from": float(np.mean([a for a, _ in values])), "to": float(np.mean([b for _, b in values])),
                             "change": paired_interval([b - a for a, b in values])} for key, values in pairs.items()}

@@ -23,11 +23,12 @@ import numpy as np
 
 from frenbrdf import Model
 from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.sampling import sample_bins, truth_samples
 from frenbrdf.models.reconstruct import BUDGETS, RefineConfig
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 #: The budgets before chart 8c (charts 8 and 8b): constant rates, 100 latent steps.
 BEFORE = {"latent": RefineConfig(latent_steps=100), "full": RefineConfig(latent_steps=100, weight_steps=1000)}
@@ -44,7 +45,7 @@ def main(argv=None) -> int:
     model, scene = Model.pretrained(), Scene(resolution=args.resolution)
     mask, pairs = material_mask(scene), []
     for path in map(Path, args.measurements):
-        truth = read_truth(path)
+        truth = read_material(path)
         table, truth_image = truth.table(), tonemap(render_linear(truth, scene))
         for seed in args.seeds:
             rng = np.random.default_rng(seed)

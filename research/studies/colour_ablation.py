@@ -1,4 +1,4 @@
-"""The colour ablation of docs/colour.md: one variant of a method preset, trained and measured.
+"""The colour ablation of research/colour.md: one variant of a method preset, trained and measured.
 
     python research/studies/colour_ablation.py NAME --data bank/ [--method frenbrdf] [--over JSON] [--seed S]
         [--training demo] [--latent-steps 300] [--ood merl/ --ood-every 4] [--work colour-ablation/]
@@ -29,9 +29,10 @@ from frenbrdf.configs import from_dict, merge, to_dict
 from frenbrdf.data.folders import list_materials
 from frenbrdf.io.atomic import save_json
 from frenbrdf.io.merl import N_BINS, read_merl
+from frenbrdf.io.sampling import bin_directions, sample_bins
 from frenbrdf.models.reconstruct import RefineConfig, reconstruct
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import bin_directions, image_metrics, reconstruction_rows, sample_bins
+from frenbrdf.render.scoring import image_metrics, reconstruction_rows
 from frenbrdf.training import Run, TrainConfig, config_for, train
 
 

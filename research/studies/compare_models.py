@@ -29,12 +29,14 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import as_table, is_bsdf, read_truth
+from frenbrdf.io.bsdf import MeasuredBSDF
+from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
 from frenbrdf.models.autoencoder import Model, load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -50,9 +52,9 @@ def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples
     ``(label, material)`` pair of ``trained_on``."""
     mask, rows, images = material_mask(scene), [], defaultdict(dict)
     for path in tqdm(paths, desc="materials"):
-        truth = read_truth(path)
+        truth = read_material(path)
         table, truth_image = as_table(truth), tonemap(render_linear(truth, scene))
-        group = "measured" if is_bsdf(path) else "tables"
+        group = "measured" if isinstance(truth, MeasuredBSDF) else "tables"
         images[path.stem]["truth"] = truth_image
         for draw in draws:
             rng = np.random.default_rng(draw)
@@ -111,6 +113,20 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], bud
     return out
 
 
+def _spread(entry: dict, key: str) -> str:
+    """`` (sd)`` between a variant's runs, empty with one run."""
+    return f" ({entry[f'{key}_run_sd']:.2f})" if entry[f"{key}_run_sd"] is not None else ""
+
+
+def _change(entry: dict, key: str) -> str:
+    """A variant's mean change from the baseline and its interval, ``–`` for the baseline."""
+    c = entry.get(f"{key}_change")
+    if c is None:
+        return "–"
+    interval = f" [{c['low']:+.2f}, {c['high']:+.2f}]" if c["low"] is not None else ""
+    return f"{c['mean']:+.2f}{interval}"
+
+
 def markdown(summary: dict) -> str:
     lines = ["PSNR dB / ΔE: each variant's mean over its runs (sd between runs); change: per-material difference from "
              "the baseline, mean [95 % interval over the materials].", ""]
@@ -120,18 +136,9 @@ def markdown(summary: dict) -> str:
                       "| variant | runs | materials | PSNR | ΔE | ΔE max | PSNR change | ΔE change |",
                       "|---|---|---|---|---|---|---|---|"]
             for name, e in variants.items():
-                def spread(key):
-                    return f" ({e[f'{key}_run_sd']:.2f})" if e[f"{key}_run_sd"] is not None else ""
-
-                def change(key):
-                    c = e.get(f"{key}_change")
-                    if c is None:
-                        return "–"
-                    interval = f" [{c['low']:+.2f}, {c['high']:+.2f}]" if c["low"] is not None else ""
-                    return f"{c['mean']:+.2f}{interval}"
-                lines.append(f"| {name} | {len(e['runs'])} | {e['materials']} | {e['psnr']:.2f}{spread('psnr')} | "
-                             f"{e['delta_e']:.2f}{spread('delta_e')} | {e['max_delta_e']:.2f} | {change('psnr')} | "
-                             f"{change('delta_e')} |")
+                lines.append(f"| {name} | {len(e['runs'])} | {e['materials']} | {e['psnr']:.2f}{_spread(e, 'psnr')} | "
+                             f"{e['delta_e']:.2f}{_spread(e, 'delta_e')} | {e['max_delta_e']:.2f} | "
+                             f"{_change(e, 'psnr')} | {_change(e, 'delta_e')} |")
             lines.append("")
     return "\n".join(lines)
 
@@ -162,7 +169,7 @@ def main(argv=None) -> int:
     extra_groups = {name: members.split(",") for name, _, members in (g.partition("=") for g in args.group)}
     if any(not name or not all(members) for name, members in extra_groups.items()):
         parser.error("--group takes NAME=MATERIAL,MATERIAL,... with no empty name")
-    models = {label: load_model(spec) for label, spec in zip(args.labels, args.models)}
+    models = {label: load_model(spec) for label, spec in zip(args.labels, args.models, strict=True)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     if args.held_out:
         config, folder = map(Path, args.held_out)
@@ -175,7 +182,8 @@ def main(argv=None) -> int:
                          trained_on, args.budgets)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    report = {"run": run_metadata(), "models": dict(zip(args.labels, args.models)), "trained_on": sorted(args.trained_on),
+    report = {"run": run_metadata(), "models": dict(zip(args.labels, args.models, strict=True)),
+              "trained_on": sorted(args.trained_on),
               "draws": args.draws, "samples": args.samples, "rows": rows}
     save_json(out / "compare.json", report)  # the scores are kept whatever the summary does
     groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}

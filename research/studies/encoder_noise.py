@@ -14,12 +14,13 @@ from pathlib import Path
 
 import numpy as np
 
-from frenbrdf.data.materials import load_material_file
-from frenbrdf.io.measured import as_table, read_truth
+from frenbrdf.io import read_material
+from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.nbrdf import as_brdf
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 
 def main(argv=None) -> int:
@@ -33,10 +34,10 @@ def main(argv=None) -> int:
     model, scene = load_model(args.model), Scene(resolution=args.resolution)
     mask = material_mask(scene)
     for path in map(Path, args.measurements):
-        truth = read_truth(path)
+        truth = read_material(path)
         truth_image = tonemap(render_linear(truth, scene))
         sources = {"measurement": truth,  # sampled itself, in both orders (truth_samples)
-                   "fit": load_material_file(Path(args.fits) / f"{path.stem}.h5").merl_table()}
+                   "fit": as_brdf(read_material(Path(args.fits) / f"{path.stem}.h5")).merl_table()}
         for draw in args.draws:
             rng = np.random.default_rng(draw)
             bins = sample_bins(as_table(truth), rng, 4000)

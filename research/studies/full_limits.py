@@ -25,12 +25,13 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import as_table, read_truth
+from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -42,7 +43,7 @@ def measure(path: Path, model, scene: Scene, *, samples: list[int], weight_steps
             draws: list[int]) -> tuple[dict, dict]:
     """``{variant: [metrics of each draw]}`` for one measurement (the table lookup: one entry, no draw), and
     ``{column: image}`` of the first draw."""
-    truth = read_truth(path)
+    truth = read_material(path)
     table = as_table(truth)
     images = {"truth": tonemap(render_linear(truth, scene))}
     mask = material_mask(scene)

@@ -22,13 +22,15 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf, nbrdf_merl_table
+from frenbrdf.data.nbrdf_import import keras_merl_table, keras_nbrdf
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.keras import read_keras_nbrdf
+from frenbrdf.io.sampling import sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import RefineConfig
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -41,9 +43,9 @@ def reach(path: Path, fit_path: Path, model, *, samples: int, steps: int, seed: 
           scene: Scene) -> tuple[dict, dict]:
     """PSNR and ΔE of each pair of :data:`PAIRS` for one measurement, and the four display images."""
     mask = material_mask(scene)
-    truth = read_truth(path)
-    layers = load_keras_nbrdf(fit_path)
-    fit_table = nbrdf_merl_table(layers)  # the samples' source; the fit itself is rendered as the network
+    truth = read_material(path)
+    layers = read_keras_nbrdf(fit_path)
+    fit_table = keras_merl_table(layers)  # the samples' source; the fit itself is rendered as the network
     config = RefineConfig(latent_steps=steps, latent_lr=3e-2, schedule="cosine", seed=seed, progress=False)
     images = {"measurement": tonemap(render_linear(truth, scene)),
               "fit": tonemap(render_linear(keras_nbrdf(layers), scene))}

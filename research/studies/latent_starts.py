@@ -24,13 +24,14 @@ from tqdm.auto import tqdm
 
 from frenbrdf.data.folders import list_materials
 from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.sampling import sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.nbrdf import mapped_samples
 from frenbrdf.models.reconstruct import _loss_config, _sample_loss, _Samples, refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path[:0] = [str(Path(__file__).resolve().parents[2] / "benches")]  # benches/
 from common import run_metadata  # noqa: E402
@@ -41,7 +42,7 @@ def bank_latents(model, tables: Path, seed: int = 123) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
     latents = {}
     for path in tqdm(list_materials(tables), desc="bank", leave=False):
-        table = read_truth(path)
+        table = read_material(path)
         latents[path.stem] = model.encode(*truth_samples(table, sample_bins(table, rng, 4000), rng))
     return latents
 
@@ -71,7 +72,7 @@ def main() -> None:
     encode = model.encode
     rows = []
     for path in args.measurements:
-        truth = read_truth(path)
+        truth = read_material(path)
         truth_image = tonemap(render_linear(truth, scene))
         for draw in args.draws:
             rng = np.random.default_rng(draw)

@@ -34,8 +34,9 @@ import numpy as np
 import torch
 from scipy.stats import spearmanr
 
-from frenbrdf.data.nbrdf_import import evaluate_keras_nbrdf, load_keras_nbrdf
+from frenbrdf.data.nbrdf_import import evaluate_keras_nbrdf
 from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.io.keras import read_keras_nbrdf
 from frenbrdf.io.merl import read_merl
 from frenbrdf.models.losses import frequency_variant, spectral_distance
 from frenbrdf.numerics.sht import SHT
@@ -54,7 +55,7 @@ def exact_coefficients(metric: FrequencyMetric, model, weights: Path) -> np.ndar
         raise ValueError("the floor is measured for models with a per-channel f_ref (not the hyperbrdf preset)")
     loss = metric.parts(model)[1]
     coords = loss.node_coords.numpy().astype(np.float64)
-    physical = np.maximum(evaluate_keras_nbrdf(load_keras_nbrdf(weights), coords[:, :3], coords[:, 3:]), 0.0)
+    physical = np.maximum(evaluate_keras_nbrdf(read_keras_nbrdf(weights), coords[:, :3], coords[:, 3:]), 0.0)
     mapped = model.mapping.forward(physical, model.mapping.reference)
     with torch.no_grad():
         return loss.coefficients_from_nodes(torch.from_numpy(mapped[None]))[0].numpy()
@@ -76,7 +77,7 @@ def measure(run: Run, weights_dir: Path, metric: FrequencyMetric, degrees: np.nd
     latents: dict = {}
     rows = reconstruction_rows(model, files, resolution=resolution, frequency_metric=False, progress=False,
                                latents=latents)
-    for row, path in zip(rows, files):
+    for row, path in zip(rows, files, strict=True):
         true = metric.true_coefficients(model, read_merl(path))
         predicted = metric.predicted_coefficients(model, latents[path.stem])
         exact = exact_coefficients(metric, model, weights_dir / f"{path.stem}.h5")

@@ -26,13 +26,14 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from frenbrdf.data.fitting import FitConfig, fit_nbrdf_samples
-from frenbrdf.data.materials import load_material_file
+from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.measured import read_truth
+from frenbrdf.io.sampling import sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.nbrdf import as_brdf
 from frenbrdf.models.reconstruct import RefineConfig, refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import render_sheet, run_metadata  # noqa: E402
@@ -44,7 +45,7 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
             warm_up: bool = False):
     """The rows and images of one measurement (``warm_up``: one untimed refinement first: the first calls
     pay for thread pools and caches, not for refinement)."""
-    truth = read_truth(path)
+    truth = read_material(path)
     table = truth.table()
     truth_image = tonemap(render_linear(truth, scene))
     mask = material_mask(scene)
@@ -57,7 +58,7 @@ def measure(path: Path, model, fits: Path | None, *, samples: int, seed: int, sc
     images, rows = {"truth": truth_image}, {}
     published = fits / f"{path.stem}.h5" if fits else None
     if published is not None and published.exists():
-        images["published fit"] = tonemap(render_linear(load_material_file(published), scene))
+        images["published fit"] = tonemap(render_linear(as_brdf(read_material(published)), scene))
     if fit_epochs:  # fit-nbrdf on the very samples the model sees
         start = time.perf_counter()
         fitted = fit_nbrdf_samples(*drawn, FitConfig(epochs=fit_epochs, seed=seed), progress=False)

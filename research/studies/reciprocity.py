@@ -18,11 +18,12 @@ from pathlib import Path
 import numpy as np
 
 import frenbrdf
-from frenbrdf.data.nbrdf_import import keras_nbrdf, load_keras_nbrdf
+from frenbrdf.data.nbrdf_import import keras_nbrdf
 from frenbrdf.evaluation.evaluate import load_runs
+from frenbrdf.io.keras import read_keras_nbrdf
 from frenbrdf.io.merl import N_BINS
+from frenbrdf.io.sampling import sample_bins
 from frenbrdf.models.nbrdf import nbrdf_coordinates
-from frenbrdf.render.scoring import sample_bins
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 import common  # noqa: E402
@@ -53,7 +54,7 @@ def run_gaps(run_dir: str, data: str | None, wi: np.ndarray, wo: np.ndarray) -> 
     for name in loaded.test:
         table = frenbrdf.read_merl(loaded.files[name])
         bins = sample_bins(table, rng, 4000)
-        from frenbrdf.render.scoring import bin_directions
+        from frenbrdf.io.sampling import bin_directions
 
         nbrdf = model.decode(model.encode(table.reshape(3, N_BINS)[:, bins].T, bin_directions(bins)))[0]
         reference = nbrdf.mapping.reference_at(wi, wo)
@@ -84,7 +85,7 @@ def main() -> int:
         moved = np.abs(folded - unfolded).max(axis=1) > 0  # the pairs the fold changes (D_y < 0): about half
         gaps, scales = [], []
         for path in files:
-            nbrdf = keras_nbrdf(load_keras_nbrdf(path))
+            nbrdf = keras_nbrdf(read_keras_nbrdf(path))
             value = nbrdf.mapped(folded[moved])
             gaps.append(np.median(np.abs(value - nbrdf.mapped(unfolded[moved]))))
             scales.append(np.median(np.abs(value)))

@@ -26,10 +26,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from frenbrdf.io.measured import as_table, read_truth
+from frenbrdf.io import read_material
+from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
 from frenbrdf.models import reconstruct as this_tree
 from frenbrdf.models.autoencoder import load_model
-from frenbrdf.render.scoring import sample_bins, truth_samples
 
 MODULE = "python/frenbrdf/models/reconstruct.py"
 
@@ -69,7 +69,7 @@ def main(argv=None) -> int:
     model = load_model(args.model)
     inputs = []
     for path in map(Path, args.measurements):
-        truth, rng = read_truth(path), np.random.default_rng(0)
+        truth, rng = read_material(path), np.random.default_rng(0)
         inputs.append((path.stem, *truth_samples(truth, sample_bins(as_table(truth), rng, args.samples), rng)))
     with tempfile.TemporaryDirectory() as folder:
         variants = {"this tree": this_tree, **{commit: module_at(commit, Path(folder)) for commit in args.against}}

@@ -24,16 +24,17 @@ from pathlib import Path
 
 import torch
 
-from frenbrdf.evaluation.timing import time_frequency_variants, time_training_step
 from frenbrdf.models.losses import frequency_variant
 from frenbrdf.training import config_for
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]  # its folder, benches/
 from common import material_folder, run_metadata  # noqa: E402
+from step_timing import time_frequency_variants, time_training_step  # noqa: E402
 
 
 def time_method(method: str, data: Path, steps: int, device: torch.device, slices=None) -> dict:
-    """One method's preset, timed by :func:`frenbrdf.evaluation.timing.time_training_step` (shared with chart 2)."""
+    """One method's preset, timed by ``step_timing.time_training_step`` (``benches/step_timing.py``, shared with
+    chart 2)."""
     cfg = config_for(method, data=str(data), out="", progress=False, cache_dir=str(data / ".cache"))
     if slices is not None:
         cfg.loss.frequency.slices = slices

@@ -31,7 +31,7 @@ type Transform<T, Out> = fn(&Sht<T>, &[T], usize, &mut [Out]) -> Result<()>;
 
 /// A value a transform writes, which decides how its output array is made. NumPy
 /// allocates it either way, backing a large one with huge pages (a `Vec` faulted in page by
-/// page cost a large share of a batched 256 × 512 analysis: docs/performance.md).
+/// page cost a large share of a batched 256 × 512 analysis: research/performance.md).
 trait OutputValue<T: numpy::Element>: Send + Sized {
     fn new_array(py: Python<'_>, dims: [usize; 2]) -> Bound<'_, PyArray2<T>>;
 }

@@ -3,7 +3,7 @@
 //! with the forward pass, the backward pass and the update in one native loop.
 //!
 //! In PyTorch such a step is ~40 small operations on 4000 × 48 arrays, and most of its time
-//! goes between them (docs/performance.md). Here a step passes over blocks of samples held
+//! goes between them (research/performance.md). Here a step passes over blocks of samples held
 //! feature-major (`kernel`), so that every inner loop runs over a block's samples in vector
 //! registers and nothing is allocated per operation.
 //! The samples are cut into parts of [`PART`] whatever the number of threads and the parts'

@@ -14,13 +14,13 @@ use crate::error::Result;
 /// Chunks of at most this many maps are analysed with λ recomputed in registers
 /// ([`streamed`]) even where the table is kept: a one-map product reuses each table value
 /// only twice, so reading the table costs more than recomputing it (single maps of 90×180
-/// and 128×256, one thread, f64 and f32: docs/performance.md).
+/// and 128×256, one thread, f64 and f32: research/performance.md).
 const STREAMED_MAX_BATCH: usize = 1;
 
 /// Tables larger than this (about half the last-level cache) are read from memory for
 /// every chunk of maps: beyond it every batch is analysed on the fly, a map at a time,
 /// which beat both reading the table and chunks of maps on the fly at 256×512 (a 34 MB
-/// table; docs/performance.md).
+/// table; research/performance.md).
 const STREAMED_MIN_TABLE_BYTES_ANY_BATCH: usize = 16 << 20;
 
 /// Bytes of gathered spectra a group of orders analysed on the fly may occupy (per
@@ -30,7 +30,7 @@ const STREAMED_GROUP_BYTES: usize = 256 << 10;
 /// Maps larger than this (a core's L2 cache) are analysed one after another, each parallel
 /// inside over orders ([`Chunks::OneAfterAnother`]), rather than one per worker: two at once evict each other's
 /// intermediates. Below it one map per worker stays the faster (512×1024 against 256×512
-/// on two threads: docs/performance.md).
+/// on two threads: research/performance.md).
 pub(super) const SHARED_MAP_BYTES: usize = 2 << 20;
 
 impl<T: Real> Sht<T> {
@@ -46,7 +46,7 @@ impl<T: Real> Sht<T> {
 
     /// [`Sht::analysis`] into `coefficients`, which it fills. Not zero-filled first by the
     /// caller: every value is written once, and zeroing a large output cost a noticeable
-    /// share of a transform (docs/performance.md).
+    /// share of a transform (research/performance.md).
     pub fn analysis_into(&self, maps: &[T], batch: usize, coefficients: &mut [MaybeUninit<T>]) -> Result<()> {
         self.check_len("maps", maps.len(), batch, self.nlat * self.nlon)?;
         self.check_len("coefficients", coefficients.len(), batch, self.n_coefficients())?;

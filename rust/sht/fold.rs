@@ -15,7 +15,7 @@ impl<T: Real> Sht<T> {
     /// One complex FFT per ring pair gives both parts: with z = (n + s) + i(n − s) for the
     /// north and south rings n and s, Z = SYM + i·ANTI, and since both are spectra of real
     /// rings, SYM_m = (Z_m + conj Z_−m)/2 and ANTI_m = (Z_m − conj Z_−m)/2i. This takes
-    /// less time than two real FFTs (realfft) of the rings (docs/performance.md).
+    /// less time than two real FFTs (realfft) of the rings (research/performance.md).
     pub(super) fn fold_rings(&self, maps: &[T], batch: usize, ring_factors: &[f64]) -> (Vec<T>, Vec<T>) {
         let (nlat, nlon, orders, width) = (self.nlat, self.nlon, self.lmax + 1, 2 * batch);
         let ring = |b: usize, j: usize| &maps[(b * nlat + j) * nlon..][..nlon];
@@ -45,7 +45,7 @@ impl<T: Real> Sht<T> {
                         // The next pair's rings, fetched one at a time while this pair is
                         // transformed: they lie a whole map apart, beyond the hardware
                         // prefetcher, and fetching them all at once stalled on the cache's
-                        // queue of misses (docs/performance.md).
+                        // queue of misses (research/performance.md).
                         let next_maps = if p + 1 < mirror { block } else { 0 };
                         let mut next = (0..next_maps).flat_map(|i| [ring(b0 + i, p + 1), ring(b0 + i, mirror - 1)]);
                         let spectra = &mut spectra[..block * nlon];

@@ -55,7 +55,7 @@ pub struct Recurrence {
     offset: Vec<usize>,
     /// Every order's [`Paired`] form, where lmax ≤ [`PAIRED_KEPT_LMAX`]. Computing it
     /// takes divisions in a chain, a noticeable share of a single-map analysis
-    /// (docs/performance.md).
+    /// (research/performance.md).
     paired: Vec<Paired>,
 }
 

@@ -5,7 +5,7 @@
 //! kernel serves them all: a 4 × 16 tile of the result stays in registers while the
 //! inner index runs (4 × 32 in f32), each value of the right factor loaded once per 4 rows. General
 //! GEMM libraries spend more on packing than on arithmetic at these sizes (the `gemm`
-//! crate took a large share of a 90 × 180 transform: docs/performance.md). The kernel is
+//! crate took a large share of a 90 × 180 transform: research/performance.md). The kernel is
 //! compiled for AVX-512 and AVX2+FMA and chosen at run time.
 
 use super::real::Real;

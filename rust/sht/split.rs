@@ -7,7 +7,7 @@
 //! map's spectrum is contiguous in m, the output is contiguous in maps), so on x86 with
 //! AVX2 whole blocks of 8 maps go through vector registers: a vector of orders per map,
 //! then a transposition of the block to a vector of maps per order. The scalar loop was
-//! a large share of a batched 90 × 180 analysis (docs/performance.md).
+//! a large share of a batched 90 × 180 analysis (research/performance.md).
 
 use realfft::num_complex::Complex;
 

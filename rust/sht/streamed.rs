@@ -102,7 +102,7 @@ pub(super) struct Scratch {
 }
 
 /// Spectra padded to whole vectors: the `stride` for `half_rings` rings. Columns a power
-/// of two apart would share cache sets (seen at 512×1024, 8 maps: docs/performance.md),
+/// of two apart would share cache sets (seen at 512×1024, 8 maps: research/performance.md),
 /// so such strides get one more vector.
 pub(super) fn padded_stride(half_rings: usize) -> usize {
     let stride = half_rings.next_multiple_of(LANES);

@@ -3,7 +3,7 @@
 //! 4 × 4 blocks of f64, 8 × 8 of f32. The analysis split ([`super::split`]) and the final
 //! scatter of coefficients use them. The scatter is a sizeable part of a batched f32
 //! analysis and bound by writing the output, so the vector scatter gains little over
-//! contiguous scalar runs, but some (docs/performance.md).
+//! contiguous scalar runs, but some (research/performance.md).
 
 use std::mem::MaybeUninit;
 

@@ -16,8 +16,8 @@ import pytest
 import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data.folders import list_materials
-from frenbrdf.io.measured import read_table, read_truth
-from frenbrdf.material.measurements import MAX_REFLECTANCE, read_measurements
+from frenbrdf.io import read_material, read_samples, read_table
+from frenbrdf.io.reflectance import MAX_REFLECTANCE
 from frenbrdf.render import Scene, material_mask, render_linear
 
 from ..conftest import mitsuba_jit, tiny, unit_vectors
@@ -70,7 +70,7 @@ def test_its_table_holds_the_measurement_at_each_bin_and_marks_the_rest_missing(
 
 def test_the_truth_renders_from_the_measurement_not_its_table(paper):
     scene = Scene(resolution=48)
-    direct, quantised = render_linear(read_truth(paper.path), scene), render_linear(read_table(paper.path), scene)
+    direct, quantised = render_linear(read_material(paper.path), scene), render_linear(read_table(paper.path), scene)
     mask = material_mask(scene)
     assert not np.array_equal(direct, quantised)
     # The same material either way: within a few per cent on the lit sphere.
@@ -84,8 +84,8 @@ def test_convert_writes_a_merl_table_and_samples_reconstruct_reads(tmp_path, pap
     for suffix in ("csv", "npz"):
         out = tmp_path / f"paper.{suffix}"
         assert cli.main(["convert", str(source), str(out), "--samples", "300", "--seed", "3"]) == 0
-        samples = read_measurements(out)
-        expected = read_measurements(source, samples=300, seed=3)
+        samples = read_samples(out)
+        expected = read_samples(source, samples=300, seed=3)
         np.testing.assert_allclose(samples.values, expected.values, rtol=1e-12)
         np.testing.assert_allclose(samples.wi, expected.wi, atol=1e-12)
         np.testing.assert_allclose(samples.values, paper(samples.wi, samples.wo), rtol=1e-12)
@@ -227,12 +227,13 @@ def test_full_gains_from_both_orders_of_a_measurement():
     draws at 256²: 35.15 → 36.98 dB reciprocal → 41.10 ordered)."""
     import dataclasses
 
+    from frenbrdf.io.sampling import sample_bins, truth_samples
     from frenbrdf.models.autoencoder import load_model
     from frenbrdf.models.reconstruct import refine_config
     from frenbrdf.render import tonemap
-    from frenbrdf.render.scoring import image_metrics, refined_reconstruction, sample_bins, truth_samples
+    from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
-    truth = read_truth(rgl_file("vch_golden_yellow_rgb"))
+    truth = read_material(rgl_file("vch_golden_yellow_rgb"))
     table, model, scene = truth.table(), load_model("pretrained"), Scene(resolution=128)
     rng = np.random.default_rng(0)
     bins = sample_bins(table, rng, 4000)

@@ -25,13 +25,11 @@ import pytest
 import frenbrdf
 from frenbrdf import cli
 from frenbrdf.data.folders import read_tables
-from frenbrdf.data.materials import load_material_file
-from frenbrdf.data.nbrdf_import import load_keras_nbrdf
 from frenbrdf.exceptions import BsdfFormatError, MerlFormatError
-from frenbrdf.io.measured import read_table
+from frenbrdf.io import read_material, read_samples, read_table
+from frenbrdf.io.keras import read_keras_nbrdf
 from frenbrdf.io.paths import checked_npz
 from frenbrdf.io.reflectance import MAX_REFLECTANCE, check_reflectance
-from frenbrdf.material.measurements import read_measurements
 
 from ..conftest import constant_table, random_layers, write_keras_h5
 from .test_bsdf_native import flat_material, tensor_file
@@ -109,7 +107,7 @@ def test_an_npy_header_declaring_more_than_its_member_is_refused(tmp_path):
     huge = npz(tmp_path / "huge.npz", {"r.npy": npy((10**11,), data=bytes(80))})
     with pytest.raises(ValueError, match=r"huge.npz: r.npy declares an array of shape \(100000000000,\) "
                                          r"\(float64, 800,000,000,000 bytes\), more than"):
-        read_measurements(huge)
+        read_samples(huge)
     short = npz(tmp_path / "short.npz", {"r.npy": npy((1000,), data=bytes(80))})
     with pytest.raises(ValueError, match=r"short.npz: r.npy declares .* 8,000 bytes\), but holds only 80 bytes"):
         checked_npz(short)
@@ -126,7 +124,7 @@ def test_a_pickled_npz_says_so(tmp_path):
     np.savez(pickled, r=np.array([{"a": 1}, None], dtype=object))
     with pytest.raises(ValueError, match="pickled.npz: r.npy holds pickled Python objects, which frenbrdf never "
                                          "loads") as caught:
-        read_measurements(pickled)
+        read_samples(pickled)
     assert "damaged" not in str(caught.value) and "allow_pickle" not in str(caught.value)
 
 
@@ -164,7 +162,7 @@ def test_odd_hdf5_structure_is_a_named_error(tmp_path, edit, message):
     path = write_keras_h5(tmp_path / "weights.h5", random_layers([6, 4, 3]))
     with h5py.File(path, "a") as file:
         edit(file)
-    for reader in (load_keras_nbrdf, load_material_file):
+    for reader in (read_keras_nbrdf, read_material):
         with pytest.raises(ValueError, match=message) as caught:
             reader(path)
         assert str(caught.value).startswith(f"{path}: ")
@@ -176,7 +174,7 @@ def test_a_soft_link_that_resolves_and_a_hard_link_cycle_are_fine(tmp_path):
     with h5py.File(path, "a") as file:
         file["alias"] = h5py.SoftLink("/dense_1/dense_1/bias:0")
         file["dense_1/dense_1/root"] = file["/"]  # a hard link back to the root
-    loaded = load_keras_nbrdf(path)
+    loaded = read_keras_nbrdf(path)
     np.testing.assert_allclose(loaded[0][0], np.float32(layers[0][0]))
 
 
@@ -221,9 +219,9 @@ def test_a_material_with_absurd_values_is_refused_by_every_reader(tmp_path):
     }
     readers = {
         "training": lambda path: read_tables([path], progress=False),
-        "reconstruction": lambda path: read_measurements(path, samples=100),
+        "reconstruction": lambda path: read_samples(path, samples=100),
         "conversion": read_table,
-        "rendering": load_material_file,
+        "rendering": read_material,
     }
     for path, message in expected.items():
         for use, reader in readers.items():

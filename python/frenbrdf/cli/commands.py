@@ -89,6 +89,7 @@ def train(args: argparse.Namespace) -> int:
         configs.append(cfg)
     for cfg in configs:
         run = train(cfg, resume=args.resume, overwrite=args.overwrite)
+        assert run.seconds is not None  # train times what it trains
         best = run.best  # the history entry of the selected epoch
         summary = {"run_dir": str(run.path), "method": cfg.method, "seed": cfg.seed, "best_epoch": best["epoch"],
                    "selected_by": cfg.select, "best_val_rec": best["val_rec"], "seconds": round(run.seconds, 1)}
@@ -103,8 +104,8 @@ def train(args: argparse.Namespace) -> int:
 
 
 def fit_nbrdf(args: argparse.Namespace) -> int:
-    from ..data.fitting import FitConfig, fit_nbrdf, save_nbrdf
-    from ..io.measured import read_table
+    from ..data.fitting import FitConfig, fit_nbrdf
+    from ..io.formats import format_of, read_table, write_material
     from ..io.outputs import OutputFolder
     from ..io.paths import input_file, naming
 
@@ -115,6 +116,8 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
     config = FitConfig(hidden=hidden, epochs=args.epochs, seed=args.seed)
     # Every input and output checked before any work: no fit is lost to a later clash, no file replaced unasked.
     materials = [input_file(path, "material file") for path in args.materials]
+    for path in materials:
+        format_of(path, ("measurement",), "fit-nbrdf")
     stems = [path.stem for path in materials]
     if len(set(stems)) < len(stems):
         raise ValueError(f"two inputs share a name and would write the same {args.out}/<name>.pt: "
@@ -127,7 +130,7 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
         with naming(path):
             nbrdf = fit_nbrdf(read_table(path), config, progress=not args.quiet)
         with out.staged() as staging:
-            save_nbrdf(staging / f"{path.stem}.pt", nbrdf)
+            write_material(staging / f"{path.stem}.pt", nbrdf.weights())
             if args.merl:
                 nbrdf.to_merl(staging / f"{path.stem}.binary")
         print(f"fitted {path.name} -> {out.path / (path.stem + '.pt')}")
@@ -150,23 +153,24 @@ def evaluate(args: argparse.Namespace) -> int:
 
 
 def render(args: argparse.Namespace) -> int:
+    from ..io.formats import format_of, read_material
     from ..io.outputs import check_output_file
     from ..io.paths import input_file
 
     if args.spp is not None and not args.mitsuba:
         raise ValueError("--spp sets a --mitsuba render's samples per pixel; the metric renderer has none")
-    input_file(args.material, "material file")
+    format_of(input_file(args.material, "material file"), ("measurement", "nbrdf"), "render")
     check_output_file(args.out, (".png",), overwrite=args.overwrite, inputs=(args.material,))
-    if args.mitsuba:  # the plugin reads the file with the same loader, frenbrdf.data.materials
+    if args.mitsuba:  # the plugin reads the file with the same reader, frenbrdf.io.read_material
         from ..render.mitsuba import render_material
 
         render_material(args.material, out_path=args.out, spp=64 if args.spp is None else args.spp,
                         resolution=args.resolution)
     else:
-        from ..data.materials import load_material_file
+        from ..models.nbrdf import as_brdf
         from ..render.renderer import Scene, render, save_png
 
-        save_png(args.out, render(load_material_file(args.material), Scene(resolution=args.resolution)))
+        save_png(args.out, render(as_brdf(read_material(args.material)), Scene(resolution=args.resolution)))
     print(f"wrote {args.out}")
     return 0
 
@@ -197,7 +201,7 @@ def select(args: argparse.Namespace) -> int:
                               progress=not args.quiet, overwrite=args.overwrite)
     if args.json:
         print(json.dumps(selection.summary, indent=2))
-    elif selection.reached:
+    elif selection.chosen is not None:  # reached
         chosen = selection.chosen
         print(f"{chosen['name']}: NBRDF 6→{'→'.join(map(str, chosen['hidden']))}→3 "
               f"({chosen['bytes_per_material']} bytes per material), latent {chosen['latent']}, validation PSNR "

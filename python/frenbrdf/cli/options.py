@@ -61,7 +61,7 @@ def decibels(text: str) -> float:
 
 
 def sample_count(text: str) -> int | None:
-    from ..material.measurements import MIN_SAMPLES
+    from ..io.samples import MIN_SAMPLES
 
     if text == "all":
         return None

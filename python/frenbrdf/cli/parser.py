@@ -174,7 +174,7 @@ def _reconstruct(subparsers) -> None:
     rec = subparsers.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ of samples, a "
                               "MERL file or an RGL .bsdf): NBRDF, MERL table, render and report in one folder")
     rec.add_argument("input", help="CSV or NPZ with columns wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b (or angles; see "
-                     "frenbrdf.material.measurements), a MERL .binary file or an RGL .bsdf measurement")
+                     "frenbrdf.io.samples), a MERL .binary file or an RGL .bsdf measurement")
     rec.add_argument("--out", required=True, help="result folder: a new or empty one, or an earlier result "
                      "folder, which is replaced (never the input's folder)")
     rec.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files "

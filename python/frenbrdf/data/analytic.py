@@ -31,7 +31,7 @@ channel (approximate values of published optical constants at about 650, 550 and
 mirror-side lobe of the same α does, and is reciprocal like it.
 
 *Thin film* (:func:`frenbrdf.data.microfacet.thin_film_fresnel`): a dielectric film on the coat replaces the coat's
-Fresnel reflectance by Airy's, evaluated per channel at :data:`WAVELENGTHS`: the coat's
+Fresnel reflectance by Airy's, evaluated per channel at :data:`~frenbrdf.data.microfacet.WAVELENGTHS`: the coat's
 colour then shifts with θ_d (iridescence), and stays ≤ 1.
 
 Materials
@@ -280,10 +280,10 @@ def _flake_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     return np.asarray(m.flake_colour) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
 
 
-def _top_lobes(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
+def _top_lobes(m: AnalyticMaterial, g: Geometry) -> np.ndarray | float:
     """The lobes above a dielectric base's matte term whose albedo is tabulated together:
-    specular (white) and sheen (RGB). The retro lobe is tabulated on its own."""
-    f = 0.0
+    specular (white) and sheen (RGB), 0 without them. The retro lobe is tabulated on its own."""
+    f: np.ndarray | float = 0.0
     if m.specular > 0:
         f = f + m.specular * _ggx_lobe(g, m.roughness, m.ior, 0.0)
     if any(m.sheen):
@@ -349,7 +349,7 @@ def _base(m: AnalyticMaterial, g: Geometry, albedos: _Albedos) -> np.ndarray:
 def _evaluate(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     albedos = _albedos(m)
     f = _base(m, g, albedos)
-    if m.coat > 0:
+    if albedos.coat is not None:  # m.coat > 0
         transmitted_in = 1.0 - m.coat * albedos.coat(g.cos_i)
         transmitted_out = 1.0 - m.coat * albedos.coat(g.cos_o)
         f = m.coat * _coat_lobe(m, g) + transmitted_in * transmitted_out * f

@@ -9,14 +9,12 @@ of ``import-nbrdf``'s Keras files).
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..io.atomic import atomic_path
 from ..io.merl import N_BINS, SHAPE
 from ..models.mapping import LogRelativeMapping
 from ..models.nbrdf import NBRDF, NBRDFConfig, bin_geometry, mapped_samples, nbrdf_forward
@@ -45,8 +43,10 @@ class FitConfig:
             raise ValueError(f"invalid fit config {self}: epochs, batch, lr and hidden widths must be positive")
 
 
-def fit_nbrdf(table, config: FitConfig = FitConfig(), progress: bool = True) -> NBRDF:
-    """Fits one NBRDF to a MERL table ``(3, 90, 90, 180)`` (reflectance, missing < 0)."""
+def fit_nbrdf(table, config: FitConfig | None = None, progress: bool = True) -> NBRDF:
+    """Fits one NBRDF to a MERL table ``(3, 90, 90, 180)`` (reflectance, missing < 0); ``config`` defaults to
+    :class:`FitConfig`'s defaults."""
+    config = FitConfig() if config is None else config
     table = np.asarray(table, dtype=np.float64)
     if table.shape != SHAPE:
         raise ValueError(f"table must have shape {SHAPE}, got {table.shape}")
@@ -60,10 +60,12 @@ def fit_nbrdf(table, config: FitConfig = FitConfig(), progress: bool = True) -> 
     return _fit(geometry.half_diff[bins], geometry.cos_in[bins], flat[:, bins].T, config, progress)
 
 
-def fit_nbrdf_samples(values, directions, config: FitConfig = FitConfig(), progress: bool = True) -> NBRDF:
+def fit_nbrdf_samples(values, directions, config: FitConfig | None = None, progress: bool = True) -> NBRDF:
     """Fits one NBRDF to scattered samples: reflectance ``(N, 3)`` at the pairs ``(wi, wo)``, as
     :func:`frenbrdf.models.reconstruct.reconstruct` takes them (e.g. a measurement in both orders of each pair,
-    :func:`frenbrdf.render.scoring.truth_samples`, which a table cannot hold). ``epochs`` are passes over them."""
+    :func:`frenbrdf.io.sampling.truth_samples`, which a table cannot hold). ``epochs`` are passes over them;
+    ``config``: as :func:`fit_nbrdf`'s."""
+    config = FitConfig() if config is None else config
     _, coords, cos_in = mapped_samples(EXP_MINUS_ONE, values, directions)  # checks them; the fit maps its own way
     return _fit(torch.from_numpy(coords.astype(np.float32)), torch.from_numpy(cos_in.astype(np.float32)),
                 np.asarray(values, dtype=np.float64), config, progress)
@@ -94,35 +96,3 @@ def _initial_params(config: NBRDFConfig) -> list[torch.Tensor]:
     """Sztrajman's initialisation: weights uniform in ±0.05, biases 0."""
     return [torch.empty(shape).uniform_(-0.05, 0.05) if len(shape) == 2 else torch.zeros(shape)
             for shape in config.shapes()]
-
-
-def save_nbrdf(path: str | os.PathLike, nbrdf: NBRDF) -> None:
-    """Saves one NBRDF (weights, mapping, and whether it is ordered) atomically."""
-    with atomic_path(path) as temporary:
-        torch.save({"params": [p[0] for p in nbrdf.params], # f_ref as float32, as run folders store it: a per-bin f_ref is then 17.5 MB, not 35
-                    "reference": torch.from_numpy(nbrdf.mapping.reference.astype(np.float32)),
-                    "epsilon": nbrdf.mapping.epsilon, "offset": nbrdf.mapping.offset, "ordered": nbrdf.ordered},
-                   temporary)
-
-
-def load_nbrdf(path: str | os.PathLike) -> NBRDF:
-    """Loads an NBRDF written by :func:`save_nbrdf`, checked whole (:func:`frenbrdf.models.nbrdf.check_params`:
-    layer shapes and widths, finite weights; the mapping's f_ref and ε) before anything is evaluated."""
-    from ..io.paths import torch_load
-
-    state = torch_load(path, "saved NBRDF")
-    try:
-        if not isinstance(state, dict) or not isinstance(state.get("params"), (list, tuple)):
-            raise ValueError("it holds no list of parameters")
-        params = [p[None] if isinstance(p, torch.Tensor) else p for p in state["params"]]
-        reference = state["reference"]
-        if not isinstance(reference, torch.Tensor):
-            raise ValueError(f"its reference is a {type(reference).__name__}, not a tensor")
-        ordered = state.get("ordered", False)  # files written before ordered NBRDFs hold reciprocal ones
-        if not isinstance(ordered, bool):
-            raise ValueError(f"its 'ordered' flag is a {type(ordered).__name__}, not a bool")
-        return NBRDF(params, LogRelativeMapping(reference.numpy(), state["epsilon"], state.get("offset", 0.0)), ordered)
-    except KeyError as error:
-        raise ValueError(f"{path}: not a saved NBRDF (it lacks {error})") from None
-    except ValueError as error:
-        raise ValueError(f"{path}: not a valid saved NBRDF: {error}") from None

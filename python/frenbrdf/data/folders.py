@@ -29,7 +29,7 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..io.measured import SUFFIXES, read_table
+from ..io.formats import MEASURED, read_table
 from ..io.merl import N_BINS
 from ..models.mapping import LogRelativeMapping, MappingConfig, channel_median
 from ..models.nbrdf import bin_geometry
@@ -39,7 +39,7 @@ from ..models.nbrdf import bin_geometry
 
 def list_materials(folder: str | os.PathLike) -> list[Path]:
     """The measured materials of a folder, sorted by name: MERL files (``*.binary``) and RGL
-    measurements (``*.bsdf``), which may be mixed (:mod:`frenbrdf.io.measured` reads either).
+    measurements (``*.bsdf``), which may be mixed (:func:`frenbrdf.io.read_table` reads either).
 
     Raises
     ------
@@ -53,7 +53,7 @@ def list_materials(folder: str | os.PathLike) -> list[Path]:
         raise FileNotFoundError(f"data folder {folder} does not exist")
     if not folder.is_dir():
         raise NotADirectoryError(f"data folder {folder} is not a folder")
-    files = sorted((path for suffix in SUFFIXES for path in folder.glob(f"*{suffix}")), key=lambda path: path.name)
+    files = sorted((path for suffix in MEASURED for path in folder.glob(f"*{suffix}")), key=lambda path: path.name)
     if not files:
         raise ValueError(f"data folder {folder} holds no material files (*.binary or *.bsdf); "
                          "create some with `frenbrdf synth` or `frenbrdf import-nbrdf`")
@@ -73,6 +73,7 @@ class Split:
     seed: int
 
     def to_json(self) -> dict:
+        """The split as JSON data (tuples as lists), as :meth:`from_json` reads it."""
         return {key: list(value) if isinstance(value, tuple) else value for key, value in asdict(self).items()}
 
     @classmethod
@@ -185,7 +186,7 @@ class MaterialBank:
         # Indices of the valid bins, once per distinct mask (usually one for all materials).
         self._valid_bins: list[torch.Tensor] = [torch.nonzero(v).squeeze(1) for v in valid]
         if any(len(bins) == 0 for bins in self._valid_bins):
-            empty = [n for n, bins in zip(self.names, self._valid_bins) if len(bins) == 0]
+            empty = [n for n, bins in zip(self.names, self._valid_bins, strict=True) if len(bins) == 0]
             raise ValueError(f"materials without a single valid bin: {empty}")
 
     def __len__(self) -> int:

@@ -117,9 +117,9 @@ def _hemisphere_rule(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return u.reshape(-1), phi.reshape(-1), weights.reshape(-1)
 
 
-def directional_albedo(lobe: Callable[[Geometry], np.ndarray], alpha: float | None,
+def directional_albedo(lobe: Callable[[Geometry], np.ndarray | float], alpha: float | None,
                        nodes: int = _QUADRATURE_NODES) -> Albedo:
-    """Tabulates E(μ) = ∫ f μ_o dω_o of ``lobe`` at :data:`_MU_NODES`.
+    """Tabulates E(μ) = ∫ f μ_o dω_o of ``lobe`` at ``_MU_NODES``.
 
     ``alpha`` given: the half vector follows the GGX distribution of that roughness
     (tan² θ_h = α² u / (1 − u), so D μ_h dω_h = du dφ / 2π), which resolves narrow
@@ -152,6 +152,6 @@ def directional_albedo(lobe: Callable[[Geometry], np.ndarray], alpha: float | No
 
 
 def _cosine_average(values: np.ndarray) -> np.ndarray:
-    """Ē = 2 ∫₀¹ E(μ) μ dμ of the linear interpolant of ``values`` at :data:`_MU_NODES`."""
+    """Ē = 2 ∫₀¹ E(μ) μ dμ of the linear interpolant of ``values`` at ``_MU_NODES``."""
     mu = np.linspace(0.0, 1.0, 4097)
     return np.array([2.0 * np.trapezoid(np.interp(mu, _MU_NODES, column) * mu, mu) for column in values.T])

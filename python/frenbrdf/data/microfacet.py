@@ -83,8 +83,8 @@ def thin_film_fresnel(cos: np.ndarray, film_ior: float, thickness: float, substr
                    (n2 * cos_film - n3 * cos_sub) / (n2 * cos_film + n3 * cos_sub)),
                   ((n2 * cos - n1 * cos_film) / (n2 * cos + n1 * cos_film),  # p
                    (n3 * cos_film - n2 * cos_sub) / (n3 * cos_film + n2 * cos_sub)))
-    reflectance = 0.0
+    polarised = []
     for r12, r23 in amplitudes:
         cross = 2.0 * r12 * r23 * np.cos(delta)
-        reflectance = reflectance + (r12**2 + r23**2 + cross) / (1.0 + (r12 * r23) ** 2 + cross)
-    return 0.5 * reflectance
+        polarised.append((r12**2 + r23**2 + cross) / (1.0 + (r12 * r23) ** 2 + cross))
+    return 0.5 * (polarised[0] + polarised[1])

@@ -82,7 +82,7 @@ def _kind_counts(n: int, shares: dict[str, float]) -> dict[str, int]:
         counts[np.argmax(target - counts)] += 1
     while counts.sum() > n:  # only after raising small kinds to 1: take from the most over-served
         counts[np.argmax(np.where(counts > 1, counts - target, -np.inf))] -= 1
-    return dict(zip(kinds, counts.tolist()))
+    return dict(zip(kinds, counts.tolist(), strict=True))
 
 
 def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
@@ -305,9 +305,9 @@ def write_bank(out_dir: str | os.PathLike, n: int = 100, seed: int = 0, *, mix: 
     out.check_names([*names, MANIFEST_NAME])
     with out.staged() as staging:
         for material, name in zip(tqdm(bank, desc="synthesising BRDFs", unit="material", disable=not progress),
-                                  names):
+                                  names, strict=True):
             write_merl(staging / name, merl_table(material))
         manifest = {"n": n, "seed": seed, "mix": mix,
-                    "materials": [{"file": name, **m.to_dict()} for name, m in zip(names, bank)]}
+                    "materials": [{"file": name, **m.to_dict()} for name, m in zip(names, bank, strict=True)]}
         write_text(staging / MANIFEST_NAME, json.dumps(manifest, indent=2) + "\n")
     return [out.path / name for name in names]

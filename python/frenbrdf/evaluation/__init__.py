@@ -1,2 +1,2 @@
-"""Studies: evaluation of trained runs (reconstruction, editing), their tables and statistics,
-trained variants, step timing and model selection."""
+"""Evaluation of trained runs: reconstruction and editing tables, their statistics over seeds, power spectra,
+trained variants of the FreNBRDF preset, and model selection (``frenbrdf evaluate``, ``spectrum``, ``select``)."""

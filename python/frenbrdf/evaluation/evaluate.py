@@ -2,7 +2,7 @@
 
 - Reconstruction: each test material is encoded from N random valid bins (default 4000,
   the same samples for every method; a measurement evaluated at them in a random order of each pair,
-  :func:`frenbrdf.render.scoring.truth_samples`), decoded, rendered and compared with the render of the
+  :func:`frenbrdf.io.sampling.truth_samples`), decoded, rendered and compared with the render of the
   true table: RMSE, PSNR, SSIM (scikit-image, data_range 1) and the colour difference ΔE
   (CIEDE2000) over the lit material pixels (:func:`frenbrdf.render.material_mask`), PSNR and ΔE over
   the highlights (the 5 % brightest of those pixels in the truth's linear render,
@@ -37,8 +37,9 @@ from tqdm.auto import tqdm
 
 from ..data.folders import list_materials
 from ..io.atomic import save_json, write_text
-from ..io.measured import as_table, read_truth
+from ..io.formats import read_measured
 from ..io.outputs import OutputFolder
+from ..io.sampling import as_table, sample_bins, truth_samples
 from ..models.autoencoder import Model
 from ..models.reconstruct import BUDGETS, refine_config
 from ..presets import method_names
@@ -47,14 +48,7 @@ from ..render.renderer import Scene, material_mask, render_linear, tonemap
 from ..render.scoring import (
     FrequencyMetric as FrequencyMetric,  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
 )
-from ..render.scoring import (
-    edit_metrics,
-    highlight_mask,
-    reconstruct,
-    refined_reconstruction,
-    sample_bins,
-    truth_samples,
-)
+from ..render.scoring import edit_metrics, encode_and_render, highlight_mask, refined_reconstruction
 from ..render.scoring import image_metrics as image_metrics
 from ..render.scoring import reconstruction_rows as reconstruction_rows
 from ..training.run import Run
@@ -275,14 +269,16 @@ def check_out(out_dir, run_dirs, *, overwrite: bool = False) -> OutputFolder:
     return out
 
 
-def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig = EvaluateConfig(),
+def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig | None = None,
                   materials: EvaluationSet | None = None, overwrite: bool = False) -> dict:
     """Evaluates runs (one per method) on their common test split, or with ``config.all_materials`` on every
     material of ``data`` they never saw; writes tables and figures to ``out_dir`` (:func:`check_out`; or an
     :class:`~frenbrdf.io.outputs.OutputFolder` claimed already) once everything is computed.
 
-    ``materials``: the materials, when chosen already (see :func:`load_runs`).
+    ``materials``: the materials, when chosen already (see :func:`load_runs`). ``config``: default
+    :class:`EvaluateConfig`.
     """
+    config = EvaluateConfig() if config is None else config
     start = time.perf_counter()
     out = out_dir if isinstance(out_dir, OutputFolder) else check_out(out_dir, run_dirs, overwrite=overwrite)
     loaded = load_runs(run_dirs, data, config.max_materials, all_materials=config.all_materials, materials=materials)
@@ -297,15 +293,15 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
                   else dataclasses.replace(refine_config(config.refine), seed=config.seed))
 
     # Reconstruction. Latents by prefix of the metrics they give: the encoder's (""), the refined ("refined_").
-    latents = {"": {m: {} for m in models}}
+    latents: dict[str, dict[str, dict[str, np.ndarray]]] = {"": {m: {} for m in models}}
     if refinement:
         latents["refined_"] = {m: {} for m in models}
     edit_truth_linear = {}
-    per_material = {m: [] for m in models}
+    per_material: dict[str, list[dict]] = {m: [] for m in models}
     renders = {}
     spectrum = SpectrumSummary()  # each method's decoded latents against the true tables: spectrum.png
     for name in tqdm(names, desc="reconstruction", disable=not show):
-        truth = read_truth(files[name])  # a .bsdf renders as measured, not through its table
+        truth = read_measured(files[name])  # a .bsdf renders as measured, not through its table
         table = as_table(truth)
         samples = truth_samples(truth, sample_bins(table, rng, config.samples), rng)
         edit_truth_linear[name] = render_linear(truth, edit_scene)
@@ -314,7 +310,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         renders[name] = {"truth": truth_image}
         decoded = {}
         for method, model in models.items():
-            z, image = reconstruct(model, samples, scene)
+            z, image = encode_and_render(model, *samples, scene)
             latents[""][method][name] = z
             renders[name][method] = image
             metrics = image_metrics(truth_image, image, mask, highlight)
@@ -332,7 +328,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
 
     # Editing.
     pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)) if config.edits else 0, rng)
-    edits = {m: [] for m in models}
+    edits: dict[str, list[dict]] = {m: [] for m in models}
     with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing", disable=not show) as bar:
         for a, b in pairs:
             name_a, name_b = names[a], names[b]
@@ -372,7 +368,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
 
 
 def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
-                   config: EvaluateConfig = EvaluateConfig(), overwrite: bool = False) -> dict:
+                   config: EvaluateConfig | None = None, overwrite: bool = False) -> dict:
     """Evaluates runs of one or several seeds: one run per method and seed (:mod:`frenbrdf.evaluation.statistics`).
 
     Runs are grouped by their split (a seed's split); with one group this is
@@ -382,7 +378,9 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     With ``config.all_materials`` every seed is evaluated on the same materials: those of
     ``data`` that no run of any seed trained or validated on. Everything that can be checked (the
     output folder, every run, the methods of every seed) is checked before anything is computed.
+    ``config``: default :class:`EvaluateConfig`.
     """
+    config = EvaluateConfig() if config is None else config
     out = check_out(out_dir, run_dirs, overwrite=overwrite)
     runs = [Run(path) for path in run_dirs]
     groups: dict[int, list] = {}

@@ -112,7 +112,7 @@ def select_config(data, target_psnr: float, out, *, front=None, base: TrainConfi
         base = base or base_config(data)
         base.data = str(data)
         variants = variants if variants is not None else capacity_variants()
-        measure = measure or MeasureSettings(timing_steps=0, throughput_queries=0, lfre=False, progress=progress)
+        measure = measure or MeasureSettings(lfre=False, progress=progress)
         order = sorted(variants, key=lambda v: (storage(v.config(base))["bytes_per_material"],
                                                 storage(v.config(base))["latent_bytes"]))
         source = f"trained in {out / 'runs'} ({base.epochs} epochs each)"

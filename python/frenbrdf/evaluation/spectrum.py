@@ -1,6 +1,6 @@
 """Per-degree power spectra of materials, and of reconstructions against their truth: ``frenbrdf spectrum``.
 
-A material is analysed as L_fre analyses it (:mod:`frenbrdf.models.losses`, docs/frequency.md): each θ_h
+A material is analysed as L_fre analyses it (:mod:`frenbrdf.models.losses`, research/frequency.md): each θ_h
 slice of the BRDF as a function of the difference direction, expanded in spherical harmonics. The
 settings are an L_fre variant (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`; by default ``tone``: the
 spectrum of ln(1 + f) fitted to the measured nodes only, so nothing below the horizon shows). The
@@ -11,9 +11,9 @@ per-degree power of slice s, channel c is
 and the error spectrum of a reconstruction A against its truth T is the same sum over c^A_lm − c^T_lm:
 where A loses its frequencies shows as the degrees where the error's power reaches the truth's.
 
-- A table (a MERL ``.binary``, or an RGL ``.bsdf`` at the MERL bins, :func:`frenbrdf.io.measured.read_table`)
+- A table (a MERL ``.binary``, or an RGL ``.bsdf`` at the MERL bins, :func:`frenbrdf.io.read_table`)
   is interpolated from its valid bins onto the grid (kNN), as L_fre's truth;
-- an NBRDF (``.pt`` of ``fit-nbrdf``/``reconstruct``, a Keras ``.h5``, :func:`frenbrdf.data.materials.load_material_file`)
+- an NBRDF (``.pt`` of ``fit-nbrdf``/``reconstruct``, a Keras ``.h5``, :func:`frenbrdf.io.read_material`)
   is evaluated at the grid nodes, as L_fre's prediction (its own values below the horizon too), and any
   other BRDF ``f(wi, wo)`` the same way (what it returns below the horizon, often 0). Under the ``"sphere"``
   fit (``paper``) the nodes below the horizon count, so a BRDF and its own table differ there: L_fre's floor.
@@ -36,10 +36,12 @@ import numpy as np
 import torch
 
 from ..io.atomic import save_csv, save_json
-from ..io.measured import is_bsdf, read_table
+from ..io.formats import read_material
 from ..io.merl import N_BINS, merl_bin_angles
+from ..io.nbrdf import NBRDFWeights
 from ..io.outputs import OutputFolder
-from ..io.paths import input_file, naming
+from ..io.paths import naming
+from ..io.sampling import as_table
 from ..models.frequency_fit import slice_directions
 from ..models.losses import (
     MAX_LMAX,
@@ -51,7 +53,7 @@ from ..models.losses import (
     frequency_variant,
 )
 from ..models.mapping import LogRelativeMapping
-from ..models.nbrdf import NBRDF
+from ..models.nbrdf import NBRDF, as_brdf
 from ..numerics.sht import SHT
 
 #: The files of a spectrum folder.
@@ -66,9 +68,10 @@ BANDS = ((0, 0), (1, 4), (5, 16), (17, 10_000))
 
 
 class SpectrumAnalyser:
-    """SH coefficients and per-degree power of materials, at the settings of an L_fre variant."""
+    """SH coefficients and per-degree power of materials, at the settings of an L_fre variant (default: ``tone``)."""
 
-    def __init__(self, config: FrequencyLossConfig = frequency_variant("tone")):
+    def __init__(self, config: FrequencyLossConfig | None = None):
+        config = frequency_variant("tone") if config is None else config
         self.config = config
         self.mapping = LogRelativeMapping(np.full(3, 1 - EPSILON), EPSILON)  # mapped = ln(f + ε)
         self.truth = FrequencyTruth(config, mapping=self.mapping)
@@ -140,10 +143,8 @@ def _band_name(low: int, high: int, lmax: int) -> str:
 def load_source(path: str | os.PathLike):
     """A material file as :meth:`SpectrumAnalyser.coefficients` takes it: a ``.bsdf`` as its MERL table, a MERL
     file as its table, an NBRDF (``.pt``, ``.h5``) as itself."""
-    from ..data.materials import load_material_file
-
-    path = input_file(path, "material file")
-    return read_table(path) if is_bsdf(path) else load_material_file(path)
+    material = read_material(path)
+    return as_brdf(material) if isinstance(material, NBRDFWeights) else as_table(material)
 
 
 def plot_spectra(powers: dict[str, np.ndarray], path: str | os.PathLike, *, errors: dict[str, np.ndarray] | None = None,
@@ -213,6 +214,8 @@ def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None,
     variant, lmax
         The L_fre settings the spectra are taken at (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`; lmax
         overrides the variant's band limit, 1 … :func:`largest_lmax`, checked before any work).
+    overwrite
+        Write into ``out_dir`` even when it holds entries of the user's (they are kept).
 
     Returns
     -------
@@ -233,14 +236,14 @@ def spectrum_report(sources, out_dir, *, truth: str | os.PathLike | None = None,
         config = frequency_variant(variant, lmax=int(lmax))
     out = check_out(out_dir, [*sources, *([truth] if truth else [])], overwrite=overwrite)
     analyser = SpectrumAnalyser(config)
-    named = {}
+    named: dict[str, tuple[Path, np.ndarray]] = {}
     for path in ([Path(truth)] if truth else []) + sources:
         name = path.stem if path.stem not in named else f"{path.stem} ({path.parent.name or path})"
         with naming(path):
             coefficients = analyser.coefficients(load_source(path))
         named[f"{name} (truth)" if truth and not named else name] = (path, coefficients)
     powers = {name: analyser.power(c) for name, (_, c) in named.items()}
-    truth_name = next(iter(named)) if truth else None
+    truth_name = next(iter(named)) if truth else ""  # no truth: no errors
     errors = ({name: analyser.power(c - named[truth_name][1]) for name, (_, c) in named.items() if name != truth_name}
               if truth else {})
     theta_h = analyser.theta_h_degrees
@@ -292,6 +295,7 @@ class SpectrumSummary:
         self.errors: dict[str, list[np.ndarray]] = {}
 
     def add(self, table: np.ndarray, reconstructions: dict) -> None:
+        """Adds one material: its truth ``table`` and its ``reconstructions`` (label → NBRDF)."""
         truth = self.analyser.coefficients(table)
         self.truth.append(self.analyser.power(truth))
         for label, nbrdf in reconstructions.items():
@@ -309,6 +313,7 @@ class SpectrumSummary:
                                                     for s in range(len(truth))] for label, e in self.errors.items()}}
 
     def write(self, path: str | os.PathLike, title: str = "") -> None:
+        """Plots the mean spectra of the truth and of each reconstruction, with their errors, to ``path``."""
         label = "truth" if len(self.truth) == 1 else f"truth (mean of {len(self.truth)})"
         powers = {label: np.mean(self.truth, axis=0), **{k: np.mean(v, axis=0) for k, v in self.powers.items()}}
         plot_spectra(powers, path, errors={k: np.mean(v, axis=0) for k, v in self.errors.items()},

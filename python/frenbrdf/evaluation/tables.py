@@ -84,7 +84,7 @@ def colour_losses(per_material: dict[str, list[dict]], worst: int = WORST_LISTED
         by_name: dict[str, list[dict]] = {}
         for row in rows:
             by_name.setdefault(row["material"], []).append(row)
-        materials = sorted(({"material": name, "delta_e": float(np.mean([r["delta_e"] for r in group])),
+        materials: list[dict] = sorted(({"material": name, "delta_e": float(np.mean([r["delta_e"] for r in group])),
                              "psnr": float(np.mean([r["psnr"] for r in group]))} for name, group in by_name.items()),
                            key=lambda m: -m["delta_e"])
         losses[method] = {"materials": len(materials), "worst": materials[:worst],
@@ -93,7 +93,7 @@ def colour_losses(per_material: dict[str, list[dict]], worst: int = WORST_LISTED
 
 
 def seeds_markdown(report: dict) -> str:
-    """The over-seeds table of :func:`evaluate_seeds`, with what was measured."""
+    """The over-seeds table of :func:`~frenbrdf.evaluation.evaluate.evaluate_seeds`, with what was measured."""
     first = next(iter(report["seeds"].values()))
     n_edits = sum(len(e) for e in first["editing"].values()) // max(1, len(first["summary"]))
     evaluated = report["evaluation_set"]
@@ -141,8 +141,8 @@ def colour_markdown(colour: dict, per_material: str = "") -> str:
 
 
 def report_markdown(report: dict) -> str:
-    """The Markdown of a report of :func:`evaluate_runs`: what was evaluated, the table, where colour is lost
-    and which materials ``renders.png`` shows."""
+    """The Markdown of a report of :func:`~frenbrdf.evaluation.evaluate.evaluate_runs`: what was evaluated, the
+    table, where colour is lost and which materials ``renders.png`` shows."""
     n_edits = sum(len(e) for e in report["editing"].values()) // max(1, len(report["summary"]))
     evaluated = report["evaluation_set"]
     noun = "materials" if evaluated["out_of_distribution"] else "test materials"

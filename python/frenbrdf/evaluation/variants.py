@@ -9,9 +9,10 @@ it) and measures it:
   compare with the render of the true table (PSNR, SSIM, RMSE, ΔE; the code of
   :func:`frenbrdf.render.scoring.reconstruction_rows`) and L_fre, always computed with the
   default :class:`~frenbrdf.models.losses.FrequencyLossConfig` so that variants compare;
-- the training-step time (:func:`frenbrdf.evaluation.timing.time_training_step`), with and without
-  the frequency term; the bytes a material costs: NBRDF weights × 4 (float32) and the
-  latent × 4.
+- the bytes a material costs: NBRDF weights × 4 (float32) and the latent × 4.
+
+Nothing here is timed: the research sweeps (``research/charts/sweeps.py``) time the training
+steps and the decoded NBRDFs themselves, with ``benches/step_timing.py``.
 
 Every run lives in ``WORK/runs/<name>-<key>/`` (``key``: a hash of the run's config) with
 its measurements in ``result.json``; a sweep started again skips variants that hold one
@@ -22,14 +23,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-import torch
 from tqdm.auto import tqdm
 
 from ..configs import from_dict, merge, to_dict
@@ -38,7 +38,6 @@ from ..io.atomic import save_json
 from ..io.jsonfile import read_json
 from ..render.scoring import FrequencyMetric, reconstruction_rows
 from ..training import TrainConfig, config_for, train
-from .timing import time_training_step
 
 
 @dataclass
@@ -70,8 +69,8 @@ def capacity_variants(hidden=((21, 21), (48, 48), (60, 60, 60), (60, 60, 60, 60)
 
 def base_config(data, *, epochs: int | None = None, seed: int = 0) -> TrainConfig:
     """The FreNBRDF preset with the sweeps' short training (the ``sweep`` training length)."""
-    return config_for("frenbrdf", training="sweep", data=str(data), seed=seed,
-                      **({"epochs": epochs} if epochs is not None else {}))
+    overrides: dict[str, Any] = {"epochs": epochs} if epochs is not None else {}
+    return config_for("frenbrdf", training="sweep", data=str(data), seed=seed, **overrides)
 
 
 def config_key(cfg: TrainConfig) -> str:
@@ -99,24 +98,16 @@ class MeasureSettings:
     """Render size of the validation renders."""
     seed: int = 0
     """Seeds the encoder's samples."""
-    timing_steps: int = 20
-    """Training steps timed per variant (0: no step timing); the fastest counts (least disturbed by other
-    processes; ``research/studies/train_step.py`` reports the median)."""
-    timing_materials: int = 16
-    """Materials of the data folder the step timing reads (enough for one batch)."""
-    throughput_queries: int = 1 << 18
-    """Queries of the decoded NBRDFs' throughput measurement (0: not measured)."""
     lfre: bool = True
     """Measure L_fre on validation (``select`` needs only the PSNR)."""
     progress: bool = True
 
 
 class SweepCaches:
-    """What a sweep keeps between runs: the mapped materials of training and of timing, the metric."""
+    """What a sweep keeps between runs: the mapped materials of training, the metric."""
 
     def __init__(self):
         self.train: dict = {}
-        self.timing: dict = {}
         self._metric: FrequencyMetric | None = None
 
     @property
@@ -124,20 +115,6 @@ class SweepCaches:
         if self._metric is None:
             self._metric = FrequencyMetric()
         return self._metric
-
-
-def _timing_data(data: Path, work: Path, n: int) -> Path:
-    """A folder linking the first ``n`` materials of ``data``: enough for one timed batch, fast to read."""
-    folder = work / "timing-data"
-    folder.mkdir(parents=True, exist_ok=True)
-    wanted = {path.name: path.resolve() for path in list_materials(data)[:n]}
-    for link in folder.glob("*.binary"):
-        if link.name not in wanted or link.resolve() != wanted[link.name]:
-            link.unlink()
-    for name, target in wanted.items():
-        if not (folder / name).exists():
-            (folder / name).symlink_to(target)
-    return folder
 
 
 SUMMARY_KEYS = ("psnr", "ssim", "rmse", "delta_e", "lfre")
@@ -157,8 +134,7 @@ def run_variant(variant: Variant, base: TrainConfig, work: str | os.PathLike,
     if result_path.exists():
         try:
             row = read_json(result_path, "result file")
-            if row.get("key") == key and (not measure.timing_steps or "step_ms" in row) and (
-                    not measure.lfre or row.get("lfre") is not None):
+            if row.get("key") == key and (not measure.lfre or row.get("lfre") is not None):
                 return {**row, "name": variant.name, "axis": variant.axis, "value": variant.value, "seed": cfg.seed}
         except ValueError:
             pass  # a damaged result is measured again
@@ -189,13 +165,6 @@ def run_variant(variant: Variant, base: TrainConfig, work: str | os.PathLike,
            "val_materials": len(per_material), "best_epoch": best["epoch"], "val_rec": best["val_rec"],
            "val_fre": best.get("val_fre"), "train_s": round(train_seconds, 1), "resumed": resume,
            "measure_s": None, "per_material": per_material, "config": to_dict(cfg)}
-    if measure.timing_steps:
-        timing_cfg = variant.config(base)
-        timing_cfg.data = str(_timing_data(Path(cfg.data), work, measure.timing_materials))
-        timing_cfg.cache_dir, timing_cfg.progress = cfg.cache_dir, False
-        timed = time_training_step(timing_cfg, measure.timing_steps, data_cache=caches.timing, statistic=min)
-        row.update(step_ms=1e3 * timed["step_s"], step_without_fre_ms=1e3 * timed.get("step_without_fre_s", math.nan),
-                   fre_share=timed.get("fre_added_share", math.nan), timing_threads=torch.get_num_threads())
     row["measure_s"] = round(time.perf_counter() - begin, 1)
     save_json(result_path, row)
     return row

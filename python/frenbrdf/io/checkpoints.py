@@ -79,7 +79,7 @@ def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer
         The run's network and optimiser, as the resumed run builds them (on the ``meta`` device is enough:
         only their shapes and parameter groups are read, nothing is loaded into them).
     config
-        The resumed run's training config (:func:`frenbrdf.training.to_dict`): its method, model and seed must be
+        The resumed run's training config (:func:`frenbrdf.configs.to_dict`): its method, model and seed must be
         the checkpoint's, checked first, so a mismatch is named as such rather than as weights that do not fit.
 
     Returns
@@ -187,7 +187,7 @@ def _check_optimizer(state, optimizer: torch.optim.Optimizer, parameters: dict) 
     if len(groups) != len(fresh) or not all(isinstance(g, dict) and isinstance(g.get("params"), list) for g in groups):
         raise ValueError(f"optimizer: {len(groups)} parameter groups, the run's optimiser has {len(fresh)}")
     shapes = [tuple(p.shape) for group in optimizer.param_groups for p in group["params"]]
-    for i, (group, ours) in enumerate(zip(groups, fresh)):
+    for i, (group, ours) in enumerate(zip(groups, fresh, strict=True)):
         if len(group["params"]) != len(ours["params"]) or not all(_is_integer(p) for p in group["params"]):
             raise ValueError(f"optimizer: parameter group {i} holds {len(group['params'])} parameters, the run's "
                              f"optimiser {len(ours['params'])} (was the run trained with another config?)")
@@ -200,7 +200,7 @@ def _check_optimizer(state, optimizer: torch.optim.Optimizer, parameters: dict) 
     indices = [p for group in groups for p in group["params"]]
     if sorted(indices) != list(range(len(shapes))):
         raise ValueError(f"optimizer: its parameter indices are not 0 … {len(shapes) - 1}")
-    shape_of = dict(zip(indices, shapes))
+    shape_of = dict(zip(indices, shapes, strict=True))
     for index, values in state["state"].items():
         if index not in shape_of or not isinstance(values, dict):
             raise ValueError(f"optimizer: state of {index!r:.20}, which is no parameter of the run's optimiser")

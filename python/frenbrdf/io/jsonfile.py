@@ -21,7 +21,7 @@ MAX_JSON_BYTES = 64 << 20
 #: The deepest nesting of lists and objects accepted (frenbrdf's own files nest 4 deep).
 MAX_DEPTH = 32
 
-_NAMES = {dict: "a JSON object", list: "a JSON list"}
+_NAMES: dict[type, str] = {dict: "a JSON object", list: "a JSON list"}
 
 
 def read_json(path: str | os.PathLike, what: str = "JSON file", *, expect: type | None = dict,

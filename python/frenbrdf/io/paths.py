@@ -6,6 +6,7 @@ Inputs
     and :func:`torch_load` open ``.npz`` and torch files without trusting them: the sizes a
     zip archive declares are checked before anything is decompressed, nothing but tensors and
     plain data is unpickled, and no message repeats numpy's or torch's advice to load unsafely.
+
 Outputs follow one rule for every command: :mod:`frenbrdf.io.outputs`.
 """
 
@@ -76,7 +77,7 @@ def checked_npz(path: str | os.PathLike, what: str = ".npz file", *, member_byte
 
     Every member must be an ``.npy`` array declaring at most ``member_bytes`` uncompressed (a
     zip bomb declares gigabytes), at most ``members`` of them. Each member's own ``.npy``
-    header is read and checked too (:func:`_check_npy_header`) before numpy allocates
+    header is read and checked too (``_check_npy_header``) before numpy allocates
     anything: pickled objects are refused, and a shape larger than the member is damage.
 
     Raises

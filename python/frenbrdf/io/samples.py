@@ -1,6 +1,8 @@
-"""A user's measurements of one material: scattered (ω_i, ω_o, RGB) samples from a file.
+"""Files of samples: a user's measurements of one material, scattered (ω_i, ω_o, RGB) samples.
 
-Four inputs are read, each into :class:`Measurements`:
+Two formats are read into :class:`Measurements` and written from it (:func:`frenbrdf.io.read_samples` and
+:func:`frenbrdf.io.write_samples` pick one by the suffix; a whole material file is sampled by
+:func:`frenbrdf.io.sampling.draw_samples`):
 
 CSV (``.csv``)
     A header row, then one sample per row. Either the *vector form*,
@@ -10,12 +12,6 @@ CSV (``.csv``)
     ω = (sin θ cos φ, sin θ sin φ, cos θ). Columns may come in any order; no other columns.
 NPZ (``.npz``)
     One 1-D array per column of one of the forms above, named as the columns.
-MERL (``.binary``)
-    A MERL table sampled at ``samples`` random valid bins (default 4000) or at all of them;
-    the table is kept as the truth.
-RGL measurement (``.bsdf``)
-    A real gonio-photometer measurement (:mod:`frenbrdf.io.bsdf`), evaluated at the
-    directions of ``samples`` random valid MERL bins; the measurement itself is the truth.
 
 Directions are unit vectors in the local shading frame (z = the surface normal, both above
 the surface: z > 0). Lengths may be off by at most :data:`UNIT_TOLERANCE` (1e-3); they are
@@ -25,7 +21,8 @@ samples, at most :data:`MAX_SAMPLES`. Every error names the file and the row, 1-
 spreadsheet shows it (the CSV header is row 1; in an NPZ, row k is the k-th sample).
 
 A CSV is read row by row into one float64 array (memory about 8 bytes a value, the data's own
-size); an NPZ's declared sizes are checked before it is decompressed.
+size); an NPZ's declared sizes are checked before it is decompressed. Both are written in the vector form,
+atomically (a CSV's floats exactly: the shortest repr that reads back as the same number).
 """
 
 from __future__ import annotations
@@ -35,11 +32,13 @@ import csv
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from ..io.paths import checked_npz, input_file
-from ..models.nbrdf import MAX_REFLECTANCE, UNIT_TOLERANCE
+from .atomic import atomic_path, save_csv
+from .paths import checked_npz, input_file
+from .reflectance import MAX_REFLECTANCE
 
 #: The fewest samples accepted: fewer say too little about a material for the encoder.
 MIN_SAMPLES = 50
@@ -48,10 +47,8 @@ MIN_SAMPLES = 50
 #: NBRDF's copy): about 330 bytes a sample with ``--refine none`` and 540 with ``full``. At this many its measured
 #: peak is about 3 GB; a CSV is refused while it is read, at the first row beyond.
 MAX_SAMPLES = 4_000_000
-#: ``UNIT_TOLERANCE`` (:data:`frenbrdf.models.nbrdf.UNIT_TOLERANCE`): how far from 1 a direction's length may be (it
-#: is then normalised); ``MAX_REFLECTANCE``: the largest value a model takes.
-__all__ = ["MAX_REFLECTANCE", "MAX_SAMPLES", "MIN_SAMPLES", "UNIT_TOLERANCE", "Measurements", "merl_measurements",
-           "read_measurements"]
+#: How far from 1 the length of a given direction may be (it is then normalised); the models check arrays with it.
+UNIT_TOLERANCE = 1e-3
 #: The column names of each form, and the colour columns they share.
 COLOURS = ("r", "g", "b")
 FORMS = {
@@ -63,7 +60,7 @@ FORMS = {
 
 @dataclass
 class Measurements:
-    """Samples of one material."""
+    """Samples of one material: what :func:`frenbrdf.io.read_samples` returns and ``reconstruct`` is given."""
 
     values: np.ndarray
     """``(N, 3)`` float64 BRDF values (1/sr), ≥ 0."""
@@ -71,10 +68,10 @@ class Measurements:
     """``(N, 3)`` unit incident directions, local frame, z > 0."""
     wo: np.ndarray
     """``(N, 3)`` unit outgoing directions."""
-    source: str
-    """The file read."""
-    kind: str
-    """``"csv"``, ``"npz"``, ``"merl"`` or ``"bsdf"``."""
+    source: str = ""
+    """The file read ('' for samples made in memory)."""
+    kind: str = "arrays"
+    """``"csv"``, ``"npz"``, ``"merl"`` or ``"bsdf"``: the format read (``"arrays"``: made in memory)."""
     table: np.ndarray | None = None
     """The whole MERL table ``(3, 90, 90, 180)`` when the input was one (or a ``.bsdf`` at every bin), else None."""
     truth: object = None
@@ -85,15 +82,8 @@ class Measurements:
         return len(self.values)
 
 
-def read_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
-    """Reads a CSV, NPZ or MERL file (see the module docstring).
-
-    Parameters
-    ----------
-    path
-        The file; its suffix picks the format (a MERL file may also be recognised by its size).
-    samples
-        MERL input only: sample this many random valid bins (from ``seed``), or all of them (None).
+def read_csv_samples(path: str | os.PathLike) -> Measurements:
+    """Reads a CSV of samples (see the module docstring).
 
     Raises
     ------
@@ -103,39 +93,36 @@ def read_measurements(path: str | os.PathLike, *, samples: int | None = 4000, se
         Anything wrong with the contents (the message names the file and the row), or not a regular file
         (a FIFO).
     """
-    from ..io.merl import FILE_BYTES
-
     path = input_file(path, "measurement file")
-    suffix = path.suffix.lower()
-    if suffix == ".csv":
-        return _checked(path, "csv", *_read_csv(path))
-    if suffix == ".npz":
-        return _checked(path, "npz", *_read_npz(path))
-    if suffix in (".binary", ".bsdf") or path.stat().st_size == FILE_BYTES:
-        return merl_measurements(path, samples=samples, seed=seed)
-    raise ValueError(f"{path}: unknown measurement format; give a .csv or .npz of samples "
-                     f"(columns {','.join(FORMS['vectors'])}), a MERL .binary file or an RGL .bsdf measurement")
+    return _checked(path, "csv", *_read_csv(path))
 
 
-def merl_measurements(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
-    """A MERL file, or an RGL ``.bsdf`` measurement, sampled at ``samples`` random valid MERL bins (drawn from
-    ``seed``) or at all of them (None). A ``.bsdf`` is evaluated itself at each bin's pair of directions, in an
-    order drawn from ``seed`` (:func:`frenbrdf.render.scoring.truth_samples`: a measurement is not reciprocal
-    near grazing, a table keeps only one order), and is itself kept as the truth to render."""
-    from ..io.measured import as_table, is_bsdf, read_truth
-    from ..render.scoring import sample_bins, truth_samples, valid_bins
+def read_npz_samples(path: str | os.PathLike) -> Measurements:
+    """Reads an NPZ of samples (see the module docstring); raises as :func:`read_csv_samples`."""
+    path = input_file(path, "measurement file")
+    return _checked(path, "npz", *_read_npz(path))
 
-    if samples is not None and samples < 1:
-        raise ValueError(f"samples must be ≥ 1 or all, got {samples}")
-    truth = read_truth(path)
-    table = as_table(truth)
-    rng = np.random.default_rng(seed)
-    try:  # more samples than the table holds: all of them (a count is capped at what the data hold)
-        bins = valid_bins(table) if samples is None else sample_bins(table, rng, samples)
-    except ValueError as error:
-        raise ValueError(f"{path}: {error}") from None
-    values, (wi, wo) = truth_samples(truth, bins, rng)
-    return Measurements(np.array(values), wi, wo, str(path), "bsdf" if is_bsdf(path) else "merl", table, truth)
+
+def write_csv_samples(path: str | os.PathLike, measurements: Measurements) -> None:
+    """Writes samples as a CSV in the vector form, atomically; every float exactly (its shortest round-trip repr)."""
+    columns = _columns(path, measurements)
+    save_csv(path, [dict(zip(columns, row, strict=True)) for row in np.stack(list(columns.values()), axis=1).tolist()])
+
+
+def write_npz_samples(path: str | os.PathLike, measurements: Measurements) -> None:
+    """Writes samples as an NPZ in the vector form (one float64 array per column), atomically."""
+    columns: dict[str, Any] = _columns(path, measurements)  # Any: numpy's stubs take any ** key for allow_pickle
+    with atomic_path(path) as temporary, open(temporary, "wb") as file:
+        np.savez(file, **columns)
+
+
+def _columns(path: str | os.PathLike, measurements: Measurements) -> dict[str, np.ndarray]:
+    """The columns of the vector form, by name."""
+    if not isinstance(measurements, Measurements):
+        raise TypeError(f"{os.fspath(path)}: a file of samples holds Measurements, got {type(measurements).__name__}")
+    stacked = np.concatenate([np.asarray(a, dtype=np.float64).reshape(-1, 3)
+                              for a in (measurements.wi, measurements.wo, measurements.values)], axis=1)
+    return dict(zip(FORMS["vectors"], stacked.T, strict=True))
 
 
 def _form(columns, where: str) -> str:
@@ -228,7 +215,8 @@ def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], np.ndarray]:
 
 def _directions(columns: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     if "wi_x" in columns:
-        return (np.stack([columns[f"{d}_{axis}"] for axis in "xyz"], axis=-1) for d in ("wi", "wo"))
+        wi, wo = (np.stack([columns[f"{d}_{axis}"] for axis in "xyz"], axis=-1) for d in ("wi", "wo"))
+        return wi, wo
     suffix, scale = ("_deg", np.pi / 180) if "theta_i_deg" in columns else ("", 1.0)
     out = []
     for d in ("i", "o"):
@@ -247,9 +235,9 @@ def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.nda
         raise ValueError(f"{path}: {len(rows)} samples; at least {MIN_SAMPLES} are needed")
     if len(rows) > MAX_SAMPLES:
         raise ValueError(f"{path}: {len(rows):,} samples; give at most {MAX_SAMPLES:,}")
-    for name, column in columns.items():
-        if not np.all(np.isfinite(column)):
-            fail(~np.isfinite(column), f"column {name} is NaN or infinite")
+    for name, column_values in columns.items():
+        if not np.all(np.isfinite(column_values)):
+            fail(~np.isfinite(column_values), f"column {name} is NaN or infinite")
     values = np.stack([columns[c] for c in COLOURS], axis=-1)
     if values.min() < 0:
         fail(np.any(values < 0, axis=1), "negative reflectance (r, g, b must be ≥ 0)")

@@ -1,2 +1,2 @@
-"""A user's material: their measurement files in (CSV/NPZ samples, a MERL table, a ``.bsdf``),
-the ``frenbrdf reconstruct`` result folder out."""
+"""A user's material: ``frenbrdf reconstruct``'s result folder from a measurement file
+(read by :func:`frenbrdf.io.read_samples`), and ``frenbrdf convert`` between its formats."""

@@ -2,7 +2,7 @@
 
 - an RGL ``.bsdf`` measurement → a MERL ``.binary`` table (evaluated at every bin's directions);
 - a ``.bsdf`` or a MERL table → a CSV or NPZ of samples at random valid MERL bins, the form
-  ``frenbrdf reconstruct`` reads (:mod:`frenbrdf.material.measurements`; a ``.bsdf`` is evaluated at each
+  ``frenbrdf reconstruct`` reads (:func:`frenbrdf.io.read_samples`; a ``.bsdf`` is evaluated at each
   bin's pair in a random order: a measurement need not be reciprocal, a table keeps one order).
 
 The output is checked before any work (its suffix, its folder; an existing file is replaced only
@@ -20,17 +20,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
-
-from ..io.atomic import atomic_path, save_csv
-from ..io.measured import SUFFIXES, read_table
-from ..io.merl import write_merl
+from ..io.formats import FORMATS, format_of, read_samples, read_table, write_material, write_samples
 from ..io.outputs import check_output_file
 from ..io.paths import input_file
-from .measurements import FORMS, read_measurements
 
-#: What each output suffix holds.
-OUTPUTS = {".binary": "a MERL table", ".csv": "samples (CSV)", ".npz": "samples (NPZ)"}
+#: What each output suffix holds: the formats frenbrdf writes a measured material or its samples in.
+OUTPUTS = {suffix: entry.holds for suffix, entry in FORMATS.items()
+           if entry.write and entry.role in ("measurement", "samples")}
 
 
 def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0,
@@ -47,18 +43,11 @@ def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int 
         A bad suffix, ``dest`` equal to ``source``, or a malformed input (the message names the file).
     """
     source = input_file(source, "material file")
-    if source.suffix.lower() not in SUFFIXES:
-        raise ValueError(f"{source}: convert reads a .bsdf measurement or a MERL .binary file")
+    format_of(source, ("measurement",), "convert")  # checked before any work
     dest = check_output_file(dest, tuple(OUTPUTS), option="output", overwrite=overwrite, inputs=(source,))
     dest.parent.mkdir(parents=True, exist_ok=True)  # a folder that can be created (checked above)
     if dest.suffix.lower() == ".binary":
-        write_merl(dest, read_table(source))
-        return dest
-    measured = read_measurements(source, samples=samples, seed=seed)
-    columns = dict(zip(FORMS["vectors"], np.concatenate([measured.wi, measured.wo, measured.values], axis=1).T))
-    if dest.suffix.lower() == ".npz":
-        with atomic_path(dest) as temporary, open(temporary, "wb") as file:
-            np.savez(file, **columns)
-    else:  # Python floats print exactly (shortest round-trip repr)
-        save_csv(dest, [dict(zip(columns, row)) for row in np.stack(list(columns.values()), axis=1).tolist()])
+        write_material(dest, read_table(source))
+    else:
+        write_samples(dest, read_samples(source, samples=samples, seed=seed))
     return dest

@@ -1,12 +1,12 @@
 """``frenbrdf reconstruct``'s work: a measurement file in, a result folder out.
 
-:func:`reconstruct_file` reads the samples (:mod:`frenbrdf.material.measurements`), loads the model
+:func:`reconstruct_file` reads the samples (:func:`frenbrdf.io.read_samples`), loads the model
 (a run folder, a checkpoint, or the packaged one), reconstructs and refines
 (:func:`frenbrdf.models.reconstruct.reconstruct`), computes everything, and only then writes the
 folder, all of it or nothing:
 
 ``material.pt``
-    The NBRDF (:func:`frenbrdf.data.fitting.save_nbrdf`), which ``frenbrdf render`` and the
+    The NBRDF (:func:`frenbrdf.io.write_material`), which ``frenbrdf render`` and the
     Mitsuba plugin load.
 ``material.binary``
     Its MERL table.
@@ -30,14 +30,13 @@ import os
 
 import numpy as np
 
-from ..data.fitting import save_nbrdf
 from ..io.atomic import save_json
-from ..io.merl import write_merl
+from ..io.formats import read_samples, write_material
 from ..io.outputs import OutputFolder
+from ..io.samples import Measurements
 from ..models.autoencoder import Model, load_model
 from ..models.reconstruct import Reconstruction, refine_config
 from ..render.renderer import Scene, material_mask, render, save_png
-from .measurements import Measurements, read_measurements
 
 #: The file names of the result folder.
 FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.png", "truth": "truth.png",
@@ -53,7 +52,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     Parameters
     ----------
     source
-        A CSV or NPZ of samples, or a MERL file (:func:`frenbrdf.material.measurements.read_measurements`).
+        A CSV or NPZ of samples, a MERL file or an RGL ``.bsdf`` (:func:`frenbrdf.io.read_samples`).
     out_dir
         The result folder, created whole or replacing an earlier result (:func:`check_out` says which
         folders may be written; nothing is computed when this one may not).
@@ -65,6 +64,10 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         ``"none"``, ``"latent"`` or ``"full"`` (:data:`frenbrdf.models.reconstruct.BUDGETS`).
     seed
         Seeds the MERL sampling and the refinement's mini-batches.
+    resolution
+        Pixels per side of the renders (``render.png``, and the truth's that the metrics compare with).
+    progress
+        Show progress bars.
     width
         ``refine="full"`` only: the least hidden width of the refined NBRDF
         (:attr:`frenbrdf.models.reconstruct.RefineConfig.width`; None: the budget's, 64 for ``full``).
@@ -85,7 +88,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     if reciprocal:
         config = dataclasses.replace(config, keep_order=False)
     out = check_out(source, out_dir, model, overwrite=overwrite)
-    measurements = read_measurements(source, samples=samples, seed=seed)
+    measurements = read_samples(source, samples=samples, seed=seed)
     loaded = load_model(model)
     result = loaded.reconstruct(measurements.values, (measurements.wi, measurements.wo), refine=config)
     scene = Scene(resolution=resolution)
@@ -95,7 +98,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
                                                                           if loaded.card else {})},
               "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary(),
               "ordered": result.nbrdf.ordered}
-    if measurements.truth is not None:
+    if measurements.truth is not None and measurements.table is not None:  # a whole material, not scattered samples
         images["truth"] = render(measurements.truth, scene)
         images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
         report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
@@ -118,6 +121,8 @@ def truth_metrics(model: Model, result: Reconstruction, measurements: Measuremen
     from ..render.renderer import render_linear
     from ..render.scoring import FrequencyMetric, highlight_mask, image_metrics
 
+    if measurements.table is None:
+        raise ValueError(f"{measurements.source}: scattered samples have no truth to compare with")
     mask = material_mask(scene)
     metrics = image_metrics(truth_image, image, mask, highlight_mask(render_linear(measurements.truth, scene), mask))
     metrics["lfre"] = FrequencyMetric()(model, measurements.table, result.nbrdf)
@@ -140,8 +145,8 @@ def _write_folder(out: OutputFolder, result: Reconstruction, table: np.ndarray, 
     """Writes the result into a hidden folder, then puts it in place (:meth:`OutputFolder.staged`): an earlier
     result is replaced, never mixed with this one, and nothing else in the folder is touched."""
     with out.staged() as staging:
-        save_nbrdf(staging / FILES["nbrdf"], result.nbrdf)
-        write_merl(staging / FILES["merl"], table)
+        write_material(staging / FILES["nbrdf"], result.nbrdf.weights())
+        write_material(staging / FILES["merl"], table)
         for name, image in images.items():
             save_png(staging / FILES[name], image)
         if spectrum is not None:

@@ -52,7 +52,7 @@ class ModelConfig:
     def n_parameters(self) -> int:
         """How many parameters the network of this config has (computed, nothing allocated)."""
         def mlp(sizes) -> int:
-            return sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:]))
+            return sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:], strict=True))
 
         from .encoder import SAMPLE_SIZE
 
@@ -78,7 +78,7 @@ class ModelConfig:
 
 
 class AutoEncoder(nn.Module):
-    """Samples ``(B, N, 9)`` → latents ``(B, latent)`` → NBRDF parameters (see :mod:`.nbrdf`)."""
+    """Samples ``(B, N, 9)`` → latents ``(B, latent)`` → NBRDF parameters (see :mod:`frenbrdf.models.nbrdf`)."""
 
     def __init__(self, config: ModelConfig):
         super().__init__()
@@ -197,7 +197,7 @@ class Model:
         encoder = self.network.encoder
         if len(samples) <= ENCODE_CHUNK:
             return encoder(samples[None])[0].numpy().astype(np.float64)
-        members = encoder.members if isinstance(encoder, EncoderMean) else [encoder]
+        members = encoder.encoders() if isinstance(encoder, EncoderMean) else [encoder]
         return np.mean([encode_in_chunks(member, samples) for member in members], axis=0)
 
     @torch.no_grad()
@@ -226,7 +226,8 @@ def encode_in_chunks(encoder: SetEncoder, samples: torch.Tensor) -> np.ndarray:
     """The latent of a large sample set ``(N, 9)``: a set encoder is a per-sample MLP, a mean and ρ, so
     the set (all 1.1 million bins of a table) goes through in chunks, which bounds memory and runs several
     times faster."""
-    total = sum(len(chunk) * encoder.pooled_features(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK))
+    total = sum((len(chunk) * encoder.pooled_features(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK)),
+                torch.zeros((), dtype=torch.float64))
     mean = total / len(samples)  # float64: a mean of up to a million codes; ρ then runs in float32
     if isinstance(encoder.after_pool, nn.Identity):
         return mean.numpy()

@@ -8,6 +8,7 @@ a ρ, an MLP after the mean, so that z can depend non-linearly on what the sampl
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import torch
@@ -23,7 +24,7 @@ def mlp(sizes: list[int], dropout: float = 0.0) -> nn.Sequential:
     """Linear layers with ReLU between them (none after the last), each ReLU followed by dropout
     when ``dropout > 0`` (without it the layers, and so the state-dict keys, are the same as ever)."""
     layers: list[nn.Module] = []
-    for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+    for fan_in, fan_out in zip(sizes[:-1], sizes[1:], strict=True):
         layers += [nn.Linear(fan_in, fan_out), nn.ReLU()] + ([nn.Dropout(dropout)] if dropout > 0 else [])
     return nn.Sequential(*layers[:-2 if dropout > 0 else -1])
 
@@ -60,6 +61,7 @@ class SetEncoder(nn.Module):
 
     def __init__(self, config: EncoderConfig):
         super().__init__()
+        self.after_pool: nn.Module
         if config.pooled:  # φ ends in a ReLU; its mean goes through ρ
             self.per_sample = nn.Sequential(mlp([SAMPLE_SIZE, *config.hidden], config.dropout), nn.ReLU())
             self.after_pool = mlp([config.hidden[-1], *config.pooled, config.latent])
@@ -82,9 +84,13 @@ class EncoderMean(nn.Module):
     saturated one different hues, depending on their seed (research/results/encoder-refit); their mean
     depends on the seed less."""
 
-    def __init__(self, configs: list[EncoderConfig]):
+    def __init__(self, configs: Sequence[EncoderConfig]):
         super().__init__()
         self.members = nn.ModuleList(SetEncoder(config) for config in configs)
+
+    def encoders(self) -> list[SetEncoder]:
+        """The members, typed."""
+        return [member for member in self.members if isinstance(member, SetEncoder)]
 
     def forward(self, samples: torch.Tensor) -> torch.Tensor:
         return torch.stack([member(samples) for member in self.members]).mean(dim=0)

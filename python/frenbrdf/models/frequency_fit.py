@@ -1,4 +1,4 @@
-"""What L_fre's spectra are taken of, and how: the parts its variants change (docs/frequency.md, "Variants").
+"""What L_fre's spectra are taken of, and how: the parts its variants change (research/frequency.md, "Variants").
 
 The paper's reading (:class:`frenbrdf.models.losses.FrequencyLossConfig` defaults, variant ``"paper"``)
 analyses each θ_h slice's *mapped* values on the whole sphere of difference directions, the
@@ -155,6 +155,9 @@ class TorchMeasuredFit(torch.nn.Module):
 
     A fixed linear map (one batched matrix product), so autograd's backward is its exact transpose.
     """
+
+    operators: torch.Tensor  # buffers (register_buffer)
+    rows: torch.Tensor
 
     def __init__(self, fit: MeasuredFit):
         super().__init__()

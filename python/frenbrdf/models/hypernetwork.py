@@ -22,7 +22,7 @@ class DecoderConfig:
     habit of starting small) every latent decodes to nearly the same NBRDF and, at the demo's 800
     steps, the decoder never learns to vary colour: purple, green and pink come back beige even with
     the latent optimised per material. At 1.0 the latent steers the NBRDF from the first step
-    (docs/colour.md)."""
+    (research/colour.md)."""
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
@@ -44,10 +44,12 @@ class HyperNetwork(nn.Module):
     def __init__(self, latent: int, shapes: list[tuple[int, ...]], config: DecoderConfig):
         super().__init__()
         self.shapes = [tuple(shape) for shape in shapes]
-        self.heads = nn.ModuleList(mlp([latent, *config.hidden, math.prod(shape)]) for shape in self.shapes)
+        heads = [mlp([latent, *config.hidden, math.prod(shape)]) for shape in self.shapes]
+        self.heads = nn.ModuleList(heads)
         with torch.no_grad():
-            for index, (head, shape) in enumerate(zip(self.heads, self.shapes)):
+            for index, (head, shape) in enumerate(zip(heads, self.shapes, strict=True)):
                 last = head[-1]
+                assert isinstance(last, nn.Linear)
                 last.weight.mul_(config.last_layer_scale)
                 output_layer = index >= len(self.shapes) - 2
                 if len(shape) == 2 and not output_layer:
@@ -57,4 +59,4 @@ class HyperNetwork(nn.Module):
                     last.bias.zero_()
 
     def forward(self, z: torch.Tensor) -> list[torch.Tensor]:
-        return [head(z).reshape(z.shape[0], *shape) for head, shape in zip(self.heads, self.shapes)]
+        return [head(z).reshape(z.shape[0], *shape) for head, shape in zip(self.heads, self.shapes, strict=True)]

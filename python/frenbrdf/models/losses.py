@@ -57,9 +57,10 @@ def weight_penalty(params: list[torch.Tensor], kind: str = "per_tensor") -> torc
     ``"per_tensor"``: Σ over the tensors of each one's mean squared weight (ours);
     ``"all"``: the mean squared weight over all of them together (HyperBRDF's main.py).
     """
+    zero = params[0].new_zeros(())  # a tensor to start the sums, on the parameters' device
     if kind == "all":
-        return sum(p.square().sum() for p in params) / sum(p.numel() for p in params)
-    return sum(p.square().mean() for p in params)
+        return sum((p.square().sum() for p in params), zero) / sum(p.numel() for p in params)
+    return sum((p.square().mean() for p in params), zero)
 
 
 def latent_penalty(z: torch.Tensor) -> torch.Tensor:
@@ -123,7 +124,7 @@ class FrequencyLossConfig:
     damping: float = 1e-2
     """λ of the ``"measured"`` fit, relative to the concentration eigenvalues of the measured region (≤ 1). Smaller
     values fit more of the region's edge and amplify the truth's interpolation error there: on MERL-derived
-    materials the floor is 0.3 % of L_fre at 1e-2 and 2 % at 1e-3 (docs/frequency.md, "Variants")."""
+    materials the floor is 0.3 % of L_fre at 1e-2 and 2 % at 1e-3 (research/frequency.md, "Variants")."""
     values: str = "mapped"
     """What the spectrum is of: ``"mapped"`` (the model's log-relative values, the paper), ``"linear"``
     (reflectance f) or ``"log1p"`` (ln(1 + f): linear for diffuse values, logarithmic in a specular peak)."""
@@ -205,6 +206,9 @@ class FrequencyLoss(nn.Module):
     coefficients ``(B, S, 3, ncoeff)`` → :func:`spectral_distance`. ``mapping``: the run's mapping,
     needed by the variants whose spectrum is of reflectance (``config.values``).
     """
+
+    degree_weights: torch.Tensor | None  # buffers (register_buffer)
+    node_coords: torch.Tensor
 
     def __init__(self, config: FrequencyLossConfig, mapping=None):
         super().__init__()

@@ -31,7 +31,7 @@ class MappingConfig:
     reference: str = "per_channel"
     """``"per_channel"``: one median per channel (3 numbers); ``"per_bin"``: the per-bin median of the
     training tables (17.5 MB; HyperBRDF's). Within noise of each other over three seeds, in and out of
-    distribution, with the decoder initialised at scale 1 (docs/colour.md); per channel the mapping is
+    distribution, with the decoder initialised at scale 1 (research/colour.md); per channel the mapping is
     three numbers and needs no interpolation of f_ref between bins."""
     form: str = "ratio"
     """``"ratio"``: y = ln(ratio) (NBRDF, ours); ``"one_plus_ratio"``: y = ln(1 + ratio) (HyperBRDF's

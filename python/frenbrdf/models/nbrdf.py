@@ -16,22 +16,17 @@ import numpy as np
 import torch
 
 from ..io.merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_directions, merl_bin_rusinkiewicz, write_merl
-from ..io.reflectance import MAX_REFLECTANCE  # the largest reflectance a model takes: every reader's limit
+from ..io.nbrdf import MAX_LAYERS, MAX_WIDTH, N_INPUTS, N_OUTPUTS, NBRDFWeights
+from ..io.reflectance import MAX_REFLECTANCE
+from ..io.samples import UNIT_TOLERANCE
 from ..numerics.coords import half_diff_vectors, rusinkiewicz_to_half_diff
 from .mapping import LogRelativeMapping
 
-#: The NBRDF input: H and D as Cartesian 3-vectors.
-N_INPUTS = 6
+# What a file may hold is every reader's limit and the models' too (from frenbrdf.io): the NBRDF's inputs (H, D) and
+# outputs (RGB), its widest and most hidden layers, the largest reflectance, how far from 1 a direction's length may be.
 #: The input that carries a pair's order in an ordered NBRDF (:attr:`NBRDF.ordered`): H_y, 0 for every pair otherwise
 #: (H is rotated onto the xz-plane), so no reciprocal NBRDF depends on its weights.
 ORDER_INPUT = 1
-#: The output: RGB.
-N_OUTPUTS = 3
-#: The widest hidden layer and the most hidden layers an NBRDF may have (Sztrajman's has 21, HyperBRDF's 60): a
-#: width read from a file is checked against it before anything is evaluated (a width of 20000 takes minutes).
-MAX_WIDTH, MAX_LAYERS = 1024, 16
-#: How far from 1 the length of a given direction may be.
-UNIT_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -51,7 +46,7 @@ class NBRDFConfig:
         """Shapes of the parameter tensors, in order: weight (out, in), bias (out,), …"""
         sizes = [N_INPUTS, *self.hidden, N_OUTPUTS]
         shapes = []
-        for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+        for fan_in, fan_out in zip(sizes[:-1], sizes[1:], strict=True):
             shapes += [(fan_out, fan_in), (fan_out,)]
         return shapes
 
@@ -171,6 +166,8 @@ def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.
 
     Parameters
     ----------
+    mapping
+        The model's mapping of reflectance to the network's output space.
     values
         Reflectance ``(N, 3)`` (physical units, ≥ 0; leave missing samples out).
     directions
@@ -193,7 +190,7 @@ def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.
     if values.max() > MAX_REFLECTANCE:
         raise ValueError(f"values must be ≤ {MAX_REFLECTANCE:g} (1/sr; MERL's highest spikes are about 1e5), got "
                          f"{values.max():g}")
-    for name, d in (("wi", wi), ("wo", wo)):  # what frenbrdf.material.measurements checks of a file, for arrays
+    for name, d in (("wi", wi), ("wo", wo)):  # what frenbrdf.io.samples checks of a file, for arrays
         length = np.linalg.norm(d, axis=-1)
         if not np.all(np.abs(length - 1) <= UNIT_TOLERANCE):
             first = int(np.flatnonzero(~(np.abs(length - 1) <= UNIT_TOLERANCE))[0])
@@ -209,8 +206,8 @@ def mapped_samples(mapping: LogRelativeMapping, values, directions) -> tuple[np.
 
 def check_params(params: list[torch.Tensor], where: str = "NBRDF") -> None:
     """Checks NBRDF parameters ``[(B, out, in), (B, out), …]`` (any source: a decoder, a file): a chain of layers
-    from the 6 inputs to the 3 outputs, at most :data:`MAX_LAYERS` hidden layers of at most :data:`MAX_WIDTH`,
-    finite floating-point values. A ValueError names what is wrong."""
+    from the 6 inputs to the 3 outputs, at most :data:`~frenbrdf.io.nbrdf.MAX_LAYERS` hidden layers of at most
+    :data:`~frenbrdf.io.nbrdf.MAX_WIDTH`, finite floating-point values. A ValueError names what is wrong."""
     if not isinstance(params, (list, tuple)) or len(params) < 2 or len(params) % 2:
         raise ValueError(f"{where}: the parameters must be (weight, bias) pairs, got {_describe(params)}")
     if not all(isinstance(p, torch.Tensor) and p.is_floating_point() for p in params):
@@ -265,7 +262,7 @@ def widen_params(params: list[torch.Tensor], width: int, generator: torch.Genera
     nothing new until training moves those weights, and the gradient reaches all of them at once.
     """
     n_layers = len(params) // 2
-    widened = []
+    widened: list[torch.Tensor] = []
     for layer in range(n_layers):
         weight, bias = params[2 * layer], params[2 * layer + 1]
         batch, rows, columns = weight.shape
@@ -306,7 +303,27 @@ class NBRDF:
         check_params(params)
         self.params = [p.detach().cpu().to(torch.float32) for p in params]
         self.mapping = mapping
+        #: Whether the network tells the two orders of a pair apart (the parameter ``ordered``).
         self.ordered = bool(ordered)
+
+    @classmethod
+    def from_weights(cls, weights: NBRDFWeights) -> NBRDF:
+        """The NBRDF of a file (:func:`frenbrdf.io.read_material` of a ``.pt`` or ``.h5``), checked whole
+        (:func:`check_params`: layer shapes and widths, finite weights; the mapping's f_ref and ε) before anything is
+        evaluated. A ValueError names the file."""
+        params = [p[None] if isinstance(p, torch.Tensor) else p for p in weights.params]
+        try:
+            return cls(params, LogRelativeMapping(weights.reference, weights.epsilon, weights.offset), weights.ordered)
+        except ValueError as error:
+            if not weights.source:
+                raise
+            raise ValueError(f"{weights.source}: not a valid {weights.what}: {error}") from None
+
+    def weights(self) -> NBRDFWeights:
+        """This one material as a file holds it (:func:`frenbrdf.io.write_material` writes it as a ``.pt``)."""
+        self._only()
+        return NBRDFWeights([p[0] for p in self.params], self.mapping.reference, self.mapping.epsilon,
+                            self.mapping.offset, self.ordered)
 
     def __len__(self) -> int:
         return self.params[0].shape[0]
@@ -373,3 +390,9 @@ class NBRDF:
     def to_merl(self, path: str | os.PathLike) -> None:
         """Writes the material as a MERL file (atomically)."""
         write_merl(path, self.merl_table())
+
+
+def as_brdf(material):
+    """What :func:`frenbrdf.io.read_material` returns, ready to evaluate and render: an NBRDF file's weights as
+    their :class:`NBRDF` (:meth:`NBRDF.from_weights`); a MERL table or a measurement as it is."""
+    return NBRDF.from_weights(material) if isinstance(material, NBRDFWeights) else material

@@ -18,7 +18,7 @@ Named budgets (:data:`BUDGETS`): ``"none"`` (stage 0), ``"latent"`` (0 + 1), ``"
 (0 + 1 + 2). Each stage is deterministic from :attr:`RefineConfig.seed` unless its
 wall-clock budget (:attr:`RefineConfig.seconds`) stops it first.
 
-Samples come as arrays or from a file (:mod:`frenbrdf.material.measurements`): CSV or NPZ rows
+Samples come as arrays or from a file (:func:`frenbrdf.io.read_samples`): CSV or NPZ rows
 ``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b`` — unit directions in the local shading frame
 (z = the normal, z > 0), BRDF values in 1/sr (≥ 0, not multiplied by cos θ_i); or angle
 columns ``theta_i,phi_i,theta_o,phi_o`` (radians; ``…_deg`` in degrees); or a MERL file.
@@ -93,7 +93,7 @@ class RefineConfig:
     1.2×, 64 about 1.45× the whole ``full`` (research/measurements.md, "What limits full")."""
     keep_order: bool = True
     """Stage 2: where the samples hold pairs in both orders, (ω_i, ω_o) and its reverse kind (as a measurement
-    sampled by :func:`frenbrdf.render.scoring.truth_samples` does), refine an ordered NBRDF
+    sampled by :func:`frenbrdf.io.sampling.truth_samples` does), refine an ordered NBRDF
     (:attr:`frenbrdf.NBRDF.ordered`): one that may tell them apart, as a real measurement does near grazing.
     False, or samples in one order only (a MERL table's): the NBRDF stays reciprocal."""
     seed: int = 0
@@ -167,6 +167,15 @@ class Reconstruction:
 
 
 @dataclass
+class _Record:
+    """What the stages of :func:`reconstruct` record while they run (as :class:`Reconstruction` keeps it)."""
+
+    timings: dict[str, float] = field(default_factory=dict)
+    losses: dict[str, float] = field(default_factory=dict)
+    steps: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
 class _Samples:
     """One material's samples as tensors: NBRDF inputs, mapped values and cos θ_i, with a leading batch of 1."""
 
@@ -203,15 +212,15 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     mapped, coords, cos_in = mapped_samples(model.mapping, values, directions)
     wi, wo = (np.asarray(d, dtype=np.float64) for d in directions)  # checked by mapped_samples
     samples = _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in)))
-    result = Reconstruction(np.zeros(0), None)
+    record = _Record()
 
     start = time.perf_counter()
     z = torch.from_numpy(model.encode(values, directions).astype(np.float32))[None]
-    result.timings["encode"] = time.perf_counter() - start
+    record.timings["encode"] = time.perf_counter() - start
     with torch.no_grad():
         params = model.network.decoder(z)
-    result.losses["encode"] = _sample_loss(params, samples, loss.kind)
-    if not math.isfinite(result.losses["encode"]):
+    record.losses["encode"] = _sample_loss(params, samples, loss.kind)
+    if not math.isfinite(record.losses["encode"]):
         raise ValueError("the model's decoded NBRDF is not finite on these samples before any refinement: the model "
                          "is damaged, or the samples lie far outside what it was trained on")
 
@@ -225,11 +234,11 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
         with _frozen(model.network):
             latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
             _optimise("latent", [z], [latent_decay], latent_objective, config.latent_steps, config.latent_lr, samples,
-                      config, result)
+                      config, record)
         z = z.detach()
         with torch.no_grad():
             params = model.network.decoder(z)
-        result.losses["latent"] = _sample_loss(params, samples, loss.kind)
+        record.losses["latent"] = _sample_loss(params, samples, loss.kind)
 
     order = pair_order(wi, wo) if config.weight_steps and config.keep_order else None
     ordered = order is not None and bool(np.ptp(order) > 0)  # pairs of both orders among the samples
@@ -237,16 +246,16 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
         params = [p.detach().clone() for p in params]
         if config.width is not None:
             params = widen_params(params, config.width, torch.Generator().manual_seed(config.seed))
-        if ordered:  # the order enters where the input was 0 for every pair: its weights go first, the output stays
+        if ordered and order is not None:
+            # The order enters where the input was 0 for every pair: its weights go first, the output stays.
             params[0][:, :, ORDER_INPUT] = 0
             samples.coords[0, :, ORDER_INPUT] = torch.from_numpy(order.astype(np.float32))
-        params = _refine_weights(params, samples, loss, config, result)
-        result.losses["weights"] = _sample_loss(params, samples, loss.kind)
+        params = _refine_weights(params, samples, loss, config, record)
+        record.losses["weights"] = _sample_loss(params, samples, loss.kind)
 
-    result.z = z[0].detach().numpy().astype(np.float64)
-    result.nbrdf = NBRDF([p.detach() for p in params], model.mapping, ordered)  # checked: finite weights
-    result.nbrdf(wi, wo)  # raises where its reflectance overflows
-    return result
+    nbrdf = NBRDF([p.detach() for p in params], model.mapping, ordered)  # checked: finite weights
+    nbrdf(wi, wo)  # raises where its reflectance overflows
+    return Reconstruction(z[0].detach().numpy().astype(np.float64), nbrdf, record.timings, record.losses, record.steps)
 
 
 def _loss_config(model) -> LossConfig:
@@ -265,7 +274,7 @@ def _weight_decays(params: list[torch.Tensor], loss: LossConfig) -> list[float]:
 
 def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
               objective: Callable[[_Samples], torch.Tensor], steps: int, lr: float, samples: _Samples,
-              config: RefineConfig, result: Reconstruction) -> None:
+              config: RefineConfig, record: _Record) -> None:
     """Adam on ``parameters`` for ``steps`` steps or ``config.seconds``; records the time and steps taken.
 
     The stage's penalty (a mean square of each tensor, times λ) is not in ``objective``: it enters as Adam's
@@ -288,17 +297,17 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
         value.backward()
         optimizer.step()
         taken += 1
-    result.timings[stage] = time.perf_counter() - start
-    result.steps[stage] = taken
+    record.timings[stage] = time.perf_counter() - start
+    record.steps[stage] = taken
 
 
 def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossConfig, config: RefineConfig,
-                    result: Reconstruction) -> list[torch.Tensor]:
+                    record: _Record) -> list[torch.Tensor]:
     """Stage 2 in the native loop (:class:`frenbrdf._native.WeightFit`): Adam's steps as :func:`_optimise` takes
     them, with the penalties as weight decay, over :data:`NATIVE_STEPS` steps a call; the refined tensors."""
     fit = _native.WeightFit([np.ascontiguousarray(p[0].numpy(), dtype=np.float32) for p in params],
-                            _weight_decays(params, loss), *(a[0].numpy() for a in (samples.coords, samples.values,
-                                                                                    samples.cos_in)), loss.kind)
+                            _weight_decays(params, loss), samples.coords[0].numpy(), samples.values[0].numpy(),
+                            samples.cos_in[0].numpy(), loss.kind)
     rates = _learning_rates(config.weight_lr, config.weight_steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index("weights"))
     start, taken = time.perf_counter(), 0
@@ -314,8 +323,8 @@ def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossCon
                 raise _diverged("weights", taken + len(losses) - 1, config.weight_lr, float(losses[-1]))
             taken += count
             bar.update(count)
-    result.timings["weights"] = time.perf_counter() - start
-    result.steps["weights"] = taken
+    record.timings["weights"] = time.perf_counter() - start
+    record.steps["weights"] = taken
     return [torch.from_numpy(t).reshape(p.shape) for t, p in zip(fit.tensors(), params, strict=True)]
 
 

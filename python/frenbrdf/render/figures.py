@@ -34,6 +34,8 @@ def write_figures(out: Path, shown: list[str], renders: dict, per_material: dict
 
     Parameters
     ----------
+    out
+        The folder the figures are written to.
     shown
         Materials of ``renders.png``, in order (:func:`rendered_materials`).
     renders
@@ -49,6 +51,8 @@ def write_figures(out: Path, shown: list[str], renders: dict, per_material: dict
         Material → linear render at ``edit_resolution``.
     weights
         The interior interpolation weights.
+    edit_resolution
+        Pixels per side of the interpolation strip's renders.
     """
     import matplotlib
 

@@ -15,6 +15,7 @@ import numpy as np
 KEY_LIGHT = ((-0.5, 0.6, 0.62), (2.2, 2.1, 2.0))
 FILL_LIGHT = ((0.7, 0.2, 0.68), (0.9, 0.95, 1.1))
 RIM_LIGHT = ((0.0, -0.8, 0.3), (0.5, 0.5, 0.5))
+#: The three lights: key, fill, rim.
 LIGHTS = (KEY_LIGHT, FILL_LIGHT, RIM_LIGHT)
 
 

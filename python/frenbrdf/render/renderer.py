@@ -137,7 +137,7 @@ def _tile_geometry(scene: Scene, start: int, stop: int) -> _Geometry:
     lights, light_radiance = _lights(scene)
     wi = np.einsum("pij,lj->pli", frame, lights)
     wo = np.broadcast_to(frame[:, None, :, 2], wi.shape)  # the camera looks along −z: wo = world +z, in local axes
-    lit = (wi[..., 2] > 0) & light_radiance.any(axis=-1)[None]
+    lit = (wi[..., 2] > 0) & np.any(light_radiance, axis=-1)[None]
     pixel_index = np.broadcast_to(pixels[:, None], lit.shape)[lit]
     radiance = light_radiance[None] * wi[..., 2:3]
     return _Geometry((stop - start) * scene.resolution, pixel_index, wi[lit], np.ascontiguousarray(wo[lit]),

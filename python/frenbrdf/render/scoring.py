@@ -1,7 +1,8 @@
 """Scoring one model on materials: what every evaluation measures, in one place.
 
-Each material is encoded from N random valid bins of its table (:func:`sample_bins`; a measurement is evaluated
-at them itself, each pair in a random order, :func:`truth_samples`), decoded
+Each material is encoded from N random valid bins of its table (:func:`frenbrdf.io.sampling.sample_bins`; a
+measurement is evaluated at them itself, each pair in a random order, :func:`frenbrdf.io.sampling.truth_samples`),
+decoded
 (or refined at test time, :func:`frenbrdf.models.reconstruct.reconstruct`), rendered and compared with
 the render of the true table (:func:`image_metrics`: RMSE, PSNR, SSIM and the colour difference ΔE
 over the lit material pixels, and PSNR and ΔE over its highlights, :func:`highlight_mask`), and its frequency
@@ -14,18 +15,19 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..io.measured import as_table, read_truth
-from ..io.merl import N_BINS, SHAPE, merl_bin_angles
+from ..io.formats import read_measured
+from ..io.merl import N_BINS
+from ..io.sampling import as_table, sample_bins, truth_samples
 from ..models.autoencoder import Model
 from ..models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
-from ..models.nbrdf import NBRDF, merl_bin_inputs
-from ..models.reconstruct import STAGES, Reconstruction, RefineConfig, refine_config
-from ..models.reconstruct import reconstruct as refine_samples
+from ..models.nbrdf import NBRDF
+from ..models.reconstruct import STAGES, Reconstruction, RefineConfig, reconstruct, refine_config
 from .renderer import Scene, material_mask, render_linear, tonemap
 
 #: The share of the lit material pixels the highlight metrics are taken over: the brightest in the truth.
@@ -94,19 +96,6 @@ def delta_e(truth: np.ndarray, prediction: np.ndarray, mask: np.ndarray) -> floa
     return float(deltaE_ciede2000(rgb2lab(truth[mask]), rgb2lab(prediction[mask])).mean())
 
 
-def bin_directions(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(ω_i, ω_o) of flat bin indices (φ_h = 0), each ``(len(bins), 3)``.
-
-    The angles of :func:`frenbrdf.merl_bin_rusinkiewicz` at those bins only (the same
-    values, without building the whole grid).
-    """
-    from ..numerics.coords import rusinkiewicz_to_directions
-
-    theta_h, theta_d, phi_d = merl_bin_angles()
-    i, j, k = np.unravel_index(np.asarray(bins), SHAPE[1:])
-    return rusinkiewicz_to_directions(np.stack([theta_h[i], np.zeros(i.shape), theta_d[j], phi_d[k]], axis=-1))
-
-
 class FrequencyMetric:
     """L_fre between a true table and a decoded latent (or an NBRDF, e.g. refined), in the model's mapped space.
 
@@ -115,9 +104,13 @@ class FrequencyMetric:
     reflectance (``config.values``) un-maps with each model's own mapping.
     """
 
-    def __init__(self, config: FrequencyLossConfig = FrequencyLossConfig()):
+    def __init__(self, config: FrequencyLossConfig | None = None):
+        config = FrequencyLossConfig() if config is None else config
         self.config = config
         self._parts: dict[int, tuple] = {}
+        # The pair every model shares when the values are mapped (the spectrum of reflectance is per mapping).
+        self.truth: FrequencyTruth | None
+        self.loss: FrequencyLoss | None
         self.truth, self.loss = self.parts(None) if config.values == "mapped" else (None, None)
 
     def parts(self, model: Model | None) -> tuple[FrequencyTruth, FrequencyLoss]:
@@ -152,76 +145,29 @@ class FrequencyMetric:
         return self.parts(model)[1].predicted_coefficients(params)[0].numpy()
 
 
-def valid_bins(table: np.ndarray) -> np.ndarray:
-    """The measured bins (flat indices) of a MERL table: valid in every channel and above the horizon (what a
-    model may be given; a value stored below the horizon is no measurement).
-
-    Raises ValueError when there is none."""
-    above = merl_bin_inputs()[0].reshape(-1)
-    bins = np.flatnonzero(np.all(table.reshape(3, N_BINS) >= 0, axis=0) & above)
-    if len(bins) == 0:
-        raise ValueError("the MERL table holds no bin measured in every channel above the horizon")
-    return bins
-
-
-def sample_bins(table: np.ndarray, rng: np.random.Generator, samples: int) -> np.ndarray:
-    """``samples`` random measured bins (flat indices, :func:`valid_bins`) of a MERL table, without replacement:
-    all of them when the table holds no more (a count is capped at what the data hold)."""
-    bins = valid_bins(table)
-    if samples < 1:
-        raise ValueError(f"samples must be ≥ 1, got {samples}")
-    return bins if samples >= len(bins) else rng.choice(bins, size=samples, replace=False)
-
-
-def truth_samples(truth, bins: np.ndarray,
-                  rng: np.random.Generator) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
-    """The truth's reflectance at ``bins`` ``(N, 3)`` and the direction pairs ``(ω_i, ω_o)`` it was taken at: what
-    an encoder takes.
-
-    ``truth`` as :func:`frenbrdf.io.measured.read_truth` returns it. A MERL table gives its values at the bins'
-    directions and draws nothing from ``rng``. A measurement (a callable ``m(ω_i, ω_o)``, e.g.
-    :class:`frenbrdf.io.bsdf.MeasuredBSDF`) is evaluated at each bin's pair in an order drawn from ``rng``: as the
-    bin gives it or reversed (ω_i ↔ ω_o), each with probability ½. A table keeps one order of each pair, as
-    reciprocity allows; a real measurement is not reciprocal near grazing (research/measurements.md, "The
-    measurements are not reciprocal"), so its other order is a measurement the table lost.
-    """
-    wi, wo = bin_directions(bins)
-    if isinstance(truth, np.ndarray):
-        return truth.reshape(3, N_BINS)[:, bins].T, (wi, wo)
-    reverse = rng.random(len(bins)) < 0.5
-    wi, wo = np.where(reverse[:, None], wo, wi), np.where(reverse[:, None], wi, wo)
-    return np.maximum(truth(wi, wo), 0.0), (wi, wo)
-
-
 def encode_and_render(model: Model, values: np.ndarray, directions, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Encodes samples, decodes and renders the result: (z, display image)."""
     z = model.encode(values, directions)
     return z, tonemap(render_linear(model.decode(z)[0], scene))
 
 
-def reconstruct(model: Model, samples, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Encodes ``samples`` (values, (ω_i, ω_o)) as :func:`truth_samples` gives them, decodes and renders the result:
-    (z, display image)."""
-    return encode_and_render(model, *samples, scene)
-
-
 def refined_reconstruction(model: Model, samples, scene: Scene,
                            config: RefineConfig) -> tuple[Reconstruction, np.ndarray, float]:
-    """Encodes ``samples`` (as for :func:`reconstruct`) and refines on them
-    (:func:`frenbrdf.models.reconstruct.reconstruct`), renders the result: (reconstruction, display image, seconds
-    of the refinement stages, beyond encoding)."""
-    result = refine_samples(model, *samples, refine=config)
+    """Encodes ``samples`` (values, (ω_i, ω_o)) as :func:`frenbrdf.io.sampling.truth_samples` gives them, refines on
+    them (:func:`frenbrdf.models.reconstruct.reconstruct`) and renders the result: (reconstruction, display image,
+    seconds of the refinement stages, beyond encoding)."""
+    result = reconstruct(model, *samples, refine=config)
     seconds = sum(result.timings.get(stage, 0.0) for stage in STAGES if stage != "encode")
     return result, tonemap(render_linear(result.nbrdf, scene)), seconds
 
 
 def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
-                        frequency_metric: FrequencyMetric | None | bool = None, refine: str = "none",
+                        frequency_metric: FrequencyMetric | Literal[False] | None = None, refine: str = "none",
                         progress: bool = True, latents: dict | None = None) -> list[dict]:
     """Reconstruction metrics of one model on MERL files (e.g. a validation split), one row each.
 
     Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
-    order of ``files``, as :func:`evaluate_runs` draws them), refined on them with the budget
+    order of ``files``, as :func:`~frenbrdf.evaluation.evaluate.evaluate_runs` draws them), refined on them with the budget
     ``refine`` (:data:`frenbrdf.models.reconstruct.BUDGETS`; ``"none"``: the encoder alone), decoded,
     rendered and compared with the render of the true table: RMSE, PSNR, SSIM, ΔE, the highlights' PSNR and ΔE
     (:func:`highlight_mask`) and L_fre
@@ -237,11 +183,12 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
     rows = []
     for path in tqdm(list(files), desc="reconstruction", disable=not progress, leave=False):
         path = Path(path)
-        truth = read_truth(path)
+        truth = read_measured(path)
         table = as_table(truth)
         measured = truth_samples(truth, sample_bins(table, rng, samples), rng)
+        decoded: np.ndarray | NBRDF
         if refine == "none":
-            z, image = reconstruct(model, measured, scene)
+            z, image = encode_and_render(model, *measured, scene)
             decoded = z  # what L_fre measures: the latent, or the refined NBRDF itself
         else:
             result, image, _ = refined_reconstruction(model, measured, scene, refinement)
@@ -270,7 +217,7 @@ class ScoringSet:
         self.mask = material_mask(self.scene)
         self.materials = []
         for path in files:
-            truth = read_truth(path)
+            truth = read_measured(path)
             table = as_table(truth)
             linear = render_linear(truth, self.scene)
             self.materials.append((truth_samples(truth, sample_bins(table, rng, samples), rng), tonemap(linear),

@@ -74,7 +74,7 @@ class AugmentConfig:
     :func:`config_for`; "custom" for values set by hand)."""
 
     def __post_init__(self):
-        self.gain_range = tuple(float(g) for g in self.gain_range)
+        low_high = tuple(float(g) for g in self.gain_range)
         problems = []
         for name in ("mix", "gain", "procedural", "hue_turn"):
             value = getattr(self, name)
@@ -84,11 +84,11 @@ class AugmentConfig:
             problems.append(f"mix + gain + procedural must be ≤ 1, got {self.mix + self.gain + self.procedural:g}")
         if self.hue_turn > 0 and self.gain == 0:
             problems.append(f"hue_turn {self.hue_turn:g} turns gained tables, but gain is 0: there are none")
-        low_high = self.gain_range
         if len(low_high) != 2 or not (0 < low_high[0] <= low_high[1] and math.isfinite(low_high[1])):
-            problems.append(f"gain_range must be two finite numbers 0 < low ≤ high, got {self.gain_range}")
+            problems.append(f"gain_range must be two finite numbers 0 < low ≤ high, got {low_high}")
         if problems:
             raise ValueError("invalid augment config: " + "; ".join(problems))
+        self.gain_range = (low_high[0], low_high[1])
 
     @property
     def active(self) -> bool:
@@ -206,7 +206,8 @@ class TrainConfig:
             problems += self._step_memory_problems()
         if problems:
             raise ValueError("invalid training config: " + "; ".join(problems))
-        self.split = tuple(self.split)
+        train, val, test = self.split  # three, checked above
+        self.split = (train, val, test)
         self.holdout = (self.holdout,) if isinstance(self.holdout, str) else tuple(self.holdout)
 
     def step_bytes(self) -> tuple[int, int, int, int]:
@@ -253,9 +254,9 @@ class TrainConfig:
 def config_for(method: str, *, training: str | None = None, augmentation: str | None = None,
                frequency: str | None = None, **overrides) -> TrainConfig:
     """The preset of a method (:data:`frenbrdf.presets.METHODS`), optionally with a training length
-    (``"demo"``, ``"sweep"``), an augmentation (:data:`frenbrdf.presets.AUGMENTATION`, ``"paper"``
-    by default) and an L_fre variant (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`, ``"paper"`` by default),
-    with top-level fields overridden."""
+    (``"demo"``, ``"sweep"``), an augmentation (:data:`frenbrdf.presets.AUGMENTATION`; by default
+    :class:`AugmentConfig`'s, the ``"augmented"`` preset) and an L_fre variant
+    (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`, ``"paper"`` by default), with top-level fields overridden."""
     check_method(method)
     layers = [METHODS[method]]
     if training is not None:

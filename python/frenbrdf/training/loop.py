@@ -95,7 +95,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     source = load_model(source_spec) if source_spec else None
     if source is not None:
         check_source(cfg, source)
-    data = prepare(cfg, split, files, ranks, data_cache, mapping=source and source.mapping)  # bad data fails here
+    data = prepare(cfg, split, files, ranks, data_cache,
+                   mapping=source.mapping if source is not None else None)  # bad data fails here
     if ranks.main:
         if not resume:  # overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's)
             folder.begin(RUN_FILES)
@@ -128,9 +129,9 @@ class Trainer:
         self.batch_size, self.steps_per_epoch = batch_size, data.n_train // batch_size
         torch.manual_seed(cfg.seed)
         network = AutoEncoder(cfg.model)
-        if cfg.init_from:  # fine-tuning: every weight starts where the source's ended
+        if source is not None and cfg.init_from:  # fine-tuning: every weight starts where the source's ended
             network.load_state_dict(source.network.state_dict())
-        elif cfg.decoder_from:  # the trained decoder, frozen: only the encoder learns
+        elif source is not None:  # cfg.decoder_from: the trained decoder, frozen; only the encoder learns
             network.decoder.load_state_dict(source.network.decoder.state_dict())
             network.decoder.requires_grad_(False)
         self.network = network.to(device)
@@ -142,6 +143,7 @@ class Trainer:
         # The best epoch by each rule measured (best.pt holds cfg.select's pick): score, lower is better.
         self.bests = {rule: {"epoch": -1, "val": math.inf}
                       for rule in (SELECTION_RULES if cfg.render_every else ("loss",))}
+        #: The epoch training starts at: 0, or the one after a resumed checkpoint's.
         self.first_epoch = 0
         if checkpoint is not None:
             self.network.load_state_dict(checkpoint["model"])
@@ -167,7 +169,7 @@ class Trainer:
         for epoch in range(self.first_epoch, cfg.epochs):
             entry = {"epoch": epoch, **self.train_epoch(epoch, bar),
                      **{f"val_{k}": v for k, v in self.validate().items()}}
-            if cfg.render_every and ((epoch + 1) % cfg.render_every == 0 or epoch == cfg.epochs - 1):
+            if validation_renders is not None and ((epoch + 1) % cfg.render_every == 0 or epoch == cfg.epochs - 1):
                 render_start = time.perf_counter()
                 entry.update(render_validation(self.network, self.data, cfg, validation_renders))
                 render_seconds += time.perf_counter() - render_start

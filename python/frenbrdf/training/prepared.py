@@ -1,6 +1,6 @@
 """What a run trains on: the split's materials read and mapped, and the true SH coefficients.
 
-:func:`prepare` is shared by training and by the step timing of :mod:`frenbrdf.evaluation.timing`;
+:func:`prepare` is shared by training and by the step timing of ``benches/step_timing.py``;
 :class:`Distributed` and :func:`select_device` say where a process runs (DDP under
 ``torchrun``: gloo on CPU, NCCL on GPU).
 """

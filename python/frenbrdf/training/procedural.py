@@ -21,7 +21,8 @@ import torch
 
 from ..data.analytic import AnalyticMaterial, evaluate
 from ..data.synth import draw_material
-from ..io.merl import merl_above_horizon, merl_bin_angles, merl_bin_to_angles, merl_lookup_directions
+from ..io.merl import merl_above_horizon, merl_bin_angles, merl_lookup_directions
+from ..io.sampling import bin_directions
 from ..models.frequency_fit import ValueSpace
 from ..models.losses import FrequencyLossConfig, FrequencyTruth
 from ..models.mapping import LogRelativeMapping
@@ -34,14 +35,6 @@ def draw_procedural(generator: torch.Generator) -> AnalyticMaterial:
     """One random analytic material, every choice seeded from ``generator`` (so from the run's seed)."""
     seed = int(torch.randint(0, 2 ** 62, (1,), generator=generator))
     return draw_material(np.random.default_rng(seed), name="procedural-{label}-{kind}")
-
-
-def bin_directions(bins: torch.Tensor) -> tuple[np.ndarray, np.ndarray]:
-    """Directions (ω_i, ω_o) ``(n, 3)`` of flat MERL bin indices (φ_h = 0, the bins' own angles)."""
-    index = np.stack(np.unravel_index(bins.numpy(), (90, 90, 180)), axis=-1)
-    angles = merl_bin_to_angles(index)
-    return rusinkiewicz_to_directions(np.stack([angles[:, 0], np.zeros(len(angles)), angles[:, 1], angles[:, 2]],
-                                               axis=-1))
 
 
 def values_at_bins(material: AnalyticMaterial, bins: torch.Tensor, mapping: LogRelativeMapping,
@@ -94,7 +87,9 @@ class NodeTruth:
         _, bin_theta_d, bin_phi_d = merl_bin_angles()
         bin_theta_d, bin_phi_d = (a.reshape(-1) for a in np.meshgrid(bin_theta_d, bin_phi_d, indexing="ij"))
         bins_above = merl_above_horizon().reshape(90, -1)
-        wi_all, wo_all, self.sources = [], [], []
+        wi_all: list[np.ndarray] = []
+        wo_all: list[np.ndarray] = []
+        self.sources: list[np.ndarray] = []
         for i in config.slices:
             theta_h = merl_bin_angles()[0][i]
             wi, wo = _directions(theta_h, folded, phi)

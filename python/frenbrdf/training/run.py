@@ -83,10 +83,10 @@ class Run:
 
     def best_by(self, rule: str) -> dict:
         """The history entry of the best epoch by ``rule`` (:data:`frenbrdf.presets.SELECTION_RULES`)."""
-        judged = [entry for entry in self.history if selection_score(entry, rule) is not None]
+        judged = [(score, entry) for entry in self.history if (score := selection_score(entry, rule)) is not None]
         if not judged:
             raise ValueError(f"{self.path}: no trained epoch has been measured by the rule {rule!r} yet")
-        return min(judged, key=lambda entry: selection_score(entry, rule))
+        return min(judged, key=lambda pair: pair[0])[1]  # the first of ties
 
     @property
     def best_epoch(self) -> int:

@@ -1,6 +1,6 @@
 """One optimisation step, and the one place where the loss is composed.
 
-Training (:mod:`.loop`) and the step timing (:mod:`frenbrdf.evaluation.timing`) both call
+Training (:mod:`.loop`) and the step timing (``benches/step_timing.py``) both call
 :func:`optimisation_step`, so what is timed is what trains.
 """
 

@@ -2,7 +2,7 @@
 # The default bank (100 analytic materials): every method at the demo's length over three seeds
 # (each its own split and initialisation), then the evaluation on the bank's test splits and on
 # the MERL-derived materials none of them saw (out of distribution). The augmentation's own
-# evidence (against the tables alone) is docs/colour.md's, made with research/studies/colour_ablation.py.
+# evidence (against the tables alone) is research/colour.md's, made with research/studies/colour_ablation.py.
 # Usage: research/results/bank/run.sh [FOLDER]   (default bank-protocol; ../shared beside the repository)
 set -e
 shared=$(cd "$(dirname "$0")/../../../../shared" && pwd)

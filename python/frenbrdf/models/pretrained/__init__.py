@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -126,8 +127,9 @@ def pack_checkpoint(checkpoint: dict, mapping: dict, dest: str | os.PathLike | N
     dest.mkdir(parents=True, exist_ok=True)
     with atomic_path(dest / MODEL_FILE) as temporary:
         torch.save(packed, temporary)
+    arrays: dict[str, Any] = pack_mapping(mapping)  # Any: numpy's stubs take any ** key for allow_pickle (a bool)
     with atomic_path(dest / MAPPING_FILE) as temporary:
-        np.savez_compressed(temporary, **pack_mapping(mapping))
+        np.savez_compressed(temporary, **arrays)
     config = json.loads(checkpoint["config"])
     save_json(dest / CARD_FILE, {"version": VERSION, **(card or {}), "format": FORMAT, "method": checkpoint["method"],
                                  "model": config["model"], "weights": "float16" if half else "float32"})

@@ -18,8 +18,8 @@ The plugin
 ----------
 ``{"type": "frenbrdf", ...}`` takes
 
-- ``filename``: a MERL ``.binary`` file, an RGL ``.bsdf`` measurement, an NBRDF saved by
-  :func:`frenbrdf.data.fitting.save_nbrdf`, or a published Keras NBRDF ``.h5``; or
+- ``filename``: a MERL ``.binary`` file, an RGL ``.bsdf`` measurement, a saved NBRDF ``.pt``, or a
+  published Keras NBRDF ``.h5`` (read by :func:`frenbrdf.io.read_material`); or
 - ``material``: a handle from :func:`material_handle` for a material held in memory (an
   :class:`frenbrdf.NBRDF`, a MERL table array, a :func:`frenbrdf.read_bsdf` measurement):
   Mitsuba's properties hold only numbers, strings and Mitsuba objects, so Python objects travel

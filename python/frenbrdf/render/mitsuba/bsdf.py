@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import Any
 
 from .kernels import Kernels
 from .material import _HANDLES, _load_file
@@ -17,8 +18,9 @@ def bsdf_class(variant: str):
     mi, dr = _import_mitsuba()
     if mi.variant() != variant:
         raise RuntimeError(f"the Mitsuba variant is {mi.variant()!r}, expected {variant!r}")
+    BSDF: Any = mi.BSDF  # the variant's base class, known only at run time
 
-    class FreNBRDFBSDF(mi.BSDF):
+    class FreNBRDFBSDF(BSDF):
         """A MERL table, measurement or NBRDF as a Mitsuba BSDF (see :mod:`frenbrdf.render.mitsuba`)."""
 
         def __init__(self, props):
@@ -58,7 +60,7 @@ def bsdf_class(variant: str):
             if self.mixture.lobes:
                 m = dr.normalize(wi + wo)
                 jacobian = dr.rcp(dr.maximum(4.0 * dr.dot(wo, m), 1e-20))
-                for lobe, distribution in zip(self.mixture.lobes, self.distributions):
+                for lobe, distribution in zip(self.mixture.lobes, self.distributions, strict=True):
                     pdf += lobe.weight * distribution.pdf(wi, m) * jacobian
             return dr.select(active, pdf, 0.0)
 
@@ -85,7 +87,7 @@ def bsdf_class(variant: str):
             active = active & (mi.Frame3f.cos_theta(wi) > 0) & ctx.is_enabled(mi.BSDFFlags.GlossyReflection)
             wo = mi.warp.square_to_cosine_hemisphere(sample2)
             threshold = self.mixture.cosine
-            for lobe, distribution in zip(self.mixture.lobes, self.distributions):
+            for lobe, distribution in zip(self.mixture.lobes, self.distributions, strict=True):
                 m, _ = distribution.sample(wi, sample2)
                 wo = dr.select(sample1 >= threshold, mi.reflect(wi, m), wo)
                 threshold += lobe.weight

@@ -4,6 +4,7 @@ measurements evaluated by Mitsuba's own ``measured`` BSDF."""
 from __future__ import annotations
 
 import itertools
+from typing import Any
 
 import numpy as np
 
@@ -20,14 +21,14 @@ class Kernels:
         self.material = material
         self.lookup = lookup
         self.jit = dr.is_jit_v(mi.Float)
-        self.buffer = None
+        self.buffer: Any = None  # the table: a Dr.Jit Float (JIT variants) or a numpy array
         if material.kind == "merl" or (material.reference is not None and material.reference.ndim == 4):
             data = material.interleaved
             self.buffer = mi.Float(data.reshape(-1)) if self.jit else data
         if material.kind == "nbrdf":
             self.layers = [(w.astype(np.float64).tolist(), b.astype(np.float64).tolist())
                            for w, b in material.layers]
-        if material.kind == "measured":
+        if material.measurement is not None:  # kind "measured"
             # Mitsuba's `measured` plugin reads the same file: the Dupuy & Jakob evaluation, in Dr.Jit, agrees
             # with the Rust core's to float32 precision (tests/io/test_bsdf_native.py).
             self.measured = mi.load_dict({"type": "measured", "filename": str(material.measurement.path)})
@@ -120,9 +121,9 @@ class Kernels:
         last = len(self.layers) - 1
         for index, (weight, bias) in enumerate(self.layers):
             out = []
-            for row, b in zip(weight, bias):
+            for row, b in zip(weight, bias, strict=True):
                 acc = None
-                for w, xi in zip(row, x):
+                for w, xi in zip(row, x, strict=True):
                     if w == 0.0 or xi is None:
                         continue
                     acc = xi * w + b if acc is None else dr.fma(xi, w, acc)
@@ -153,7 +154,8 @@ class Kernels:
             return self.table_lookup(i, j, k, active, self.lookup, masked=True)
         y = mi.Color3f(*self.mlp(h, d))
         eps = self.material.epsilon
-        if self.buffer is None:
+        if self.buffer is None:  # f_ref a constant (3,)
+            assert self.material.reference is not None
             reference = mi.Color3f(*(float(r) + eps for r in self.material.reference))
         else:
             i, j, k = self.bin_coordinates(h, d)

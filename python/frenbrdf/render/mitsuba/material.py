@@ -7,12 +7,16 @@ import itertools
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...data.materials import load_material_file
 from .sampling import SamplingMixture, fit_sampling
 from .variants import PLUGIN_NAME
+
+if TYPE_CHECKING:
+    from ...io.bsdf import MeasuredBSDF
+    from ...models.nbrdf import NBRDF
 
 
 @dataclass(eq=False)
@@ -36,9 +40,9 @@ class Material:
     """NBRDF: f_ref, ``(3,)`` or a MERL-shaped table ``(3, 90, 90, 180)``."""
     table: np.ndarray | None = None
     """MERL: the table ``(3, 90, 90, 180)`` in physical units, missing bins negative."""
-    nbrdf: object = None
+    nbrdf: NBRDF | None = None
     """NBRDF: the :class:`frenbrdf.NBRDF` itself (numpy evaluation)."""
-    measurement: object = None
+    measurement: MeasuredBSDF | None = None
     """Measured: the :class:`frenbrdf.io.bsdf.MeasuredBSDF` (numpy evaluation, by the Rust core)."""
     ordered: bool = False
     """Whether it tells the two orders of a pair apart (an ordered NBRDF, :attr:`frenbrdf.NBRDF.ordered`, or a
@@ -47,8 +51,10 @@ class Material:
     def brdf(self, wi, wo) -> np.ndarray:
         """Reference (numpy) evaluation: reflectance at direction pairs ``(..., 3)`` → ``(..., 3)``, ≥ 0."""
         if self.kind == "nbrdf":
+            assert self.nbrdf is not None
             return self.nbrdf(wi, wo)
         if self.kind == "measured":
+            assert self.measurement is not None
             return self.measurement(wi, wo)
         from ...io.merl import merl_lookup_directions
 
@@ -63,6 +69,7 @@ class Material:
     def interleaved(self) -> np.ndarray:
         """The table (MERL) or the reference table (NBRDF) as float32 ``(N_BINS, 3)``."""
         source = self.table if self.kind == "merl" else self.reference
+        assert source is not None
         return np.ascontiguousarray(source.reshape(3, -1).T, dtype=np.float32)
 
 
@@ -75,7 +82,7 @@ def material_from_nbrdf(nbrdf, name: str = "nbrdf") -> Material:
     if len(nbrdf) != 1:
         raise ValueError(f"this NBRDF holds {len(nbrdf)} materials; pass one, e.g. nbrdf[0]")
     params = [p[0].numpy().astype(np.float32) for p in nbrdf.params]
-    layers = list(zip(params[0::2], params[1::2]))
+    layers = list(zip(params[0::2], params[1::2], strict=True))
     reference = np.asarray(nbrdf.mapping.reference, dtype=np.float64)
     return Material("nbrdf", name, layers=layers, epsilon=float(nbrdf.mapping.epsilon),
                     offset=float(nbrdf.mapping.offset), reference=reference, nbrdf=nbrdf, ordered=nbrdf.ordered)
@@ -110,10 +117,9 @@ def load_material(material) -> Material:
     ----------
     material
         A :class:`frenbrdf.NBRDF` (one material); a MERL table array; a measurement
-        (:func:`frenbrdf.read_bsdf`); a path to a MERL ``.binary`` file, to an RGL ``.bsdf``,
-        to an NBRDF saved by :func:`frenbrdf.data.fitting.save_nbrdf`, or to a published Keras
-        NBRDF ``.h5`` (see :mod:`frenbrdf.data.nbrdf_import`); a :func:`material_handle`; or a
-        :class:`Material`.
+        (:func:`frenbrdf.read_bsdf`); an NBRDF's weights; a path to a MERL ``.binary`` file, to an RGL ``.bsdf``,
+        to a saved NBRDF ``.pt`` or to a published Keras NBRDF ``.h5`` (any :func:`frenbrdf.io.read_material`
+        reads); a :func:`material_handle`; or a :class:`Material`.
 
     Raises
     ------
@@ -125,8 +131,9 @@ def load_material(material) -> Material:
         Anything else.
     """
     from ...io.bsdf import MeasuredBSDF
-    from ...models.nbrdf import NBRDF
+    from ...models.nbrdf import NBRDF, as_brdf
 
+    material = as_brdf(material)  # an NBRDF's weights as their NBRDF
     if isinstance(material, Material):
         return material
     if isinstance(material, NBRDF):
@@ -144,10 +151,12 @@ def load_material(material) -> Material:
 
 
 def _load_file(path: Path) -> Material:
-    """A material file (any :func:`frenbrdf.data.materials.load_material_file` reads) → :class:`Material`."""
+    """A material file (any :func:`frenbrdf.io.read_material` reads) → :class:`Material`."""
     from ...io.bsdf import MeasuredBSDF
+    from ...io.formats import read_material
+    from ...models.nbrdf import as_brdf
 
-    loaded = load_material_file(path)
+    loaded = as_brdf(read_material(path))
     if isinstance(loaded, MeasuredBSDF):
         return material_from_measurement(loaded)  # named by its file's stem
     if isinstance(loaded, np.ndarray):

@@ -36,6 +36,8 @@ class SamplingMixture:
             raise ValueError(f"invalid sampling mixture {self}: weights must be ≥ 0 and sum to 1, α > 0")
 
 
+#: Cosine-weighted hemisphere sampling alone: ``sampling="cosine"``, and the fit's result when there is nothing to
+#: fit (a BRDF that is zero or not finite).
 COSINE_ONLY = SamplingMixture(1.0)
 
 #: Smallest cosine-sampling probability of a fitted mixture (keeps weights bounded off the lobes).
@@ -116,6 +118,6 @@ def fit_sampling(brdf, max_lobes: int = 2) -> SamplingMixture:
     share = energies / energies.sum()
     cosine = max(share[0], MIN_COSINE_WEIGHT)
     rest = share[1:] / max(share[1:].sum(), 1e-30) * (1 - cosine)
-    lobes_out = tuple(Lobe(float(a), float(w)) for a, w in zip(alphas, rest) if w > 0)
+    lobes_out = tuple(Lobe(float(a), float(w)) for a, w in zip(alphas, rest, strict=True) if w > 0)
     return SamplingMixture(float(1 - sum(lobe.weight for lobe in lobes_out)), lobes_out)
 

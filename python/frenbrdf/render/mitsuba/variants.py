@@ -9,6 +9,7 @@ import subprocess
 import sys
 import warnings
 from pathlib import Path
+from typing import Any
 
 #: The plugin's type name in Mitsuba scenes.
 PLUGIN_NAME = "frenbrdf"
@@ -27,8 +28,9 @@ _INSTALL_HINT = ("frenbrdf.render.mitsuba needs Mitsuba 3: pip install mitsuba, 
                  f"also installs {LLVM_PACKAGE}, a libLLVM for its fast llvm_ad_rgb variant")
 
 
-def _import_mitsuba():
-    """``(mitsuba, drjit)``, or an ImportError that says how to install them.
+def _import_mitsuba() -> tuple[Any, Any]:
+    """``(mitsuba, drjit)``, or an ImportError that says how to install them. (Typed Any: what the modules hold,
+    ``mi.BSDF`` for one, depends on the variant set at run time.)
 
     Before drjit's first import, points Dr.Jit at the pip-installed libLLVM if the
     system's does not work (:func:`use_packaged_llvm`).

@@ -30,6 +30,7 @@ class View:
     """A page: its HTML (:attr:`html`), shown inline by Jupyter, written by :meth:`save`."""
 
     def __init__(self, html: str, materials: list[Material], edit: Edit | None):
+        #: The page: one self-contained HTML document.
         self.html = html
         self.materials = materials
         self.edit = edit
@@ -76,6 +77,8 @@ def view(a, b=None, *, title: str | None = None, model=None, progress: bool = Fa
     model
         A :class:`frenbrdf.Model` that fits measurements and holds the edit's latent space (default: the model of
         a result folder's latent, else the packaged one).
+    progress
+        Show progress bars (a measurement's fit, the edit).
 
     Returns
     -------

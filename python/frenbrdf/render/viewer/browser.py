@@ -70,6 +70,7 @@ class Browser:
         os.close(from_child)
         self._buffer = b""
         self._next_id = 0
+        #: The events received so far (messages that answer no command), in order.
         self.events: list[dict] = []
 
     def __enter__(self) -> Browser:
@@ -174,9 +175,9 @@ class Page:
 
     def screenshot(self, clip: tuple[float, float, float, float] | None = None) -> bytes:
         """A PNG of the viewport, or of ``clip`` = (x, y, width, height) in CSS pixels."""
-        params = {"format": "png"}
+        params: dict[str, object] = {"format": "png"}
         if clip:
-            params["clip"] = dict(zip(("x", "y", "width", "height"), clip), scale=1)
+            params["clip"] = dict(zip(("x", "y", "width", "height"), clip, strict=True), scale=1)
         return base64.b64decode(self.send("Page.captureScreenshot", params)["data"])
 
     def events(self, *methods: str) -> list[dict]:

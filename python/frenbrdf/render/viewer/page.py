@@ -47,7 +47,7 @@ class _Texture:
         weights, biases = nbrdf.params[0::2], nbrdf.params[1::2]
         widths = [int(weights[0].shape[2])] + [int(w.shape[1]) for w in weights]
         blocks = []
-        for weight, bias in zip(weights, biases):
+        for weight, bias in zip(weights, biases, strict=True):
             out, fan_in = weight.shape[1:]
             block = np.zeros((_pad(out), _pad(fan_in) // 4 + 1, 4), dtype=np.float32)
             rows = np.zeros((_pad(out), _pad(fan_in)), dtype=np.float32)
@@ -78,7 +78,7 @@ def _lights_data() -> dict:
     scene = Scene()
     directions, radiance = _lights(scene)
     n_fixed = len(scene.light_directions)
-    pairs = [[[float(v) for v in d], [float(v) for v in r]] for d, r in zip(directions, radiance)]
+    pairs = [[[float(v) for v in d], [float(v) for v in r]] for d, r in zip(directions, radiance, strict=True)]
     return {"key": {"radiance": pairs[0][1]}, "fixed": pairs[1:n_fixed], "environment": pairs[n_fixed:]}
 
 

@@ -114,21 +114,21 @@ def read_material(path: str | os.PathLike, *, model=None, progress: bool = False
     ``model``: the model that fits a measurement (default: the packaged one). Raises FileNotFoundError or
     ValueError naming the file and what was expected.
     """
-    from ...data.materials import load_material_file
+    from ...io import formats
     from ...io.paths import input_file
 
     path = Path(path)
     if path.is_dir():
         return _result_folder(path)
     path = input_file(path, "material file")
-    suffix = path.suffix.lower()
-    if suffix in (".binary", ".bsdf"):
+    try:
+        entry = formats.format_of(path, ("measurement", "nbrdf"), "view")
+    except ValueError:
+        raise ValueError(f"{path}: unknown format; view reads {SUPPORTED}") from None
+    if entry.role == "measurement":
         return _fit_measurement(path, model, progress)
-    if suffix not in (".pt", ".h5"):
-        raise ValueError(f"{path}: unknown format; view reads {SUPPORTED}")
-    nbrdf = load_material_file(path)
-    kind = "a published Keras NBRDF" if suffix == ".h5" else "a saved NBRDF"
-    return Material(nbrdf, path.stem, f"{path} ({kind}, {_describe(nbrdf)})")
+    nbrdf = NBRDF.from_weights(entry.read(path))
+    return Material(nbrdf, path.stem, f"{path} ({entry.holds}, {_describe(nbrdf)})")
 
 
 def _describe(nbrdf: NBRDF) -> str:
@@ -138,8 +138,8 @@ def _describe(nbrdf: NBRDF) -> str:
 
 
 def _result_folder(folder: Path) -> Material:
-    from ...data.fitting import load_nbrdf
     from ...io.jsonfile import read_json
+    from ...io.nbrdf import read_nbrdf
 
     report_path, nbrdf_path = folder / "reconstruction.json", folder / "material.pt"
     if not report_path.is_file() or not nbrdf_path.is_file():
@@ -154,7 +154,7 @@ def _result_folder(folder: Path) -> Material:
         raise ValueError(f"{report_path}: not a reconstruct report (missing or wrong {error})") from None
     if z.ndim != 1 or not np.all(np.isfinite(z)):
         raise ValueError(f"{report_path}: its latent z is not a finite vector")
-    nbrdf = load_nbrdf(nbrdf_path)
+    nbrdf = NBRDF.from_weights(read_nbrdf(nbrdf_path))
     model_name = "the packaged model" if model_key == "pretrained" else f"the model {model_key}"
     return Material(nbrdf, folder.name, f"reconstructed in {folder}/ from {source} by {model_name} "
                     f"(refine {refine}; {_describe(nbrdf)})", z, model_key)
@@ -162,21 +162,13 @@ def _result_folder(folder: Path) -> Material:
 
 def _fit_measurement(path: Path, model, progress: bool) -> Material:
     """A MERL table or .bsdf measurement as the packaged model's fit (``reconstruct``'s ``full`` refinement)."""
-    from ...io.measured import as_table, is_bsdf, read_truth
+    from ...io.formats import read_samples
     from ...models.autoencoder import Model
-    from ..scoring import sample_bins, truth_samples
 
     model = Model.pretrained() if model is None else model
-    # What reconstruct reads of the file (frenbrdf.material.measurements.merl_measurements, a layer above this one).
-    truth = read_truth(path)
-    rng = np.random.default_rng(0)
-    try:
-        bins = sample_bins(as_table(truth), rng, SAMPLES)
-    except ValueError as error:
-        raise ValueError(f"{path}: {error}") from None
-    values, directions = truth_samples(truth, bins, rng)
-    result = model.reconstruct(np.array(values), directions, refine=_refine("full", progress))
-    what = "RGL measurement" if is_bsdf(path) else "MERL table"
+    measured = read_samples(path, samples=SAMPLES, seed=0)  # what reconstruct reads of the file
+    result = model.reconstruct(measured.values, (measured.wi, measured.wo), refine=_refine("full", progress))
+    what = "RGL measurement" if measured.kind == "bsdf" else "MERL table"
     return Material(result.nbrdf, path.stem, f"{path} (a {what}; shown as its fit by the packaged model from "
                     f"{SAMPLES} samples, refine full: {_describe(result.nbrdf)})", result.z, "pretrained")
 
@@ -234,7 +226,7 @@ def make_edit(a: Material, b: Material, *, model=None, progress: bool = False) -
 def _same(x: NBRDF, y: NBRDF) -> bool:
     """The same network and mapping (a material that is its own decoding)."""
     return x.ordered == y.ordered and len(x.params) == len(y.params) \
-        and all(p.shape == q.shape and torch.equal(p, q) for p, q in zip(x.params, y.params)) \
+        and all(p.shape == q.shape and torch.equal(p, q) for p, q in zip(x.params, y.params, strict=True)) \
         and mapping_state(x.mapping) == mapping_state(y.mapping)
 
 

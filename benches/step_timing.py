@@ -1,10 +1,14 @@
-"""Timing of training steps and of decoded NBRDFs, for benchmarks and sweeps.
+"""Timing of training steps and of decoded NBRDFs, for the benchmarks and the research sweeps.
+
+Research tooling, not part of the installed package: the research scripts (``research/charts/sweeps.py``,
+``research/studies/train_step.py``, ``research/studies/augment_step.py``) put ``benches/`` on ``sys.path`` and
+import it as ``step_timing``.
 
 - :func:`time_training_step`: one optimisation step of a config (the training code's own
   :func:`~frenbrdf.training.optimisation_step`), with and without the frequency term;
 - :func:`time_frequency_variants`: the same step with each L_fre variant, timed side by side;
 - :func:`nbrdf_throughput`: queries per second of decoded NBRDFs, timed in turn;
-- :func:`timed_seconds`: the interleaved timer both use.
+- :func:`timed_seconds`: the interleaved timer they all use.
 """
 
 from __future__ import annotations
@@ -16,12 +20,12 @@ import time
 import numpy as np
 import torch
 
-from ..data.folders import list_materials, split_materials
-from ..models.autoencoder import AutoEncoder
-from ..models.losses import FrequencyLoss, FrequencyLossConfig
-from ..models.nbrdf import N_INPUTS, NBRDF
-from ..training import TrainConfig, optimisation_step, prepare
-from ..training.loop import make_optimizer
+from frenbrdf.data.folders import list_materials, split_materials
+from frenbrdf.models.autoencoder import AutoEncoder
+from frenbrdf.models.losses import FrequencyLoss, FrequencyLossConfig
+from frenbrdf.models.nbrdf import N_INPUTS, NBRDF
+from frenbrdf.training import TrainConfig, optimisation_step, prepare
+from frenbrdf.training.loop import make_optimizer
 
 
 def timed_seconds(functions: dict, steps: int, device: torch.device, *, warmup: int = 3,
