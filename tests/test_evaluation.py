@@ -248,6 +248,34 @@ def test_evaluate_refuses_runs_of_different_splits(tiny_runs, toy_materials, tmp
         evaluate_runs([tmp_path], tmp_path / "eval")
 
 
+def test_evaluate_gives_each_sampling_pattern_its_own_rows(tiny_runs, tmp_path, capsys):
+    """``--patterns``: each material encoded from each pattern's pairs; the first pattern's numbers (and editing,
+    which uses its latents) are those of an evaluation of it alone."""
+    plain = evaluate_runs(tiny_runs, tmp_path / "plain", config=EvaluateConfig(
+        samples=200, edits=3, resolution=32, edit_resolution=96, progress=False))
+    assert "drawn by the sampling pattern `merl-bins`" in (tmp_path / "plain" / "evaluation.md").read_text()
+    assert cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "two"), "--samples", "200",
+                     "--edits", "3", "--resolution", "32", "--quick", "--quiet",
+                     "--patterns", "merl-bins", "image-based"]) == 0
+    table = capsys.readouterr().out
+    report = json.loads((tmp_path / "two" / "evaluation.json").read_text())
+    assert report["config"]["patterns"] == ["merl-bins", "image-based"]
+    for method, summary in report["summary"].items():
+        assert {key: summary[key] for key in plain["summary"][method]} == pytest.approx(plain["summary"][method])
+        rows = report["reconstruction"][method]
+        assert summary["psnr@image-based"] == pytest.approx(np.mean([r["psnr@image-based"] for r in rows]))
+        assert summary["rmse_x100@image-based"] == pytest.approx(100 * np.mean([r["rmse@image-based"] for r in rows]))
+        assert summary["psnr@image-based"] != summary["psnr"]
+        assert not any(key.startswith("edit_") and "@" in key for key in summary)  # editing: the first pattern's
+        psnr = " | ".join(f"{s['psnr@image-based']:.3g}" for s in report["summary"].values())
+        assert f"| image-based: Recon PSNR ↑ | {psnr} | – | – | – |" in table
+    assert "| merl-bins: Recon PSNR ↑ |" in table and "| Edit PSNR ↑ |" in table
+    assert "samples of each sampling pattern: `merl-bins`, `image-based`" in table
+    for patterns in (("uniform", "uniform"), ("nope",), ()):
+        with pytest.raises(ValueError, match="patterns must be one or more distinct sampling patterns"):
+            EvaluateConfig(patterns=patterns)
+
+
 def test_cli_evaluate_and_render(tiny_runs, toy_materials, tmp_path, capsys):
     assert cli.main(["evaluate", *map(str, tiny_runs), "--out", str(tmp_path / "eval"), "--samples", "200",
                      "--edits", "6", "--resolution", "32", "--quick", "--quiet"]) == 0

@@ -53,6 +53,17 @@ def _valid_npz() -> bytes:
     return buffer.getvalue()
 
 
+def _valid_astm() -> bytes:
+    """An ASTM E1392 file of the same samples: angles in radians, then R,G,B."""
+    rows = samples(60)
+    angles = [np.arccos(rows[:, 2]), np.arctan2(rows[:, 1], rows[:, 0]), np.arccos(rows[:, 5]),
+              np.arctan2(rows[:, 4], rows[:, 3])]
+    table = np.column_stack([*angles, rows[:, 6:]])
+    header = ["SOURCE fuzz", 'SAMPLE_NAME "valid"', "SCATTER_TYPE BRDF", "NUM_POINTS 60",
+              "VARS theta_i,phi_i,theta_s,phi_s,R,G,B"]
+    return ("\n".join(header + [",".join(repr(float(v)) for v in row) for row in table]) + "\n").encode()
+
+
 def _valid_nbrdf() -> bytes:
     buffer = io.BytesIO()
     torch.save({"params": [torch.randn(8, 6), torch.zeros(8), torch.randn(3, 8), torch.zeros(3)],
@@ -60,7 +71,7 @@ def _valid_nbrdf() -> bytes:
     return buffer.getvalue()
 
 
-VALID = {".csv": _valid_csv(), ".npz": _valid_npz(), ".pt": _valid_nbrdf(),
+VALID = {".csv": _valid_csv(), ".npz": _valid_npz(), ".astm": _valid_astm(), ".pt": _valid_nbrdf(),
          ".bsdf": tensor_file(flat_material())}  # a small RGL measurement (tests/io/test_bsdf_native.py)
 
 
@@ -94,7 +105,7 @@ def _network(path):
     return as_brdf(read_material(path))
 
 
-READERS = {".csv": [read_samples], ".npz": [read_samples],
+READERS = {".csv": [read_samples], ".npz": [read_samples], ".astm": [read_samples],
            ".pt": [read_nbrdf, _network, checkpoints.load],
            ".binary": [read_samples, _network, frenbrdf.read_merl],
            ".h5": [_network], ".json": [load_config],

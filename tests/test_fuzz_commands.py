@@ -97,6 +97,12 @@ def _csv(values: str) -> bytes:
             + "\n").encode()
 
 
+def _astm(row: str | None, values: str = "R,G,B", scatter: str = "BRDF") -> bytes:
+    """An ASTM E1392 file of 60 copies of ``row`` (numbers, commas between them); None: the header alone."""
+    header = f"SCATTER_TYPE {scatter}\nNUM_POINTS 60\nVARS theta_i,phi_i,theta_s,phi_s,{values}\n"
+    return (header + ("" if row is None else "\n".join(row for _ in range(60)) + "\n")).encode()
+
+
 def corpus(folder: Path) -> dict[str, Path]:
     """Crafted files by name; written once per session."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -109,6 +115,11 @@ def corpus(folder: Path) -> dict[str, Path]:
         "nan.csv": _csv("nan,0.1,0.1"), "inf.csv": _csv("inf,0.1,0.1"), "negative.csv": _csv("-1,0.1,0.1"),
         "huge-value.csv": _csv("1e300,0.1,0.1"), "at-limit.csv": _csv("1e8,1e8,1e8"),
         "text.csv": _csv("red,green,blue"), "few-columns.csv": b"a,b\n1,2\n",
+        "empty.astm": b"", "random.astm": bytes(range(256)) * 8,
+        "half.astm": VALID[".astm"][: len(VALID[".astm"]) // 2],
+        "nan.astm": _astm("0.5,0,0.5,3.1,nan,0.1,0.1"), "degrees.astm": _astm("30,0,30,180,0.1,0.1,0.1"),
+        "negative.astm": _astm("0.5,0,0.5,3.1,-0.01,0.1,0.1"), "header-only.astm": _astm(None),
+        "btdf.astm": _astm("0.5,0,0.5,3.1,0.1", values="BTDF", scatter="BTDF"),
         "header-bomb.npz": _npz_with_header((100_000_000_000,)), "pickled.npz": _pickled_npz(),
         "huge-values.bsdf": tensor_file(flat_material(colour=(1e44, 1e44, 1e44))),
         "bad-magic.bsdf": tensor_file(flat_material(), magic=b"not_a_tensor"),
@@ -146,7 +157,8 @@ BAD_FILES = ["empty.csv", "empty.bsdf", "empty.binary", "empty.pt", "empty.h5", 
              "random.h5", "random.npz", "half.bsdf", "half.csv", "half.npz", "half.pt", "nan.csv", "inf.csv",
              "negative.csv", "huge-value.csv", "text.csv", "few-columns.csv", "header-bomb.npz", "pickled.npz",
              "huge-values.bsdf", "bad-magic.bsdf", "sparse.bsdf", "loop.h5", "fifo.csv", "loop-a.csv",
-             "folder.binary"]
+             "folder.binary", "empty.astm", "random.astm", "half.astm", "nan.astm", "degrees.astm", "negative.astm",
+             "btdf.astm", "header-only.astm"]
 
 
 def _reader_cases() -> list:

@@ -263,12 +263,38 @@ def test_the_command_end_to_end(run_dir, toy_materials, tmp_path, capsys):
          "truth.png"])
     assert set(report["spectrum"]["relative_error_by_band"]["reconstruction"]) == {"l 0", "l 1–4", "l 5–16", "l 17–49"}
     assert {"rmse", "psnr", "ssim", "delta_e", "lfre"} <= set(report["metrics"])
-    assert report["input"] == {"path": str(source), "kind": "merl", "samples": 500}
+    assert report["input"] == {"path": str(source), "kind": "merl", "samples": 500, "pattern": "merl-bins"}
     assert set(report["timings_s"]) == {"encode", "latent", "weights"} and len(report["z"]) == 8
     # What was written is what the renderers and the MERL reader take.
     assert frenbrdf.read_merl(out / "material.binary").shape == (3, 90, 90, 180)
     assert cli.main(["render", str(out / "material.pt"), "--out", str(tmp_path / "x.png"), "--resolution", "32"]) == 0
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging folder left
+
+
+def test_the_command_samples_a_material_by_the_pattern_asked_for(run_dir, toy_materials, tmp_path, capsys):
+    source = sorted(toy_materials.glob("*.binary"))[3]
+    assert _reconstruct(source, "--out", tmp_path / "gonio", "--model", run_dir, "--samples", 300,
+                        "--pattern", "gonioreflectometer", "--refine", "none") == 0
+    report = json.loads((tmp_path / "gonio" / "reconstruction.json").read_text())
+    assert report["input"] == {"path": str(source), "kind": "merl", "samples": 300, "pattern": "gonioreflectometer"}
+    assert np.isfinite(report["metrics"]["psnr"])
+    material = read_samples(source, samples=300, pattern="gonioreflectometer")  # what the model was given
+    z = frenbrdf.Model.load(run_dir).encode(material.values, (material.wi, material.wo))
+    np.testing.assert_allclose(report["z"], z.tolist(), rtol=1e-5, atol=1e-6)
+    with pytest.raises(SystemExit) as exit_info:
+        _reconstruct(source, "--out", tmp_path / "x", "--model", run_dir, "--pattern", "goniometer")
+    assert exit_info.value.code == 2 and "expected a sampling pattern, one of merl-bins, " in capsys.readouterr().err
+    csv = tmp_path / "measured.csv"
+    from frenbrdf.io import write_samples
+
+    write_samples(csv, material)
+    with pytest.raises(SystemExit) as exit_info:
+        _reconstruct(csv, "--out", tmp_path / "csv", "--model", run_dir, "--pattern", "uniform")
+    assert exit_info.value.code == 2 and "--pattern picks samples from a MERL file or a .bsdf" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        _reconstruct(source, "--out", tmp_path / "all", "--model", run_dir, "--pattern", "uniform", "--samples", "all")
+    assert "--samples all draws every MERL bin; --pattern uniform draws N pairs" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists() and not (tmp_path / "csv").exists() and not (tmp_path / "all").exists()
 
 
 def test_the_command_on_a_csv_and_all_bins(run_dir, toy_materials, tmp_path):

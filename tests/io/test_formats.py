@@ -23,7 +23,7 @@ from ..conftest import constant_table, random_layers, random_nbrdf_params, write
 from .test_bsdf_native import flat_material, tensor_file
 
 MATERIALS = (".binary", ".bsdf", ".pt", ".h5")
-SAMPLES = (".csv", ".npz")
+SAMPLES = (".csv", ".npz", ".astm")
 
 
 def _unit(rng, n):
@@ -59,7 +59,7 @@ def _write(folder, suffix: str, stem: str = "m"):
 def test_the_table_holds_every_format_once():
     assert set(FORMATS) == {*MATERIALS, *SAMPLES}
     assert all(suffix == suffix.lower() and entry.suffix == suffix for suffix, entry in FORMATS.items())
-    assert {s for s, e in FORMATS.items() if e.write} == {".binary", ".pt", ".csv", ".npz"}
+    assert {s for s, e in FORMATS.items() if e.write} == {".binary", ".pt", ".csv", ".npz", ".astm"}
     assert frenbrdf.read_material is read_material and frenbrdf.read_samples is read_samples
 
 
@@ -117,7 +117,8 @@ def test_another_suffix_is_refused_naming_the_file_and_the_suffixes_read(tmp_pat
         (read_material, "fit.weights", r"read_material reads .*; this file has the suffix '\.weights'"),
         (read_material, "material", r"read_material reads .*; this file has no suffix$"),
         (read_samples, "notes.txt", r"read_samples reads \.binary \(a MERL table\), \.bsdf \(an RGL measurement\), "
-                                    r"\.csv \(samples in CSV\), \.npz \(samples in NPZ\); this file has the suffix"),
+                                    r"\.csv \(samples in CSV\), \.npz \(samples in NPZ\), \.astm \(ASTM E1392 scatter "
+                                    r"data\); this file has the suffix"),
         (read_table, "notes.txt", r"read_table reads \.binary \(a MERL table\), \.bsdf \(an RGL measurement\); "),
     ]
     for reader, name, message in cases:
@@ -146,7 +147,7 @@ def test_writers_refuse_what_frenbrdf_does_not_write(tmp_path):
     with pytest.raises(ValueError, match=r"m\.h5: write_material writes .*; this file is a published Keras NBRDF"):
         write_material(tmp_path / "m.h5", _nbrdf().weights())
     with pytest.raises(ValueError, match=r"m\.binary: write_samples writes \.csv \(samples in CSV\), \.npz \(samples "
-                                         r"in NPZ\); this file is a MERL table"):
+                                         r"in NPZ\), \.astm \(ASTM E1392 scatter data\); this file is a MERL table"):
         write_samples(tmp_path / "m.binary", _measurements())
     with pytest.raises(TypeError, match=r"m\.pt: a saved NBRDF holds NBRDFWeights"):
         write_material(tmp_path / "m.pt", _nbrdf())
@@ -184,8 +185,9 @@ def test_samples_round_trip_exactly(tmp_path, suffix):
     read = read_samples(path)
     assert read.kind == suffix[1:] and read.source == str(path)
     np.testing.assert_array_equal(read.values, written.values)  # written exactly
-    for name in ("wi", "wo"):  # normalised as they are read: to the last bit or two
-        np.testing.assert_allclose(getattr(read, name), getattr(written, name), rtol=1e-15, atol=0)
+    for name in ("wi", "wo"):  # normalised as they are read: to the last bit or two (an .astm holds angles)
+        tolerance = {"rtol": 0, "atol": 1e-15} if suffix == ".astm" else {"rtol": 1e-15, "atol": 0}
+        np.testing.assert_allclose(getattr(read, name), getattr(written, name), **tolerance)
 
 
 def test_samples_drawn_from_a_measurement_convert_and_read_back(tmp_path):

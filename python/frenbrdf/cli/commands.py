@@ -142,7 +142,7 @@ def evaluate(args: argparse.Namespace) -> int:
 
     config = EvaluateConfig(samples=args.samples, edits=args.edits, resolution=args.resolution,
                             max_materials=args.max_materials, all_materials=args.all_materials,
-                            refine=args.refine, progress=not args.quiet)
+                            refine=args.refine, patterns=tuple(args.patterns), progress=not args.quiet)
     if args.quick:
         config.edits, config.edit_resolution = min(args.edits, 120), 96
     report = evaluate_seeds(args.runs, args.out, data=args.data, config=config, overwrite=args.overwrite)
@@ -228,10 +228,13 @@ def demo(args: argparse.Namespace) -> int:
 def reconstruct(args: argparse.Namespace) -> int:
     from ..material.outputs import reconstruct_file
 
-    given = given_options(args, "samples")
-    if given and Path(args.input).suffix.lower() in (".csv", ".npz"):
-        raise ValueError(f"--samples picks samples from a MERL file or a .bsdf; {args.input} is a file of samples, "
-                         "read whole")
+    given = given_options(args, "samples", "pattern")
+    if given and _holds_samples(args.input):
+        raise ValueError(f"--{next(iter(given))} picks samples from a MERL file or a .bsdf; {args.input} is a file "
+                         "of samples, read whole")
+    if given.get("samples", 1) is None and given.get("pattern", "merl-bins") != "merl-bins":
+        raise ValueError(f"--samples all draws every MERL bin; --pattern {given['pattern']} draws N pairs: give a "
+                         "number")
     if (args.width is not None or args.reciprocal) and args.refine != "full":
         raise ValueError(f"{'--width' if args.width is not None else '--reciprocal'} sets the NBRDF that "
                          f"--refine full fits; with --refine {args.refine} there is none")
@@ -253,8 +256,11 @@ def convert(args: argparse.Namespace) -> int:
 
     given = given_options(args, "samples")
     if given and Path(args.output).suffix.lower() == ".binary":
-        raise ValueError("--samples sets how many samples a .csv or .npz output holds; a .binary output is the whole "
-                         "table")
+        raise ValueError("--samples sets how many samples a .csv, .npz or .astm output holds; a .binary output is the "
+                         "whole table")
+    if given and _holds_samples(args.input):
+        raise ValueError(f"--samples picks samples from a MERL file or a .bsdf; {args.input} is a file of samples, "
+                         "converted whole")
     print(f"wrote {convert(args.input, args.output, seed=args.seed, overwrite=args.overwrite, **given)}")
     return 0
 
@@ -268,6 +274,14 @@ def view(args: argparse.Namespace) -> int:
     modes = f"; edit: {', '.join(page.edit.modes)}" if page.edit else ""
     print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB{modes}); open it in a browser")
     return 0
+
+
+def _holds_samples(path: str) -> bool:
+    """Whether ``path``'s suffix is that of a file of samples (``.csv``, ``.npz``, ``.astm``: frenbrdf.io.formats)."""
+    from ..io.formats import FORMATS
+
+    entry = FORMATS.get(Path(path).suffix.lower())
+    return entry is not None and entry.role == "samples"
 
 
 def given_options(args: argparse.Namespace, *options: str) -> dict:

@@ -68,3 +68,12 @@ def sample_count(text: str) -> int | None:
     if not text.isdigit() or int(text) < MIN_SAMPLES:  # as many as a file of samples must hold
         raise argparse.ArgumentTypeError(f"expected a number ≥ {MIN_SAMPLES} or 'all', got {text!r}")
     return int(text)
+
+
+def pattern(text: str) -> str:
+    """An argparse type: the name of a sampling pattern (:data:`frenbrdf.io.patterns.PATTERNS`)."""
+    from ..io.patterns import PATTERNS
+
+    if text not in PATTERNS:
+        raise argparse.ArgumentTypeError(f"expected a sampling pattern, one of {', '.join(PATTERNS)}; got {text!r}")
+    return text

@@ -125,6 +125,10 @@ def _evaluate(subparsers) -> None:
                           help="evaluate only the first N materials by name (default and 0: all)")
     evaluate.add_argument("--samples", type=options.table_samples, default=4000,
                           help="samples given to the encoder (default 4000)")
+    evaluate.add_argument("--patterns", type=options.pattern, nargs="+", default=["merl-bins"], metavar="NAME",
+                          help="sampling patterns to encode each material from, each its own rows (default "
+                          "merl-bins: random valid bins; gonioreflectometer, image-based, in-plane, …: "
+                          "frenbrdf.io.patterns); editing and the figures use the first")
     evaluate.add_argument("--edits", type=options.count, default=2000, help="interpolations for editing (default 2000; 0: no editing table)")
     evaluate.add_argument("--resolution", type=options.evaluate_resolution, default=256,
                           help="render size of the reconstruction table (8 … 1024)")
@@ -171,10 +175,13 @@ def _select(subparsers) -> None:
 
 
 def _reconstruct(subparsers) -> None:
-    rec = subparsers.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ of samples, a "
-                              "MERL file or an RGL .bsdf): NBRDF, MERL table, render and report in one folder")
+    rec = subparsers.add_parser("reconstruct", help="a material from your measurements (CSV/NPZ/ASTM E1392 "
+                              "samples, a MERL file or an RGL .bsdf): NBRDF, MERL table, render and report in one "
+                              "folder")
     rec.add_argument("input", help="CSV or NPZ with columns wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b (or angles; see "
-                     "frenbrdf.io.samples), a MERL .binary file or an RGL .bsdf measurement")
+                     "frenbrdf.io.samples), an ASTM E1392 .astm file (theta_i,phi_i,theta_s,phi_s in radians, "
+                     "then R,G,B or one BRDF column; see frenbrdf.io.astm), a MERL .binary file or an RGL .bsdf "
+                     "measurement")
     rec.add_argument("--out", required=True, help="result folder: a new or empty one, or an earlier result "
                      "folder, which is replaced (never the input's folder)")
     rec.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files "
@@ -182,7 +189,12 @@ def _reconstruct(subparsers) -> None:
     rec.add_argument("--model", default="pretrained", help="training run folder, checkpoint, or 'pretrained' "
                      "(the model shipped in the package; the default)")
     rec.add_argument("--samples", type=options.sample_count, default=argparse.SUPPRESS, metavar="N|all",
-                     help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
+                     help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all; "
+                     "with --pattern, its pairs")
+    rec.add_argument("--pattern", type=options.pattern, default=argparse.SUPPRESS, metavar="NAME",
+                     help="MERL or .bsdf input: the sampling pattern, the device imitated (default merl-bins: "
+                     "random valid bins; gonioreflectometer, image-based, in-plane, …: frenbrdf.io.patterns, "
+                     "docs/usage.md)")
     rec.add_argument("--refine", choices=("none", "latent", "full"), default="full",
                      help="test-time refinement: none (encoder only), latent (optimise z: stays in the latent "
                      "space, for editing), full (then the NBRDF's weights; the default)")
@@ -200,12 +212,16 @@ def _reconstruct(subparsers) -> None:
 
 
 def _convert(subparsers) -> None:
-    convert = subparsers.add_parser("convert", help="an RGL .bsdf measurement into a MERL .binary table, or a .bsdf "
-                                  "or MERL file into a CSV/NPZ of samples that reconstruct reads")
-    convert.add_argument("input", help="a .bsdf measurement or a MERL .binary file")
-    convert.add_argument("output", help="a .binary (MERL table), .csv or .npz (samples) file to write")
+    convert = subparsers.add_parser("convert", help="an RGL .bsdf measurement into a MERL .binary table, a .bsdf "
+                                  "or MERL file into a CSV/NPZ/ASTM E1392 file of samples that reconstruct reads, "
+                                  "or a file of samples into another format")
+    convert.add_argument("input", help="a .bsdf measurement, a MERL .binary file, or a .csv, .npz or .astm file of "
+                         "samples")
+    convert.add_argument("output", help="a .binary (MERL table; not from samples), .csv, .npz or .astm (samples) "
+                         "file to write")
     convert.add_argument("--samples", type=options.sample_count, default=argparse.SUPPRESS, metavar="N|all",
-                         help="CSV/NPZ output: random valid MERL bins to sample (default 4000), or all")
+                         help="a .bsdf or MERL input into samples: random valid MERL bins to sample (default "
+                         "4000), or all")
     convert.add_argument("--seed", type=options.seed, default=0, help="seeds the sampling (default 0)")
     convert.add_argument("--overwrite", action="store_true", help="replace the output file if it exists")
     convert.set_defaults(run=commands.convert)

@@ -8,7 +8,10 @@
   the highlights (the 5 % brightest of those pixels in the truth's linear render,
   :func:`frenbrdf.render.scoring.highlight_mask`), and the frequency loss. With ``EvaluateConfig.refine`` the same samples are also refined at test time
   (:func:`frenbrdf.models.reconstruct.reconstruct`, what a user reconstructing a material runs) and the
-  refined NBRDF measured the same way: the "refined" rows.
+  refined NBRDF measured the same way: the "refined" rows. With several sampling patterns
+  (``EvaluateConfig.patterns``, :mod:`frenbrdf.io.patterns`: the devices imitated) each material is also encoded
+  from the same number of pairs of each further pattern and measured the same way: rows ``<key>@<pattern>``, each
+  pattern's rows its own in the tables; editing, the figures and the spectra use the first pattern's latents.
 - Editing: each unordered pair (a, b) of test materials at most once and interior
   t ∈ {0.25, 0.5, 0.75}; the truth is
   the table (1 − t)·a + t·b (its render is the same blend of the linear renders, since
@@ -29,6 +32,7 @@ import dataclasses
 import itertools
 import os
 import time
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +43,9 @@ from ..data.folders import list_materials
 from ..io.atomic import save_json, write_text
 from ..io.formats import read_measured
 from ..io.outputs import OutputFolder
-from ..io.sampling import as_table, sample_bins, truth_samples
+from ..io.patterns import DEFAULT as DEFAULT_PATTERN
+from ..io.patterns import PATTERNS, pattern_samples
+from ..io.sampling import as_table
 from ..models.autoencoder import Model
 from ..models.reconstruct import BUDGETS, refine_config
 from ..presets import method_names
@@ -48,7 +54,7 @@ from ..render.renderer import Scene, material_mask, render_linear, tonemap
 from ..render.scoring import (
     FrequencyMetric as FrequencyMetric,  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
 )
-from ..render.scoring import edit_metrics, encode_and_render, highlight_mask, refined_reconstruction
+from ..render.scoring import Scoring, edit_metrics, highlight_mask
 from ..render.scoring import image_metrics as image_metrics
 from ..render.scoring import reconstruction_rows as reconstruction_rows
 from ..training.run import Run
@@ -56,7 +62,7 @@ from .spectrum import SpectrumSummary
 from .statistics import REFERENCE, compare_seeds
 from .tables import PAPER as PAPER  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
 from .tables import ROWS as ROWS
-from .tables import colour_losses, report_markdown, seeds_markdown, summarise, table_rows
+from .tables import colour_losses, pattern_suffix, report_markdown, seeds_markdown, summarise, table_rows
 from .tables import markdown_table as markdown_table
 
 #: The largest render sizes an evaluation takes: about 2 GB at these on 100 test materials.
@@ -87,11 +93,21 @@ class EvaluateConfig:
     refine: str = "none"
     """Test-time refinement, a budget name of :data:`frenbrdf.models.reconstruct.BUDGETS`: besides the encoder-only rows
     (the paper's protocol), each material is refined on the same samples and measured again ("none": not)."""
+    patterns: tuple[str, ...] = (DEFAULT_PATTERN,)
+    """The sampling patterns each material is encoded from (:data:`frenbrdf.io.patterns.PATTERNS`), ``samples``
+    pairs of each: the first gives the rows under the plain keys, editing, the figures and the spectra; each other
+    its rows ``<key>@<pattern>``. ``merl-bins`` draws from the evaluation's seed as it always has; another pattern
+    from a seed of its own (the evaluation's and the name's), so adding a pattern changes no other's numbers."""
     progress: bool = True
 
     def __post_init__(self):
         if self.refine not in BUDGETS:
             raise ValueError(f"refine must be a refinement budget, one of {tuple(BUDGETS)}; got {self.refine!r}")
+        self.patterns = tuple(self.patterns)
+        unknown = [name for name in self.patterns if name not in PATTERNS]
+        if not self.patterns or unknown or len(set(self.patterns)) != len(self.patterns):
+            raise ValueError(f"patterns must be one or more distinct sampling patterns of {', '.join(PATTERNS)}; "
+                             f"got {self.patterns!r}")
         # Every test material's editing truth is kept for the editing table, and each material's renders while it
         # is scored: the render sizes bound the memory an evaluation needs.
         for name, value, most in (("resolution", self.resolution, MAX_RESOLUTION),
@@ -269,6 +285,12 @@ def check_out(out_dir, run_dirs, *, overwrite: bool = False) -> OutputFolder:
     return out
 
 
+def pattern_rng(seed: int, pattern: str) -> np.random.Generator:
+    """The generator a sampling pattern other than ``merl-bins`` draws an evaluation's samples from: seeded by the
+    evaluation's seed and the pattern's name (the same on every machine), whatever other patterns run."""
+    return np.random.default_rng([seed, zlib.crc32(pattern.encode())])
+
+
 def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: EvaluateConfig | None = None,
                   materials: EvaluationSet | None = None, overwrite: bool = False) -> dict:
     """Evaluates runs (one per method) on their common test split, or with ``config.all_materials`` on every
@@ -286,7 +308,6 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     rng = np.random.default_rng(config.seed)
     scene, edit_scene = Scene(resolution=config.resolution), Scene(resolution=config.edit_resolution)
     mask, edit_mask = material_mask(scene), material_mask(edit_scene)
-    frequency_metric = FrequencyMetric()
     show = config.progress
     # Refinement is seeded by the evaluation's seed: the same config reruns to the same numbers.
     refinement = (None if config.refine == "none"
@@ -300,30 +321,32 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     per_material: dict[str, list[dict]] = {m: [] for m in models}
     renders = {}
     spectrum = SpectrumSummary()  # each method's decoded latents against the true tables: spectrum.png
+    scoring = Scoring(scene, mask, FrequencyMetric(), refinement)
+    rngs = {pattern: rng if pattern == DEFAULT_PATTERN else pattern_rng(config.seed, pattern)
+            for pattern in config.patterns}
     for name in tqdm(names, desc="reconstruction", disable=not show):
         truth = read_measured(files[name])  # a .bsdf renders as measured, not through its table
         table = as_table(truth)
-        samples = truth_samples(truth, sample_bins(table, rng, config.samples), rng)
+        samples = {pattern: pattern_samples(truth, pattern, config.samples, rngs[pattern], table=table)
+                   for pattern in config.patterns}
         edit_truth_linear[name] = render_linear(truth, edit_scene)
         truth_linear = render_linear(truth, scene)
         truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
         renders[name] = {"truth": truth_image}
         decoded = {}
         for method, model in models.items():
-            z, image = encode_and_render(model, *samples, scene)
-            latents[""][method][name] = z
-            renders[name][method] = image
-            metrics = image_metrics(truth_image, image, mask, highlight)
-            metrics["lfre"] = frequency_metric(model, table, z)
-            decoded[method] = model.decode(z)
-            if refinement:
-                result, image, seconds = refined_reconstruction(model, samples, scene, refinement)
-                latents["refined_"][method][name] = result.z
-                renders[name][f"{method} refined"] = image
-                refined = image_metrics(truth_image, image, mask, highlight)
-                metrics.update({f"refined_{key}": value for key, value in refined.items()})
-                metrics.update(refined_lfre=frequency_metric(model, table, result.nbrdf), refine_seconds=seconds)
-            per_material[method].append({"material": name, **metrics})
+            scored = {pattern: scoring.reconstruct(model, drawn, table, truth_image, highlight)
+                      for pattern, drawn in samples.items()}
+            primary = scored[config.patterns[0]]  # the first pattern's: the figures show it
+            latents[""][method][name] = primary.z
+            renders[name][method] = primary.image
+            decoded[method] = model.decode(primary.z)
+            if primary.refined is not None and primary.refined_image is not None:
+                latents["refined_"][method][name] = primary.refined.z
+                renders[name][f"{method} refined"] = primary.refined_image
+            per_material[method].append({"material": name, **{key + pattern_suffix(pattern, config.patterns): value
+                                                              for pattern, one in scored.items()
+                                                              for key, value in one.metrics.items()}})
         spectrum.add(table, decoded)
 
     # Editing.
@@ -415,7 +438,7 @@ def _compare_seeds(runs: list, groups: dict, staging: Path, data, config: Evalua
     reports = {seed: evaluate_runs(group, staging / f"seed-{seed}", data=data, config=config, materials=materials)
                for seed, group in sorted(groups.items())}
     # A row without a finite value on every seed (editing of a single material) cannot be compared.
-    keys = [key for key, _ in table_rows(config.refine)
+    keys = [key for key, _ in table_rows(config.refine, config.patterns)
             if all(np.isfinite(v.get(key, np.nan)) for r in reports.values() for v in r["summary"].values())]
     comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, keys)
     methods = reports[min(reports)]["reconstruction"]

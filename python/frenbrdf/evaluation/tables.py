@@ -33,23 +33,53 @@ ROWS = RECONSTRUCTION_ROWS + EDITING_ROWS
 REFINED = {"latent": "refined z", "full": "refined z + weights"}
 
 
-def table_rows(refine: str = "none") -> list[tuple[str, str]]:
+def pattern_suffix(pattern: str, patterns) -> str:
+    """What a sampling pattern's metric keys end with in a report evaluated from ``patterns``
+    (:attr:`frenbrdf.evaluation.evaluate.EvaluateConfig.patterns`): nothing for the first, ``@<pattern>`` for
+    another."""
+    return "" if pattern == patterns[0] else f"@{pattern}"
+
+
+def table_rows(refine: str = "none", patterns=()) -> list[tuple[str, str]]:
     """The rows of a table: :data:`ROWS` and, when test-time refinement ``refine`` (a budget name) ran, the
     refined rows after the encoder's of each block. Editing interpolates refined latents whatever the budget
-    (refined weights have no latent), so its rows say "refined z"."""
+    (refined weights have no latent), so its rows say "refined z".
+
+    With several sampling ``patterns`` (a report's ``config["patterns"]``) the reconstruction rows come once per
+    pattern, each labelled with its name (``uniform: Recon PSNR ↑``; keys ``<key>@<pattern>`` after the first),
+    then the editing rows, which interpolate the first pattern's latents."""
     if refine == "none":
-        return list(ROWS)
-    refined = REFINED.get(refine, f"refined ({refine})")
-    return [*RECONSTRUCTION_ROWS, ("refined_psnr", f"Recon PSNR, {refined} ↑"),
-            ("refined_lfre", f"Recon L_fre, {refined} ↓"), ("refined_delta_e", f"Recon ΔE, {refined} ↓"),
-            ("refined_highlight_psnr", f"Recon highlight PSNR, {refined} ↑"),
-            *EDITING_ROWS, ("edit_refined_psnr", "Edit PSNR, refined z ↑"),
-            ("edit_refined_delta_e", "Edit ΔE, refined z ↓")]
+        rows = list(ROWS)
+    else:
+        refined = REFINED.get(refine, f"refined ({refine})")
+        rows = [*RECONSTRUCTION_ROWS, ("refined_psnr", f"Recon PSNR, {refined} ↑"),
+                ("refined_lfre", f"Recon L_fre, {refined} ↓"), ("refined_delta_e", f"Recon ΔE, {refined} ↓"),
+                ("refined_highlight_psnr", f"Recon highlight PSNR, {refined} ↑"),
+                *EDITING_ROWS, ("edit_refined_psnr", "Edit PSNR, refined z ↑"),
+                ("edit_refined_delta_e", "Edit ΔE, refined z ↓")]
+    if len(patterns) < 2:
+        return rows
+    reconstruction = [row for row in rows if not row[0].startswith("edit_")]
+    return [*((key + pattern_suffix(pattern, patterns), f"{pattern}: {label}") for pattern in patterns
+              for key, label in reconstruction), *(row for row in rows if row[0].startswith("edit_"))]
 
 
 def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
     """The table's numbers of one method: means over its reconstruction ``rows`` and its ``edit_rows``
-    (NaN without edits); the refined ones too when the rows hold them."""
+    (NaN without edits); the refined ones too when the rows hold them, and each further sampling pattern's
+    (row keys ``<key>@<pattern>``: summary keys ``<summary key>@<pattern>``)."""
+    summary = _summary(rows, edit_rows)
+    suffixes = dict.fromkeys("@" + key.partition("@")[2] for key in (rows[0] if rows else {}) if "@" in key)
+    for suffix in suffixes:
+        drawn = [{key.removesuffix(suffix): value for key, value in row.items() if key.endswith(suffix)}
+                 for row in rows]
+        summary.update({key + suffix: value for key, value in _summary(drawn, []).items()
+                        if not key.startswith("edit_")})
+    return summary
+
+
+def _summary(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
+    """:func:`summarise` of one pattern's rows (plain keys)."""
     def mean(values, key, scale=1.0):
         return scale * float(np.mean([r[key] for r in values])) if values else float("nan")
 
@@ -99,10 +129,12 @@ def seeds_markdown(report: dict) -> str:
     evaluated = report["evaluation_set"]
     materials = (f"the same {evaluated['materials']} materials for every seed" if evaluated["out_of_distribution"]
                  else f"each seed's test materials ({report['test_materials']} in all)")
-    rows = table_rows(first["config"].get("refine", "none"))
+    patterns = first["config"].get("patterns", ["merl-bins"])
+    rows = table_rows(first["config"].get("refine", "none"), patterns)
     left_out = [label for key, label in rows if key not in report["comparison"]["metrics"]]
     refined = first.get("refinement")
-    return (evaluation_set_markdown(evaluated) + "\n\n"
+    return (evaluation_set_markdown(evaluated) + "\n\n" + patterns_markdown(patterns, first["config"]["samples"])
+            + "\n\n"
             + (refinement_markdown(refined, first["config"]["samples"]) + "\n\n" if refined else "")
             + f"Reconstruction on {materials}; editing over {n_edits} interpolations per seed (each unordered pair of "
             "evaluated materials at most once, t ∈ {0.25, 0.5, 0.75}). RMSE, PSNR, SSIM and ΔE over the lit material "
@@ -112,6 +144,18 @@ def seeds_markdown(report: dict) -> str:
             + markdown(report["comparison"], dict(rows)) + "\n"
             + colour_markdown(report["colour"], "averaged over the seeds that evaluated it"
                               + ("; encoder only" if refined else "")))
+
+
+def patterns_markdown(patterns, samples: int) -> str:
+    """How the samples were drawn (a report's ``config["patterns"]``, :mod:`frenbrdf.io.patterns`), in a sentence or
+    two."""
+    names = ", ".join(f"`{name}`" for name in patterns)
+    if len(patterns) == 1:
+        return f"Each material encoded from {samples} samples drawn by the sampling pattern {names}."
+    return (f"Each material encoded from {samples} samples of each sampling pattern: {names}. The reconstruction "
+            "rows come once per pattern, labelled with its name (the paper's numbers, from random MERL bins, beside "
+            f"the first only); editing, the renders and the spectra use the first pattern's (`{patterns[0]}`) "
+            "latents.")
 
 
 def evaluation_set_markdown(evaluated: dict) -> str:
@@ -153,10 +197,11 @@ def report_markdown(report: dict) -> str:
     refined = report.get("refinement")
     if refined:
         rendered += " Beside each method's render, its refined one (`<method> refined`)."
-    return "\n".join([evaluation_set_markdown(evaluated), "",
-                      *([refinement_markdown(refined, report["config"]["samples"]), ""] if refined else []),
+    patterns = report["config"].get("patterns", ["merl-bins"])  # a report from before patterns: merl-bins
+    return "\n".join([evaluation_set_markdown(evaluated), "", patterns_markdown(patterns, report["config"]["samples"]),
+                      "", *([refinement_markdown(refined, report["config"]["samples"]), ""] if refined else []),
                       markdown_table(report["summary"], len(report["test_materials"]), n_edits, materials=noun,
-                                     refine=report["config"].get("refine", "none")),
+                                     refine=report["config"].get("refine", "none"), patterns=patterns),
                       colour_markdown(report["colour"], "encoder only" if refined else ""), rendered, ""])
 
 
@@ -181,9 +226,10 @@ def refinement_markdown(refinement: dict, samples: int) -> str:
 
 
 def markdown_table(summary: dict, n_materials: int, n_edits: int, materials: str = "test materials",
-                   refine: str = "none") -> str:
+                   refine: str = "none", patterns=()) -> str:
     """The reconstruction and editing table, methods side by side, with the paper's numbers (none for ΔE nor
-    the refined rows); ``refine``: the refinement budget that ran (:func:`table_rows`)."""
+    the refined rows, nor a further pattern's); ``refine``: the refinement budget that ran, ``patterns``: the
+    sampling patterns (:func:`table_rows`)."""
     methods = list(summary)
     header = "| | " + " | ".join(methods) + " | " + " | ".join(f"paper: {m}" for m in PAPER) + " |"
     editing = (f"editing over {n_edits} interpolations (each unordered pair of {materials} at most once, "
@@ -192,8 +238,8 @@ def markdown_table(summary: dict, n_materials: int, n_edits: int, materials: str
              "the lit material pixels of the renders (background excluded); L_fre normalised on the sphere "
              "(docs/method.md §5).", "",
              header, "|---" * (1 + len(methods) + len(PAPER)) + "|"]
-    for key, label in table_rows(refine):
-        if key in HIGHLIGHT_KEYS and any(key not in summary[m] for m in methods):
+    for key, label in table_rows(refine, patterns):
+        if key.partition("@")[0] in HIGHLIGHT_KEYS and any(key not in summary[m] for m in methods):
             continue  # a report from before the highlight metrics
         if key.startswith("edit_") and not n_edits:
             continue  # a single material: nothing to interpolate, every value NaN

@@ -9,11 +9,12 @@ suffix       holds                               :func:`read_material`       :fu
 ``.h5``      a published Keras NBRDF             :class:`NBRDFWeights`       —
 ``.csv``     samples in CSV                      —                           the samples
 ``.npz``     samples in NPZ                      —                           the samples
+``.astm``    ASTM E1392 scatter data             —                           the samples (:mod:`frenbrdf.io.astm`)
 ===========  ==================================  ==========================  ===============================
 
 Suffixes are matched whatever their case (``GOLD.H5``). :func:`write_material` writes ``.binary`` and ``.pt``,
-:func:`write_samples` ``.csv`` and ``.npz``, each atomically. A suffix of no format, or of a format that does not
-hold what is asked for, is refused with one message naming the file and the suffixes accepted.
+:func:`write_samples` ``.csv``, ``.npz`` and ``.astm``, each atomically. A suffix of no format, or of a format that
+does not hold what is asked for, is refused with one message naming the file and the suffixes accepted.
 
 What :func:`read_material` returns is the file's own content: an NBRDF file gives its weights, as files sit below
 the models; :meth:`frenbrdf.NBRDF.from_weights` (or :func:`frenbrdf.models.nbrdf.as_brdf`, which leaves a table or
@@ -37,11 +38,16 @@ from typing import Any
 
 import numpy as np
 
+from .astm import SUFFIX as ASTM_SUFFIX
+from .astm import read_astm_samples, write_astm_samples
 from .bsdf import SUFFIX as BSDF_SUFFIX
 from .bsdf import MeasuredBSDF, read_bsdf
 from .merl import read_merl, write_merl
 from .nbrdf import NBRDFWeights, read_nbrdf, write_nbrdf
 from .paths import input_file
+from .patterns import DEFAULT as DEFAULT_PATTERN
+from .patterns import measure
+from .patterns import pattern as find_pattern
 from .samples import Measurements, read_csv_samples, read_npz_samples, write_csv_samples, write_npz_samples
 from .sampling import as_table, draw_samples
 
@@ -81,7 +87,7 @@ FORMATS = {entry.suffix: entry for entry in (
     Format(".h5", "a published Keras NBRDF", "nbrdf", _read_keras),
     Format(".csv", "samples in CSV", "samples", read_csv_samples, write_csv_samples),
     Format(".npz", "samples in NPZ", "samples", read_npz_samples, write_npz_samples),
-    # ".astm": ASTM E1392 scatter data, samples (role "samples"): its reader and writer go here.
+    Format(ASTM_SUFFIX, "ASTM E1392 scatter data", "samples", read_astm_samples, write_astm_samples),
 )}
 #: The suffixes of measured materials, as material folders hold them (:func:`read_table` reads them).
 MEASURED = tuple(suffix for suffix, entry in FORMATS.items() if entry.role == "measurement")
@@ -140,18 +146,24 @@ def read_table(path: str | os.PathLike) -> np.ndarray:
     return as_table(format_of(path, ("measurement",), "read_table").read(path))
 
 
-def read_samples(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0) -> Measurements:
-    """Reads the samples of one material: a CSV or NPZ of samples, or samples drawn from a MERL ``.binary`` or an
-    RGL ``.bsdf`` (:func:`frenbrdf.io.sampling.draw_samples`: the whole material is kept as the truth).
+def read_samples(path: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0,
+                 pattern: str = DEFAULT_PATTERN) -> Measurements:
+    """Reads the samples of one material: a CSV, NPZ or ASTM E1392 (``.astm``) file of samples, or samples drawn
+    from a MERL ``.binary`` or an RGL ``.bsdf`` (:func:`frenbrdf.io.sampling.draw_samples`: the whole material is kept as the truth).
 
     Parameters
     ----------
     path
         The file; its suffix picks the format (:data:`FORMATS`).
     samples
-        A whole material only: sample this many random valid MERL bins (from ``seed``), or all of them (None).
+        A whole material only: sample this many random valid MERL bins (from ``seed``), or all of them (None);
+        with another ``pattern``, this many of its pairs.
     seed
-        A whole material only: seeds the bins drawn (and a measurement's order of each pair).
+        A whole material only: seeds the bins drawn (and a measurement's order of each pair), or the pattern.
+    pattern
+        A whole material only: the sampling pattern, a name of :data:`frenbrdf.io.patterns.PATTERNS` (the device
+        imitated); the default, ``merl-bins``, draws random valid MERL bins. Another is measured at its pairs
+        (:func:`frenbrdf.io.patterns.measure`).
 
     Raises
     ------
@@ -163,9 +175,14 @@ def read_samples(path: str | os.PathLike, *, samples: int | None = 4000, seed: i
     """
     path = input_file(path, "measurement file")
     entry = format_of(path, ("samples", "measurement"), "read_samples")
+    find_pattern(pattern)  # an unknown pattern is named, whatever the file
     if entry.role == "samples":
         return entry.read(path)
-    return draw_samples(entry.read(path), samples=samples, seed=seed, source=str(path))
+    if pattern == DEFAULT_PATTERN:
+        return draw_samples(entry.read(path), samples=samples, seed=seed, source=str(path))
+    if samples is None:
+        raise ValueError(f"samples=None (all) draws every MERL bin: the {DEFAULT_PATTERN} pattern only, not {pattern!r}")
+    return measure(entry.read(path), pattern, samples, np.random.default_rng(seed), source=str(path))
 
 
 def write_material(path: str | os.PathLike, material: np.ndarray | NBRDFWeights) -> None:
@@ -177,8 +194,8 @@ def write_material(path: str | os.PathLike, material: np.ndarray | NBRDFWeights)
 
 
 def write_samples(path: str | os.PathLike, measurements: Measurements) -> None:
-    """Writes samples as a ``.csv`` or an ``.npz`` (the vector form), atomically; :func:`read_samples` reads them
-    back."""
+    """Writes samples as a ``.csv`` or an ``.npz`` (the vector form) or an ``.astm`` (angles), atomically;
+    :func:`read_samples` reads them back."""
     entry = format_of(path, ("samples",), "write_samples", writing=True)
     assert entry.write is not None  # format_of(writing=True) picks only formats with a writer
     entry.write(path, measurements)

@@ -13,6 +13,9 @@ CSV (``.csv``)
 NPZ (``.npz``)
     One 1-D array per column of one of the forms above, named as the columns.
 
+ASTM E1392 files (``.astm``), as gonioreflectometers export them, are read into the same class and checked the same
+way by :mod:`frenbrdf.io.astm`.
+
 Directions are unit vectors in the local shading frame (z = the surface normal, both above
 the surface: z > 0). Lengths may be off by at most :data:`UNIT_TOLERANCE` (1e-3); they are
 then normalised. ``r, g, b`` is the BRDF value in 1/sr (reflectance as MERL tables hold it
@@ -71,7 +74,7 @@ class Measurements:
     source: str = ""
     """The file read ('' for samples made in memory)."""
     kind: str = "arrays"
-    """``"csv"``, ``"npz"``, ``"merl"`` or ``"bsdf"``: the format read (``"arrays"``: made in memory)."""
+    """``"csv"``, ``"npz"``, ``"astm"``, ``"merl"`` or ``"bsdf"``: the format read (``"arrays"``: made in memory)."""
     table: np.ndarray | None = None
     """The whole MERL table ``(3, 90, 90, 180)`` when the input was one (or a ``.bsdf`` at every bin), else None."""
     truth: object = None
@@ -225,11 +228,13 @@ def _directions(columns: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]
     return out[0], out[1]
 
 
-def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.ndarray) -> Measurements:
-    """Checks every sample, naming the first bad row; returns the samples with unit directions."""
+def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.ndarray, *,
+             unit: str = "row") -> Measurements:
+    """Checks every sample, naming the first bad row (``unit``: what ``rows`` number, ``"line"`` in a file whose
+    rows are lines of their own kind); returns the samples with unit directions."""
     def fail(bad: np.ndarray, what: str):
         first = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"{path}: row {rows[first]}: {what} ({int(bad.sum())} such row(s) in all)")
+        raise ValueError(f"{path}: {unit} {rows[first]}: {what} ({int(bad.sum())} such {unit}(s) in all)")
 
     if len(rows) < MIN_SAMPLES:
         raise ValueError(f"{path}: {len(rows)} samples; at least {MIN_SAMPLES} are needed")

@@ -1,9 +1,11 @@
-"""``frenbrdf convert``: a measured material into another format.
+"""``frenbrdf convert``: a measured material, or a file of samples, into another format.
 
 - an RGL ``.bsdf`` measurement → a MERL ``.binary`` table (evaluated at every bin's directions);
-- a ``.bsdf`` or a MERL table → a CSV or NPZ of samples at random valid MERL bins, the form
-  ``frenbrdf reconstruct`` reads (:func:`frenbrdf.io.read_samples`; a ``.bsdf`` is evaluated at each
-  bin's pair in a random order: a measurement need not be reciprocal, a table keeps one order).
+- a ``.bsdf`` or a MERL table → a CSV, NPZ or ASTM E1392 (``.astm``) file of samples at random valid MERL
+  bins, the form ``frenbrdf reconstruct`` reads (:func:`frenbrdf.io.read_samples`; a ``.bsdf`` is evaluated at
+  each bin's pair in a random order: a measurement need not be reciprocal, a table keeps one order);
+- a file of samples (``.csv``, ``.npz``, ``.astm``) → another, every sample as it is (ASTM files to CSV and
+  back). Scattered samples make no MERL table: ``frenbrdf reconstruct`` fits a material to them and writes one.
 
 The output is checked before any work (its suffix, its folder; an existing file is replaced only
 when asked) and written atomically.
@@ -13,6 +15,7 @@ Examples
 >>> from frenbrdf.material.convert import convert
 >>> convert("paper_white_rgb.bsdf", "paper_white.binary")                 # doctest: +SKIP
 >>> convert("paper_white_rgb.bsdf", "paper_white.csv", samples=4000)      # doctest: +SKIP
+>>> convert("gonio-export.astm", "gonio-export.csv")                     # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -31,20 +34,24 @@ OUTPUTS = {suffix: entry.holds for suffix, entry in FORMATS.items()
 
 def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0,
             overwrite: bool = False) -> Path:
-    """Converts ``source`` (a ``.bsdf`` or ``.binary`` file) into ``dest``, whose suffix picks the format
-    (:data:`OUTPUTS`). ``samples``: CSV/NPZ output only, the random valid bins drawn (from ``seed``), None for
-    all. Returns ``dest``.
+    """Converts ``source`` (a ``.bsdf`` or ``.binary`` file, or a file of samples) into ``dest``, whose suffix
+    picks the format (:data:`OUTPUTS`). ``samples``: a material into samples only, the random valid bins drawn
+    (from ``seed``), None for all; a file of samples is converted whole. Returns ``dest``.
 
     Raises
     ------
     FileExistsError
         ``dest`` exists and ``overwrite`` is false.
     ValueError
-        A bad suffix, ``dest`` equal to ``source``, or a malformed input (the message names the file).
+        A bad suffix, ``dest`` equal to ``source``, samples into a ``.binary``, or a malformed input (the message
+        names the file).
     """
     source = input_file(source, "material file")
-    format_of(source, ("measurement",), "convert")  # checked before any work
+    entry = format_of(source, ("measurement", "samples"), "convert")  # checked before any work
     dest = check_output_file(dest, tuple(OUTPUTS), option="output", overwrite=overwrite, inputs=(source,))
+    if entry.role == "samples" and dest.suffix.lower() == ".binary":
+        raise ValueError(f"{source}: scattered samples make no MERL table ({dest.name}); `frenbrdf reconstruct "
+                         f"{source.name} --out FOLDER` fits a material to them and writes its table")
     dest.parent.mkdir(parents=True, exist_ok=True)  # a folder that can be created (checked above)
     if dest.suffix.lower() == ".binary":
         write_material(dest, read_table(source))

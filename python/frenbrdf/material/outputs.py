@@ -17,10 +17,11 @@ folder, all of it or nothing:
     With a MERL or ``.bsdf`` input: the per-degree power spectra of the truth and of the reconstruction and the
     error's, per θ_h slice (:mod:`frenbrdf.evaluation.spectrum`): where the reconstruction loses its frequencies.
 ``reconstruction.json``
-    The input, the model, the refinement, the latent, seconds and loss per stage, and with a MERL or
-    ``.bsdf`` input the image metrics against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit
-    material pixels and PSNR, ΔE over its highlights, :func:`frenbrdf.render.scoring.image_metrics`), L_fre, and
-    the spectrum's error by degree band (``spectrum``).
+    The input (with a MERL or ``.bsdf`` input, the sampling pattern: :mod:`frenbrdf.io.patterns`), the model,
+    the refinement, the latent, seconds and loss per stage, and with a MERL or ``.bsdf`` input the image metrics
+    against the truth's render (RMSE, PSNR, SSIM, ΔE over the lit material pixels and PSNR, ΔE over its
+    highlights, :func:`frenbrdf.render.scoring.image_metrics`), L_fre, and the spectrum's error by degree band
+    (``spectrum``).
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ import numpy as np
 from ..io.atomic import save_json
 from ..io.formats import read_samples, write_material
 from ..io.outputs import OutputFolder
+from ..io.patterns import DEFAULT as DEFAULT_PATTERN
+from ..io.patterns import pattern as find_pattern
 from ..io.samples import Measurements
 from ..models.autoencoder import Model, load_model
 from ..models.reconstruct import Reconstruction, refine_config
@@ -46,24 +49,25 @@ FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.pn
 def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
                      samples: int | None = 4000, refine: str = "full", seed: int = 0, resolution: int = 256,
                      progress: bool = True, overwrite: bool = False, width: int | None = None,
-                     reciprocal: bool = False) -> dict:
+                     reciprocal: bool = False, pattern: str = DEFAULT_PATTERN) -> dict:
     """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
 
     Parameters
     ----------
     source
-        A CSV or NPZ of samples, a MERL file or an RGL ``.bsdf`` (:func:`frenbrdf.io.read_samples`).
+        A CSV, NPZ or ASTM E1392 (``.astm``) file of samples, a MERL file or an RGL ``.bsdf``
+        (:func:`frenbrdf.io.read_samples`).
     out_dir
         The result folder, created whole or replacing an earlier result (:func:`check_out` says which
         folders may be written; nothing is computed when this one may not).
     model
         ``"pretrained"``, a run folder or a checkpoint.
     samples
-        MERL input: random valid bins given to the model (None: all).
+        MERL or ``.bsdf`` input: random valid bins given to the model (None: all), or pairs of ``pattern``.
     refine
         ``"none"``, ``"latent"`` or ``"full"`` (:data:`frenbrdf.models.reconstruct.BUDGETS`).
     seed
-        Seeds the MERL sampling and the refinement's mini-batches.
+        Seeds the MERL sampling (or the pattern) and the refinement's mini-batches.
     resolution
         Pixels per side of the renders (``render.png``, and the truth's that the metrics compare with).
     progress
@@ -76,6 +80,9 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         (:attr:`frenbrdf.models.reconstruct.RefineConfig.keep_order` False).
     overwrite
         Write into ``out_dir`` even when it holds entries this function did not write (they are kept).
+    pattern
+        MERL or ``.bsdf`` input: the sampling pattern (:data:`frenbrdf.io.patterns.PATTERNS`: the device imitated),
+        recorded in the report's ``input``; ``merl-bins``, the default, draws random valid bins.
 
     Returns
     -------
@@ -87,13 +94,16 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         config = dataclasses.replace(config, width=width)  # checked before anything is read or written
     if reciprocal:
         config = dataclasses.replace(config, keep_order=False)
+    find_pattern(pattern)  # an unknown name is refused before anything is read or written
     out = check_out(source, out_dir, model, overwrite=overwrite)
-    measurements = read_samples(source, samples=samples, seed=seed)
+    measurements = read_samples(source, samples=samples, seed=seed, pattern=pattern)
     loaded = load_model(model)
     result = loaded.reconstruct(measurements.values, (measurements.wi, measurements.wo), refine=config)
     scene = Scene(resolution=resolution)
     images = {"render": render(result.nbrdf, scene)}
-    report = {"input": {"path": str(source), "kind": measurements.kind, "samples": len(measurements)},
+    whole = measurements.table is not None  # a whole material, sampled here; not scattered samples
+    report = {"input": {"path": str(source), "kind": measurements.kind, "samples": len(measurements),
+                        **({"pattern": pattern} if whole else {})},
               "model": {"path": str(model), "method": loaded.method, **({"version": loaded.card.get("version")}
                                                                           if loaded.card else {})},
               "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary(),

@@ -21,7 +21,8 @@ wall-clock budget (:attr:`RefineConfig.seconds`) stops it first.
 Samples come as arrays or from a file (:func:`frenbrdf.io.read_samples`): CSV or NPZ rows
 ``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b`` — unit directions in the local shading frame
 (z = the normal, z > 0), BRDF values in 1/sr (≥ 0, not multiplied by cos θ_i); or angle
-columns ``theta_i,phi_i,theta_o,phi_o`` (radians; ``…_deg`` in degrees); or a MERL file.
+columns ``theta_i,phi_i,theta_o,phi_o`` (radians; ``…_deg`` in degrees); or an ASTM E1392 ``.astm`` file
+(:mod:`frenbrdf.io.astm`); or a MERL file.
 :func:`frenbrdf.material.outputs.reconstruct_file` writes a result folder (``frenbrdf reconstruct``).
 
 Examples

@@ -161,6 +161,46 @@ def refined_reconstruction(model: Model, samples, scene: Scene,
     return result, tonemap(render_linear(result.nbrdf, scene)), seconds
 
 
+@dataclasses.dataclass
+class Scored:
+    """One method's reconstruction of one material from one pattern's samples (:meth:`Scoring.reconstruct`)."""
+
+    metrics: dict[str, float]
+    z: np.ndarray
+    image: np.ndarray
+    refined: Reconstruction | None = None
+    refined_image: np.ndarray | None = None
+
+
+@dataclasses.dataclass
+class Scoring:
+    """How :func:`frenbrdf.evaluation.evaluate.evaluate_runs` scores a reconstruction: the scene and its material
+    mask, the frequency metric, the test-time refinement (None: the encoder only)."""
+
+    scene: Scene
+    mask: np.ndarray
+    frequency_metric: FrequencyMetric
+    refinement: RefineConfig | None
+
+    def reconstruct(self, model: Model, samples, table: np.ndarray, truth_image: np.ndarray,
+                    highlight: np.ndarray) -> Scored:
+        """Encodes ``samples`` (values, (ω_i, ω_o)), decodes, renders and compares with the truth's render
+        ``truth_image`` (``highlight``: its highlight pixels) and its table; with refinement, refines on the same
+        samples and compares again (the keys ``refined_…``)."""
+        values, directions = samples
+        z, image = encode_and_render(model, values, directions, self.scene)
+        metrics = image_metrics(truth_image, image, self.mask, highlight)
+        metrics["lfre"] = self.frequency_metric(model, table, z)
+        scored = Scored(metrics, z, image)
+        if self.refinement is not None:
+            result, scored.refined_image, seconds = refined_reconstruction(model, samples, self.scene, self.refinement)
+            refined = image_metrics(truth_image, scored.refined_image, self.mask, highlight)
+            metrics.update({f"refined_{key}": value for key, value in refined.items()})
+            metrics.update(refined_lfre=self.frequency_metric(model, table, result.nbrdf), refine_seconds=seconds)
+            scored.refined = result
+        return scored
+
+
 def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
                         frequency_metric: FrequencyMetric | Literal[False] | None = None, refine: str = "none",
                         progress: bool = True, latents: dict | None = None) -> list[dict]:
