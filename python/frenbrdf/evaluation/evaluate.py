@@ -307,64 +307,14 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     runs, models, names, files = loaded.runs, loaded.models, loaded.test, loaded.files
     rng = np.random.default_rng(config.seed)
     scene, edit_scene = Scene(resolution=config.resolution), Scene(resolution=config.edit_resolution)
-    mask, edit_mask = material_mask(scene), material_mask(edit_scene)
-    show = config.progress
     # Refinement is seeded by the evaluation's seed: the same config reruns to the same numbers.
     refinement = (None if config.refine == "none"
                   else dataclasses.replace(refine_config(config.refine), seed=config.seed))
 
-    # Reconstruction. Latents by prefix of the metrics they give: the encoder's (""), the refined ("refined_").
-    latents: dict[str, dict[str, dict[str, np.ndarray]]] = {"": {m: {} for m in models}}
-    if refinement:
-        latents["refined_"] = {m: {} for m in models}
-    edit_truth_linear = {}
-    per_material: dict[str, list[dict]] = {m: [] for m in models}
-    renders = {}
-    spectrum = SpectrumSummary()  # each method's decoded latents against the true tables: spectrum.png
-    scoring = Scoring(scene, mask, FrequencyMetric(), refinement)
-    rngs = {pattern: rng if pattern == DEFAULT_PATTERN else pattern_rng(config.seed, pattern)
-            for pattern in config.patterns}
-    for name in tqdm(names, desc="reconstruction", disable=not show):
-        truth = read_measured(files[name])  # a .bsdf renders as measured, not through its table
-        table = as_table(truth)
-        samples = {pattern: pattern_samples(truth, pattern, config.samples, rngs[pattern], table=table)
-                   for pattern in config.patterns}
-        edit_truth_linear[name] = render_linear(truth, edit_scene)
-        truth_linear = render_linear(truth, scene)
-        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
-        renders[name] = {"truth": truth_image}
-        decoded = {}
-        for method, model in models.items():
-            scored = {pattern: scoring.reconstruct(model, drawn, table, truth_image, highlight)
-                      for pattern, drawn in samples.items()}
-            primary = scored[config.patterns[0]]  # the first pattern's: the figures show it
-            latents[""][method][name] = primary.z
-            renders[name][method] = primary.image
-            decoded[method] = model.decode(primary.z)
-            if primary.refined is not None and primary.refined_image is not None:
-                latents["refined_"][method][name] = primary.refined.z
-                renders[name][f"{method} refined"] = primary.refined_image
-            per_material[method].append({"material": name, **{key + pattern_suffix(pattern, config.patterns): value
-                                                              for pattern, one in scored.items()
-                                                              for key, value in one.metrics.items()}})
-        spectrum.add(table, decoded)
-
-    # Editing.
+    done = _reconstruct_all(models, names, files, config, rng, scene, edit_scene, refinement)
+    latents, per_material, renders, spectrum = done.latents, done.per_material, done.renders, done.spectrum
     pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)) if config.edits else 0, rng)
-    edits: dict[str, list[dict]] = {m: [] for m in models}
-    with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing", disable=not show) as bar:
-        for a, b in pairs:
-            name_a, name_b = names[a], names[b]
-            for t in config.weights:
-                for method, model in models.items():
-                    row = {"a": name_a, "b": name_b, "t": t}
-                    for prefix, by_method in latents.items():
-                        metrics = edit_metrics(model, by_method[method][name_a], by_method[method][name_b],
-                                               edit_truth_linear[name_a], edit_truth_linear[name_b], t, edit_scene,
-                                               edit_mask)
-                        row.update({prefix + key: value for key, value in metrics.items()})
-                    edits[method].append(row)
-                    bar.update()
+    edits = _edit_all(models, names, pairs, done, config, edit_scene)
 
     first, hardest = rendered_materials(names, per_material)
     report = {"data": str(loaded.data), "runs": [str(r) for r in runs], "test_materials": names,
@@ -383,11 +333,86 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
         save_json(staging / "evaluation.json", report)
         write_text(staging / "evaluation.md", report_markdown(report))
         write_figures(staging, first + hardest, renders, per_material, models, latents[""], edit_pair,
-                      edit_truth_linear, config.weights, config.edit_resolution)
+                      done.edit_truth_linear, config.weights, config.edit_resolution)
         spectrum.write(staging / "spectrum.png", f"Per-degree power spectra of the {len(names)} evaluated materials "
                        "(mean) and each method's encoder-only reconstructions; dashed: their error (L_fre variant "
                        "'tone')")
     return report
+
+
+@dataclass
+class _Reconstructed:
+    """What the reconstruction pass of :func:`evaluate_runs` keeps for the editing, the tables and the figures."""
+
+    latents: dict[str, dict[str, dict[str, np.ndarray]]]
+    """By prefix of the metrics they give (the encoder's ``""``, the refined ``"refined_"``), method, material."""
+    per_material: dict[str, list[dict]]
+    """Each method's metric rows, one per material."""
+    renders: dict[str, dict[str, np.ndarray]]
+    """By material: the truth's display image and each method's."""
+    edit_truth_linear: dict[str, np.ndarray]
+    """The truth's linear render at the editing resolution, by material."""
+    spectrum: SpectrumSummary
+    """Each method's decoded latents against the true tables."""
+
+
+def _reconstruct_all(models: dict, names: list[str], files: dict, config: EvaluateConfig, rng: np.random.Generator,
+                     scene: Scene, edit_scene: Scene, refinement) -> _Reconstructed:
+    """Encodes (and refines) every material from each pattern's samples with every model, and scores it."""
+    mask = material_mask(scene)
+    done = _Reconstructed({"": {m: {} for m in models}}, {m: [] for m in models}, {}, {}, SpectrumSummary())
+    if refinement:
+        done.latents["refined_"] = {m: {} for m in models}
+    scoring = Scoring(scene, mask, FrequencyMetric(), refinement)
+    rngs = {pattern: rng if pattern == DEFAULT_PATTERN else pattern_rng(config.seed, pattern)
+            for pattern in config.patterns}
+    for name in tqdm(names, desc="reconstruction", disable=not config.progress):
+        truth = read_measured(files[name])  # a .bsdf renders as measured, not through its table
+        table = as_table(truth)
+        samples = {pattern: pattern_samples(truth, pattern, config.samples, rngs[pattern], table=table)
+                   for pattern in config.patterns}
+        done.edit_truth_linear[name] = render_linear(truth, edit_scene)
+        truth_linear = render_linear(truth, scene)
+        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
+        done.renders[name] = {"truth": truth_image}
+        decoded = {}
+        for method, model in models.items():
+            scored = {pattern: scoring.reconstruct(model, drawn, table, truth_image, highlight)
+                      for pattern, drawn in samples.items()}
+            primary = scored[config.patterns[0]]  # the first pattern's: the figures show it
+            done.latents[""][method][name] = primary.z
+            done.renders[name][method] = primary.image
+            decoded[method] = model.decode(primary.z)
+            if primary.refined is not None and primary.refined_image is not None:
+                done.latents["refined_"][method][name] = primary.refined.z
+                done.renders[name][f"{method} refined"] = primary.refined_image
+            done.per_material[method].append({"material": name, **{
+                key + pattern_suffix(pattern, config.patterns): value
+                for pattern, one in scored.items() for key, value in one.metrics.items()}})
+        done.spectrum.add(table, decoded)
+    return done
+
+
+def _edit_all(models: dict, names: list[str], pairs, done: _Reconstructed, config: EvaluateConfig,
+              edit_scene: Scene) -> dict[str, list[dict]]:
+    """Each method's editing rows: every pair at every weight t, from each kind of latent (encoder, refined)."""
+    edit_mask = material_mask(edit_scene)
+    edits: dict[str, list[dict]] = {m: [] for m in models}
+    with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing",
+              disable=not config.progress) as bar:
+        for a, b in pairs:
+            name_a, name_b = names[a], names[b]
+            for t in config.weights:
+                for method, model in models.items():
+                    row = {"a": name_a, "b": name_b, "t": t}
+                    for prefix, by_method in done.latents.items():
+                        metrics = edit_metrics(model, by_method[method][name_a], by_method[method][name_b],
+                                               done.edit_truth_linear[name_a], done.edit_truth_linear[name_b], t,
+                                               edit_scene, edit_mask)
+                        row.update({prefix + key: value for key, value in metrics.items()})
+                    edits[method].append(row)
+                    bar.update()
+    return edits
 
 
 def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,

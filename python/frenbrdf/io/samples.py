@@ -249,13 +249,13 @@ def _checked(path: Path, kind: str, columns: dict[str, np.ndarray], rows: np.nda
     if values.max() > MAX_REFLECTANCE:
         fail(np.any(values > MAX_REFLECTANCE, axis=1), f"reflectance above {MAX_REFLECTANCE:g} 1/sr (MERL's highest "
              "spikes are about 1e5; is the unit right?)")
-    for column, top, unit in (("theta_i", np.pi / 2, " rad"), ("theta_o", np.pi / 2, " rad"),
-                              ("theta_i_deg", 90.0, "°"), ("theta_o_deg", 90.0, "°")):
+    for column, top, angle_unit in (("theta_i", np.pi / 2, " rad"), ("theta_o", np.pi / 2, " rad"),
+                                    ("theta_i_deg", 90.0, "°"), ("theta_o_deg", 90.0, "°")):
         # θ is measured from the normal: 0 ≤ θ < 90° (angles in the wrong unit would wrap round without a word)
         outside = (columns[column] < 0) | (columns[column] >= top) if column in columns else None
         if outside is not None and outside.any():
-            hint = "; angles in degrees go in columns named theta_i_deg, …" if unit == " rad" else ""
-            fail(outside, f"{column} is {columns[column][outside][0]:.6g}, outside 0 … {top:.6g}{unit} "
+            hint = "; angles in degrees go in columns named theta_i_deg, …" if angle_unit == " rad" else ""
+            fail(outside, f"{column} is {columns[column][outside][0]:.6g}, outside 0 … {top:.6g}{angle_unit} "
                           f"(above the surface{hint})")
     wi, wo = _directions(columns)
     for name, d in (("ω_i", wi), ("ω_o", wo)):
