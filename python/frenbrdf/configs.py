@@ -46,7 +46,7 @@ def from_dict(cls, data: dict, where: str = "config"):
 
 def checked_value(value, hint, where: str):
     """``value`` checked against a field's type (``int``, ``float``, ``str``, ``bool``, ``X | None``,
-    ``tuple[X, ...]``, ``tuple[X, Y]``, a dataclass); lists become tuples. A wrong type is a ValueError naming the setting:
+    ``tuple[X, ...]``, ``tuple[X, Y]``, ``dict[K, V]``, a dataclass); lists become tuples. A wrong type is a ValueError naming the setting:
     ``"1"`` is not an integer, 1.5 is not an integer, ``true`` is not a number.
 
     A config read from a file meets here what the code assumes, before any work is done.
@@ -54,6 +54,12 @@ def checked_value(value, hint, where: str):
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if isinstance(hint, type) and dataclasses.is_dataclass(hint):  # e.g. an item of tuple[EncoderConfig, ...]
         return value if isinstance(value, hint) else from_dict(hint, value, where)
+    if origin is dict:  # a mapping such as dict[str, float]: a JSON object, keys and values checked
+        if not isinstance(value, dict):
+            raise ValueError(f"{where} must be a JSON object, got {value!r}")
+        key_hint, value_hint = args or (str, typing.Any)
+        return {checked_value(key, key_hint, f"{where} key"): checked_value(item, value_hint, f"{where}[{key!r}]")
+                for key, item in value.items()}
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
             return None
@@ -88,10 +94,28 @@ def checked_value(value, hint, where: str):
     return value
 
 
-def merge(base: dict, update: dict) -> dict:
-    """``base`` with ``update`` laid over it, nested dicts merged key by key."""
+def merge(base: dict, update: dict, cls=None) -> dict:
+    """``base`` with ``update`` laid over it, nested dicts merged key by key.
+
+    ``cls``: the config dataclass the dicts describe. With it, only its nested config sections are merged key by
+    key; a field that is itself a mapping (e.g. ``sampling.patterns``, pattern → weight) is replaced whole, so that
+    ``{"patterns": {"uniform": 1}}`` means the uniform pattern alone, not the default's patterns and it.
+    """
     merged = dict(base)
+    sections = _sections(cls) if cls is not None else None
     for key, value in update.items():
         nested = isinstance(value, dict) and isinstance(base.get(key), dict)
-        merged[key] = merge(base[key], value) if nested else value
+        if nested and sections is not None and key not in sections:
+            nested = False
+        merged[key] = merge(base[key], value, sections[key] if sections is not None else None) if nested else value
     return merged
+
+
+def _sections(cls) -> dict:
+    """The fields of a config dataclass that are config dataclasses themselves, with their classes."""
+    sections = {}
+    for f in dataclasses.fields(cls):
+        default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+        if dataclasses.is_dataclass(default):
+            sections[f.name] = type(default)
+    return sections

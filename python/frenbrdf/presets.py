@@ -17,7 +17,9 @@ protocol uses the defaults; ``demo`` fits ``frenbrdf demo`` in minutes on 2 core
 ``sweep`` is half the demo, for the many runs of sweeps and ``frenbrdf select``.
 
 Augmentations (:data:`AUGMENTATION`) say what data a comparison trained on, the same for every
-method: the tables only (``paper``) or with mixes, gains and procedural materials.
+method: the tables only (``paper``) or with mixes, gains and procedural materials. Samplings
+(:data:`SAMPLING`) say how the encoder's samples of a material were drawn: random valid MERL bins
+(``paper``) or the patterns of real instruments (``instruments``).
 """
 
 from __future__ import annotations
@@ -56,6 +58,22 @@ method: ``paper`` trains on the tables only (the paper's protocol), ``augmented`
 adds mixes and colour gains, ``procedural`` also analytic materials drawn afresh (docs/data.md)."""
 
 
+#: Every sampling pattern of :data:`frenbrdf.io.patterns.PATTERNS` (named here, so that this registry imports nothing).
+ALL_PATTERNS = ("merl-bins", "uniform", "cosine", "in-plane", "gonioreflectometer", "image-based", "flat-sample",
+                "specular", "back-scatter", "peaks")
+
+SAMPLING: dict[str, dict] = {
+    "paper": {"patterns": {"merl-bins": 1.0}, "counts": None},
+    "instruments": {"patterns": dict.fromkeys(ALL_PATTERNS, 1.0), "counts": [300, 4000]},
+}
+"""Sampling → its :class:`~frenbrdf.training.config.SamplingConfig` values, the same for every method: how each
+training step draws the samples the encoder reads (docs/data.md, "Sampling patterns"). ``paper`` (the default) draws
+random valid MERL bins, ``context_samples`` of them, as the paper does; ``instruments`` gives each material of a step
+one of the ten patterns of :mod:`frenbrdf.io.patterns` with equal chances, and each step 300 … 4000 samples,
+log-uniform (what devices give, from a gonioreflectometer's few hundred readings to a capture of thousands). No
+measurement has chosen between them yet: the retrain and seed studies of issue 47 will."""
+
+
 FREQUENCY_VARIANTS: dict[str, dict] = {
     "paper": {"fit": "sphere", "values": "mapped", "degree_power": 0.0, "slices": [0, 24, 48, 72]},
     "no-floor": {"fit": "measured", "values": "mapped", "degree_power": 0.0, "slices": [0, 24, 48, 72]},
@@ -88,6 +106,14 @@ def augmentation_overrides(name: str) -> dict:
     if name not in AUGMENTATION:
         raise ValueError(f"augmentation must be one of {sorted(AUGMENTATION)}, got {name!r}")
     return {**AUGMENTATION[name], "preset": name}
+
+
+def sampling_overrides(name: str) -> dict:
+    """The ``sampling`` values of a sampling preset, its name recorded in them."""
+    if name not in SAMPLING:
+        raise ValueError(f"sampling must be one of {sorted(SAMPLING)}, got {name!r}")
+    entry = SAMPLING[name]
+    return {"patterns": dict(entry["patterns"]), "counts": entry["counts"], "preset": name}
 
 
 def method_names() -> tuple[str, ...]:

@@ -78,7 +78,7 @@ def main() -> None:
     out = Path(args.work) / f"{args.name}-s{args.seed}"
     cfg = config_for(args.method, training=args.training, data=args.data, out=str(out), seed=args.seed,
                      progress=False)
-    cfg = from_dict(TrainConfig, merge(to_dict(cfg), json.loads(args.over)), args.name)
+    cfg = from_dict(TrainConfig, merge(to_dict(cfg), json.loads(args.over), TrainConfig), args.name)
     start = time.perf_counter()
     if not (out / "best.pt").exists():
         train(cfg, overwrite=True)  # its own work folder

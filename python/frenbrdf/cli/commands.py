@@ -67,8 +67,9 @@ def train(args: argparse.Namespace) -> int:
     from ..training import config_for, load_config, train
     from ..training.loop import check_run_folder
 
-    if args.config and (args.training or args.augmentation):
-        raise ValueError("--training and --augmentation set presets; with --config the file says everything")
+    if args.config and (args.training or args.augmentation or args.sampling):
+        raise ValueError("--training, --augmentation and --sampling set presets; with --config the file says "
+                         "everything")
     if args.seeds is not None and args.seed is not None:
         raise ValueError("give --seed or --seeds, not both")
     if args.seeds is not None and not args.out:
@@ -83,6 +84,7 @@ def train(args: argparse.Namespace) -> int:
             cfg = load_config(args.config, **overrides)
         else:
             cfg = config_for(args.method or "frenbrdf", training=args.training, augmentation=args.augmentation,
+                             sampling=args.sampling,
                              **{k: v for k, v in overrides.items() if v is not None and k != "method"})
         cfg.progress = not args.quiet
         check_run_folder(cfg, resume=args.resume, overwrite=args.overwrite)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .._native import __version__
-from ..presets import AUGMENTATION, FREQUENCY_VARIANTS, SELECTION_RULES, TRAINING, method_names
+from ..presets import AUGMENTATION, FREQUENCY_VARIANTS, SAMPLING, SELECTION_RULES, TRAINING, method_names
 from . import commands, options
 
 DESCRIPTION = "frenbrdf: neural BRDFs (FreNBRDF) from measured materials: train, reconstruct, render, evaluate."
@@ -72,6 +72,10 @@ def _train(subparsers) -> None:
     train.add_argument("--augmentation", choices=sorted(AUGMENTATION),
                        help="what the batches hold beyond the tables (frenbrdf.presets.AUGMENTATION; default: augmented, "
                        "mixes and colour gains; paper: the tables only, the paper's protocol)")
+    train.add_argument("--sampling", choices=sorted(SAMPLING),
+                       help="how the encoder's samples of each material are drawn (frenbrdf.presets.SAMPLING; default: "
+                       "paper, random valid MERL bins; instruments: the sampling patterns of real devices, 300 … 4000 "
+                       "samples)")
     train.add_argument("--holdout", nargs="+", metavar="PATTERN",
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")

@@ -200,9 +200,13 @@ class MaterialBank:
         """``n`` random valid bins (with replacement) of each listed material index."""
         if n < 1:
             raise ValueError(f"the number of samples must be ≥ 1, got {n}")
-        geometry = bin_geometry()
         bins = torch.stack([self._valid_bins[m][torch.randint(len(self._valid_bins[m]), (n,), generator=generator)]
                             for m in materials])
+        return self.at_bins(materials, bins)
+
+    def at_bins(self, materials, bins: torch.Tensor) -> SampleBatch:
+        """The samples of each listed material index at its row of flat bin indices ``bins`` ``(B, n)``."""
+        geometry = bin_geometry()
         rows = torch.as_tensor(list(materials))[:, None]
         return SampleBatch(geometry.half_diff[bins], self.mapped[rows, bins], geometry.cos_in[bins])
 

@@ -55,7 +55,7 @@ class Variant:
 
     def config(self, base: TrainConfig) -> TrainConfig:
         """``base`` with the overrides applied (validated like any config)."""
-        return from_dict(TrainConfig, merge(to_dict(base), self.overrides), f"variant {self.name}")
+        return from_dict(TrainConfig, merge(to_dict(base), self.overrides, TrainConfig), f"variant {self.name}")
 
 
 def capacity_variants(hidden=((21, 21), (48, 48), (60, 60, 60), (60, 60, 60, 60)), latent=(16, 64)) -> list[Variant]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -68,7 +69,7 @@ def load(path: str | os.PathLike) -> dict:
 
 
 def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer: torch.optim.Optimizer,
-                    config: dict | None = None) -> dict:
+                    config: dict | None = None, model_as_read: Callable[[dict], dict] | None = None) -> dict:
     """The checkpoint a training run resumes from (``last.pt``), every field it restores checked.
 
     Parameters
@@ -81,6 +82,9 @@ def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer
     config
         The resumed run's training config (:func:`frenbrdf.configs.to_dict`): its method, model and seed must be
         the checkpoint's, checked first, so a mismatch is named as such rather than as weights that do not fit.
+    model_as_read
+        The saved model config (a dict) as a model reads it today (fields added since it was saved at their
+        defaults), for that comparison; None: compared as saved.
 
     Returns
     -------
@@ -100,7 +104,7 @@ def load_for_resume(path: str | os.PathLike, network: torch.nn.Module, optimizer
     if missing:
         raise ValueError(f"{path}: not a checkpoint to resume from: it lacks {', '.join(missing)}")
     try:
-        _check_resume_fields(checkpoint, network, optimizer, config)
+        _check_resume_fields(checkpoint, network, optimizer, config, model_as_read)
     except ValueError as error:
         raise ValueError(f"{path}: {error}") from None
     return checkpoint
@@ -120,7 +124,7 @@ RESUME_KEYS = ("split", "optimizer", "generator", "epoch", "best", "history")
 
 
 def _check_resume_fields(checkpoint: dict, network: torch.nn.Module, optimizer: torch.optim.Optimizer,
-                         expected: dict | None = None) -> None:
+                         expected: dict | None = None, model_as_read: Callable[[dict], dict] | None = None) -> None:
     """Raises ValueError (naming the field) for the first field of ``checkpoint`` a resume cannot restore."""
     from ..presets import SELECTION_RULES
     from .jsonfile import parse_json
@@ -128,6 +132,8 @@ def _check_resume_fields(checkpoint: dict, network: torch.nn.Module, optimizer: 
     config = parse_json(checkpoint["config"], "config", "training config")
     if not isinstance(config.get("model"), dict) or not _is_integer(config.get("seed")):
         raise ValueError("config: holds no model settings or seed")
+    if model_as_read is not None:
+        config = {**config, "model": model_as_read(config["model"])}
     for key in ("method", "seed", "model"):
         if expected is not None and key in expected and config.get(key) != expected[key]:
             where = _difference(config.get(key), expected[key], key)

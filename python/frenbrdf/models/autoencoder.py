@@ -225,10 +225,16 @@ class Model:
 def encode_in_chunks(encoder: SetEncoder, samples: torch.Tensor) -> np.ndarray:
     """The latent of a large sample set ``(N, 9)``: a set encoder is a per-sample MLP, a mean and ρ, so
     the set (all 1.1 million bins of a table) goes through in chunks, which bounds memory and runs several
-    times faster."""
-    total = sum((len(chunk) * encoder.pooled_features(chunk[None])[0].double() for chunk in samples.split(ENCODE_CHUNK)),
-                torch.zeros((), dtype=torch.float64))
-    mean = total / len(samples)  # float64: a mean of up to a million codes; ρ then runs in float32
+    times faster. With density pooling the weights are those of the whole set (its k-NN search runs once)."""
+    weights = encoder.weights(samples[None])
+    if weights is None:
+        total = sum((len(chunk) * encoder.pooled_features(chunk[None])[0].double()
+                     for chunk in samples.split(ENCODE_CHUNK)), torch.zeros((), dtype=torch.float64))
+        mean = total / len(samples)  # float64: a mean of up to a million codes; ρ then runs in float32
+    else:  # each chunk's weighted sum, with its share of the whole set's weights (they sum to 1)
+        mean = sum((encoder.pooled_features(chunk[None], part[None])[0].double()
+                    for chunk, part in zip(samples.split(ENCODE_CHUNK), weights[0].split(ENCODE_CHUNK), strict=True)),
+                   torch.zeros((), dtype=torch.float64))
     if isinstance(encoder.after_pool, nn.Identity):
         return mean.numpy()
     return encoder.after_pool(mean.float()[None])[0].double().numpy()

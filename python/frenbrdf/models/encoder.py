@@ -4,6 +4,12 @@ DeepSets is z = ρ(mean φ(sample)). The paper's encoder (the default) has no ρ
 per-sample codes, a linear functional of the samples' distribution. ``EncoderConfig.pooled`` gives it
 a ρ, an MLP after the mean, so that z can depend non-linearly on what the samples show together
 (research/measurements.md measures what that does to the encoder's gap on real materials).
+
+The plain mean estimates an expectation under the sampling distribution: a device that samples the
+highlight densely moves z although the material is the same. ``EncoderConfig.pooling = "density"``
+weights each sample's code by the inverse of a k-nearest-neighbour estimate of the samples' density in
+their coordinates (H, D) (:func:`density_weights`), so that the pooled code approximates a mean over
+the domain the samples cover rather than over the samples (docs/method.md, "Pooling").
 """
 
 from __future__ import annotations
@@ -11,11 +17,29 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 from torch import nn
 
 #: One sample: mapped RGB (3) and the NBRDF coordinates H, D (6).
 SAMPLE_SIZE = 9
+#: Where a sample's coordinates (H, D) lie in it: after the 3 mapped values.
+COORDINATES = slice(3, 9)
+#: How the per-sample codes may be pooled (:attr:`EncoderConfig.pooling`).
+POOLINGS = ("mean", "density")
+#: The dimension of the set the coordinates of an isotropic material's pairs fill: H (φ_h = 0) runs along an arc
+#: (θ_h) and D over a sphere (θ_d, φ_d), a 3-dimensional set inside the 6 numbers. A k-NN density estimate there
+#: scales as 1 / r_k³: so do the weights' powers (:func:`density_weights`).
+DENSITY_DIMENSION = 3
+#: A sample's k-NN radius is taken as at least this share of the set's median radius: ``k`` + 1 samples at one bin
+#: (a pattern's pairs in one bin) get a small weight, not none.
+RADIUS_FLOOR = 0.05
+#: Points of the exhaustive k-NN search a chunk compares at once (on the GPU; a CPU set uses scipy's k-d tree).
+_KNN_CHUNK = 1 << 24
+#: The most neighbours :attr:`EncoderConfig.density_k` may name.
+MAX_DENSITY_K = 256
+#: The fields of :class:`EncoderConfig` that say how the codes are pooled: they hold no weights.
+POOLING_FIELDS = ("pooling", "density_k")
 #: The widest layer (hidden or latent) and the most hidden layers of the encoder and the decoder's heads.
 MAX_WIDTH, MAX_LAYERS = 4096, 16
 
@@ -42,6 +66,14 @@ class EncoderConfig:
     pooled: tuple[int, ...] = ()
     """Hidden widths of DeepSets' ρ, an MLP from the mean of the last hidden layer's features to the latent;
     () (the paper's encoder): no ρ, the per-sample MLP ends in the latent and z is the mean of its outputs."""
+    pooling: str = "mean"
+    """How the per-sample codes are pooled: ``"mean"``, the plain mean (the paper's; models saved before this
+    option load with it), or ``"density"``, each code weighted by the inverse of a k-NN estimate of the samples'
+    density in (H, D) (:func:`density_weights`), so that the pooled code depends less on how the material was
+    sampled. The weights are the same for every ρ; they carry no gradient and no parameters."""
+    density_k: int = 8
+    """The neighbour whose distance estimates a sample's density with ``pooling="density"`` (the k of k-NN; a set of
+    at most k samples uses its size − 1)."""
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
@@ -54,6 +86,47 @@ class EncoderConfig:
             raise ValueError("an encoder with a ρ (pooled) needs hidden layers: ρ reads the mean of the last one")
         if not 0.0 <= self.dropout < 1.0:
             raise ValueError(f"encoder dropout must lie in [0, 1), got {self.dropout}")
+        if self.pooling not in POOLINGS:
+            raise ValueError(f"encoder pooling must be one of {POOLINGS}, got {self.pooling!r}")
+        if not 1 <= self.density_k <= MAX_DENSITY_K:
+            raise ValueError(f"encoder density_k must lie in 1 … {MAX_DENSITY_K}, got {self.density_k}")
+
+
+def knn_radius(points: torch.Tensor, k: int, *, exhaustive: bool | None = None) -> torch.Tensor:
+    """The distance from each point to its k-th nearest other point, ``(..., N, C)`` → ``(..., N)`` (Euclidean;
+    ``1 ≤ k < N``). ``exhaustive``: compare every pair, in chunks (None: on a GPU; a CPU set is searched with
+    scipy's k-d tree, which a set of a whole table of 1.1 million bins needs)."""
+    n = points.shape[-2]
+    if not 1 <= k < n:
+        raise ValueError(f"k must lie in 1 … {n - 1} (the other points of a set of {n}), got {k}")
+    flat = points.detach().reshape(-1, n, points.shape[-1])
+    if not (flat.device.type != "cpu" if exhaustive is None else exhaustive):
+        from scipy.spatial import cKDTree
+
+        found = [cKDTree(p).query(p, k=[k + 1])[0][:, 0] for p in flat.double().numpy()]  # k + 1: itself first
+        return torch.from_numpy(np.stack(found)).to(points.dtype).reshape(points.shape[:-1])
+    rows = max(1, _KNN_CHUNK // (len(flat) * n))
+    radii = [torch.cdist(flat[:, start:start + rows], flat).topk(k + 1, dim=-1, largest=False).values[..., k]
+             for start in range(0, n, rows)]
+    return torch.cat(radii, dim=-1).reshape(points.shape[:-1])
+
+
+@torch.no_grad()
+def density_weights(coordinates: torch.Tensor, k: int) -> torch.Tensor:
+    """Weights ``(..., N)`` summing to 1 over each set of samples ``(..., N, C)``: each sample's share of the domain
+    the set covers, ∝ r_k^3 with r_k its distance to its k-th nearest other sample (the inverse of the k-NN density
+    estimate k / (N · volume of the ball of radius r_k) in the :data:`DENSITY_DIMENSION` dimensions the coordinates
+    fill). r_k is taken as at least :data:`RADIUS_FLOOR` times the set's median. A set of one sample weighs it 1,
+    a set of at most k uses k = N − 1; a set of identical samples is weighed evenly."""
+    n = coordinates.shape[-2]
+    if n == 1:
+        return torch.ones(coordinates.shape[:-1], dtype=coordinates.dtype, device=coordinates.device)
+    radius = knn_radius(coordinates, min(k, n - 1)).double()
+    floor = RADIUS_FLOOR * radius.median(dim=-1, keepdim=True).values
+    weights = torch.maximum(radius, floor) ** DENSITY_DIMENSION
+    total = weights.sum(dim=-1, keepdim=True)
+    even = torch.full_like(weights, 1.0 / n)
+    return torch.where(total > 0, weights / total.clamp_min(torch.finfo(torch.float64).tiny), even).to(coordinates.dtype)
 
 
 class SetEncoder(nn.Module):
@@ -68,10 +141,22 @@ class SetEncoder(nn.Module):
         else:  # the paper's encoder: the same state-dict keys as ever
             self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent], config.dropout)
             self.after_pool = nn.Identity()
+        self.pooling, self.density_k = config.pooling, config.density_k
 
-    def pooled_features(self, samples: torch.Tensor) -> torch.Tensor:
-        """The mean over the samples of the per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads."""
-        return self.per_sample(samples).mean(dim=-2)
+    def weights(self, samples: torch.Tensor) -> torch.Tensor | None:
+        """The pooling weights of the samples ``(B, N, 9)`` → ``(B, N)`` (:func:`density_weights`), or None for
+        the plain mean."""
+        return density_weights(samples[..., COORDINATES], self.density_k) if self.pooling == "density" else None
+
+    def pooled_features(self, samples: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
+        """The pooled per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads. The plain mean, or with
+        ``pooling="density"`` the weighted sum with :meth:`weights` (computed here unless given: ``(B, N)``)."""
+        features = self.per_sample(samples)
+        if self.pooling == "mean":
+            return features.mean(dim=-2)
+        if weights is None:
+            weights = density_weights(samples[..., COORDINATES], self.density_k)
+        return (weights.unsqueeze(-1) * features).sum(dim=-2)
 
     def forward(self, samples: torch.Tensor) -> torch.Tensor:
         return self.after_pool(self.pooled_features(samples))

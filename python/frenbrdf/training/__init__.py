@@ -2,6 +2,8 @@
 
 - :mod:`.config`: :class:`TrainConfig`, :func:`config_for`, :func:`load_config`;
 - :mod:`.prepared`: the materials read, mapped and their true SH coefficients;
+- :mod:`frenbrdf.training.augment`, :mod:`frenbrdf.training.patterns`: each step's batch (augmented materials, the
+  sampling patterns the encoder reads them through);
 - :mod:`.step`: the loss composed, one optimisation step;
 - :mod:`.loop`: :func:`train`;
 - :mod:`.run`: :class:`Run`, a run folder opened (what :func:`train` returns).

@@ -16,6 +16,11 @@ Context and query samples of one material are drawn together, so both describe t
 material. Every random choice comes from the training loop's generator: the same seed gives
 the same batches, and a resumed run continues the same sequence. With augmentation off the
 generator is used exactly as before it existed.
+
+With :class:`~frenbrdf.training.config.SamplingConfig` set (anything but the ``paper`` preset), each
+material's context samples, augmented ones included, come from a sampling pattern
+(:mod:`frenbrdf.training.patterns`), and each step's count from ``sampling.counts``; the query samples stay random
+valid bins. With the ``paper`` sampling the generator is used exactly as before that option existed.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from ..data.folders import SampleBatch
 from ..io.merl import merl_above_horizon
 from ..models.nbrdf import bin_geometry
 from .config import TrainConfig
+from .patterns import PatternSampler
 from .procedural import NodeTruth, draw_procedural, values_at_bins
 
 #: What each material of a batch is.
@@ -70,7 +76,7 @@ class BatchDrawer:
     Parameters
     ----------
     cfg
-        The run's config: sample counts, ``context_jitter``, ``augment``.
+        The run's config: sample counts, ``context_jitter``, ``augment``, ``sampling``.
     data
         The prepared data (its bank, mapping, truth and, with gains, albedos).
     with_truth
@@ -80,17 +86,27 @@ class BatchDrawer:
     def __init__(self, cfg: TrainConfig, data, with_truth: bool):
         self.cfg, self.data, self.augment = cfg, data, cfg.augment
         self.with_truth = with_truth and data.truth is not None
+        #: The sampling patterns and their setups, or None for the paper's sampling (random valid bins).
+        self.patterns = (None if cfg.sampling.paper else
+                         PatternSampler(cfg.sampling, cfg.sampling.most_context(cfg.context_samples), cfg.seed))
         if not self.augment.active:
             return
         self.reference = torch.from_numpy(np.ascontiguousarray(data.mapping.reference_bins().T, dtype=np.float32))
         if self.augment.procedural > 0:
-            self.above_horizon = torch.from_numpy(np.flatnonzero(merl_above_horizon().reshape(-1)))
+            above = torch.from_numpy(merl_above_horizon().reshape(-1))
+            self.above_horizon, self.above_mask = torch.nonzero(above).squeeze(1), above
             self.node_truth = NodeTruth(cfg.loss.frequency, data.mapping) if self.with_truth else None
         if self.augment.gain > 0 and data.albedo is None:
             raise ValueError("gain augmentation needs the materials' albedos: prepare the data with this config")
 
     def context_count(self, generator: torch.Generator) -> int:
-        """This step's number of context samples (drawn from [jitter · N, N] with ``context_jitter``)."""
+        """This step's number of context samples: log-uniform in ``sampling.counts``, or drawn from [jitter · N, N]
+        with ``context_jitter``, else N = ``context_samples``."""
+        counts = self.cfg.sampling.counts
+        if counts is not None:
+            low, high = math.log(counts[0]), math.log(counts[1] + 1)
+            u = float(torch.rand(1, generator=generator, dtype=torch.float64))
+            return min(counts[1], int(math.exp(low + u * (high - low))))
         n = self.cfg.context_samples
         if self.cfg.context_jitter == 0:
             return n
@@ -99,9 +115,14 @@ class BatchDrawer:
 
     def draw(self, batch: list[int], generator: torch.Generator) -> TrainingBatch:
         """The batch of training materials ``batch`` (bank indices), some replaced by augmented ones."""
-        n_context = self.context_count(generator)
-        context = self.data.bank.sample(batch, n_context, generator)
-        query = self.data.bank.sample(batch, self.cfg.query_samples, generator)
+        n_context, n_query = self.context_count(generator), self.cfg.query_samples
+        patterns: list[str | None] = [None] * len(batch)
+        if self.patterns is None:
+            context = self.data.bank.sample(batch, n_context, generator)
+        else:
+            patterns = list(self.patterns.choose(len(batch), generator))
+            context = self.pattern_context(batch, patterns, n_context, generator)
+        query = self.data.bank.sample(batch, n_query, generator)
         truth = self.data.truth[batch] if self.with_truth else None
         if not self.augment.active:
             return TrainingBatch(context, query, truth)
@@ -110,21 +131,40 @@ class BatchDrawer:
         for slot in np.flatnonzero(roles != TABLE):
             if roles[slot] == PROCEDURAL:
                 material = draw_procedural(generator)
-                bins = self.above_horizon[torch.randint(len(self.above_horizon), (n_context + self.cfg.query_samples,),
-                                                        generator=generator)]
+                bins = self.role_bins(self.above_horizon, lambda: self.above_mask, n_context + n_query, generator,
+                                      patterns[slot])
                 values = values_at_bins(material, bins, self.data.mapping, self.reference[bins])
                 if truth is not None and self.node_truth is not None:
                     truth[slot] = self.node_truth.coefficients(material)
             elif roles[slot] == MIX:
-                bins, values = self.mixed(batch[slot], n_context + self.cfg.query_samples, generator)
+                bins, values = self.mixed(batch[slot], n_context + n_query, generator, patterns[slot])
             else:
-                bins, values = self.gained(batch[slot], n_context + self.cfg.query_samples, generator)
+                bins, values = self.gained(batch[slot], n_context + n_query, generator, patterns[slot])
             for samples, part in ((context, slice(0, n_context)), (query, slice(n_context, None))):
                 samples.coords[slot] = geometry.half_diff[bins[part]]
                 samples.values[slot] = values[part]
                 samples.cos_in[slot] = geometry.cos_in[bins[part]]
         mask = torch.from_numpy((roles == TABLE) | (roles == PROCEDURAL)) if truth is not None else None
         return TrainingBatch(context, query, truth, mask, roles)
+
+    def pattern_context(self, batch: list[int], patterns: list, n: int, generator: torch.Generator) -> SampleBatch:
+        """The context samples of each table of ``batch`` read through its pattern, ``n`` each."""
+        assert self.patterns is not None
+        bank = self.data.bank
+        bins = torch.stack([self.patterns.bins(name, bank.valid_bins(material), bank.valid[material], n, generator)
+                            for material, name in zip(batch, patterns, strict=True)])
+        return bank.at_bins(batch, bins)
+
+    def role_bins(self, valid_bins: torch.Tensor, valid, n: int, generator: torch.Generator,
+                  pattern: str | None) -> torch.Tensor:
+        """``n`` bins of an augmented material: its context bins, then its query bins. Without a pattern (or with
+        ``merl-bins``) all are random ``valid_bins``, as ever; with one, the context bins (``n`` − ``query_samples``)
+        are read through it where ``valid()`` (bool ``(N_BINS,)``, computed only then) marks the material's bins."""
+        if pattern is None or pattern == "merl-bins" or self.patterns is None:
+            return valid_bins[torch.randint(len(valid_bins), (n,), generator=generator)]
+        n_query = self.cfg.query_samples
+        context = self.patterns.bins(pattern, valid_bins, valid(), n - n_query, generator)
+        return torch.cat([context, valid_bins[torch.randint(len(valid_bins), (n_query,), generator=generator)]])
 
     def roles(self, n: int, generator: torch.Generator) -> np.ndarray:
         """What each of ``n`` batch materials becomes: procedural, mix, gain or table, independently."""
@@ -137,8 +177,10 @@ class BatchDrawer:
         """A bank material's reflectance ``(n, 3)`` at bins (its mapped values un-mapped)."""
         return self.data.mapping.inverse(self.data.bank.mapped[material, bins], self.reference[bins])
 
-    def mixed(self, a: int, n: int, generator: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
-        """Bins and mapped values of t·a + (1 − t)·b, with b another training material and t ~ U(0, 1)."""
+    def mixed(self, a: int, n: int, generator: torch.Generator,
+              pattern: str | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Bins and mapped values of t·a + (1 − t)·b, with b another training material and t ~ U(0, 1); the
+        context part of the bins read through ``pattern`` (:meth:`role_bins`)."""
         n_train = self.data.n_train
         b = (a + 1 + int(torch.randint(n_train - 1, (1,), generator=generator))) % n_train if n_train > 1 else a
         t = float(torch.rand(1, generator=generator, dtype=torch.float64))
@@ -147,19 +189,20 @@ class BatchDrawer:
             valid[a] & valid[b]).squeeze(1)
         if len(common) == 0:
             raise ValueError(f"materials {self.data.bank.names[a]} and {self.data.bank.names[b]} share no valid bin")
-        bins = common[torch.randint(len(common), (n,), generator=generator)]
+        bins = self.role_bins(common, lambda: valid[a] & valid[b], n, generator, pattern)
         mix = t * self.reflectance(a, bins) + (1 - t) * self.reflectance(b, bins)
         return bins, self.data.mapping.forward(mix, self.reference[bins])
 
-    def gained(self, a: int, n: int, generator: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
+    def gained(self, a: int, n: int, generator: torch.Generator,
+               pattern: str | None = None) -> tuple[torch.Tensor, torch.Tensor]:
         """Bins and mapped values of material ``a`` in another colour: its hue turned (for a share
-        ``hue_turn`` of them), then per-channel gains (:func:`draw_gains`)."""
+        ``hue_turn`` of them), then per-channel gains (:func:`draw_gains`); the context part of the bins read
+        through ``pattern`` (:meth:`role_bins`)."""
         turn = self.draw_turn(generator)
         # A turned colour's channel is at most the turn's |row| times the channels: so is its albedo.
         albedo = self.data.albedo[a] if turn is None else turn.abs() @ self.data.albedo[a]
         gains = draw_gains(albedo, self.augment.gain_range, generator)
-        own = self.data.bank.valid_bins(a)
-        bins = own[torch.randint(len(own), (n,), generator=generator)]
+        bins = self.role_bins(self.data.bank.valid_bins(a), lambda: self.data.bank.valid[a], n, generator, pattern)
         colours = self.reflectance(a, bins)
         if turn is not None:
             colours = (colours @ turn.T).clamp_min(0)

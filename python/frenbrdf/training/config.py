@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -11,6 +12,7 @@ from pathlib import Path
 from ..configs import MAX_SEED, from_dict, merge, to_dict
 from ..io.jsonfile import read_json
 from ..io.merl import N_BINS
+from ..io.patterns import PATTERNS
 from ..models.autoencoder import ModelConfig
 from ..models.encoder import SAMPLE_SIZE
 from ..models.losses import LossConfig
@@ -21,6 +23,7 @@ from ..presets import (
     augmentation_overrides,
     check_method,
     frequency_overrides,
+    sampling_overrides,
     training_overrides,
 )
 
@@ -96,6 +99,74 @@ class AugmentConfig:
         return self.mix + self.gain + self.procedural > 0
 
 
+#: The most context samples a step may draw with :attr:`SamplingConfig.counts` (the most a device gives:
+#: :data:`frenbrdf.io.patterns.SENSIBLE_COUNTS`).
+MAX_PATTERN_COUNT = 20_000
+
+
+def _paper_patterns() -> dict[str, float]:
+    return {"merl-bins": 1.0}
+
+
+@dataclass
+class SamplingConfig:
+    """How each training step draws the samples the encoder reads (docs/data.md, "Sampling patterns"). The
+    defaults are the ``paper`` preset of :data:`frenbrdf.presets.SAMPLING`: random valid MERL bins,
+    ``context_samples`` of them, as the paper and every earlier run drew them.
+
+    Each material of a step takes one pattern of :data:`frenbrdf.io.patterns.PATTERNS`, drawn with the chances
+    ``patterns`` gives, and its context samples are that pattern's pairs at the material's nearest bins
+    (:mod:`frenbrdf.training.patterns`). The query samples, at which the loss compares, stay random valid bins
+    (the loss measures the whole material); so do validation's context samples (``context_samples`` of them), so
+    that validation losses stay comparable between runs.
+    """
+
+    patterns: dict[str, float] = field(default_factory=_paper_patterns)
+    """Pattern name → its weight (≥ 0; the weights need not sum to 1, at least one is > 0)."""
+    counts: tuple[int, int] | None = None
+    """``(low, high)``: each step's number of context samples, drawn log-uniformly in low … high (one count for
+    every material of the step); None: ``context_samples`` (and ``context_jitter``), as ever."""
+    preset: str = "paper"
+    """The :data:`frenbrdf.presets.SAMPLING` entry these values came from (set by :func:`config_for`; "custom"
+    for values set by hand)."""
+
+    def __post_init__(self):
+        problems = []
+        if not isinstance(self.patterns, dict) or not self.patterns:
+            problems.append(f"patterns must map pattern names to weights, at least one, got {self.patterns!r}")
+        else:
+            unknown = [name for name in self.patterns if name not in PATTERNS]
+            if unknown:
+                problems.append(f"unknown pattern(s) {unknown}; the patterns are {', '.join(PATTERNS)}")
+            weights = list(self.patterns.values())
+            if not all(isinstance(w, (int, float)) and not isinstance(w, bool) and math.isfinite(w) and w >= 0
+                       for w in weights):
+                problems.append(f"pattern weights must be finite numbers ≥ 0, got {self.patterns}")
+            elif sum(weights) <= 0:
+                problems.append(f"at least one pattern weight must be > 0, got {self.patterns}")
+        if self.counts is not None:
+            counts = tuple(self.counts)
+            if (len(counts) != 2 or not all(isinstance(c, numbers.Integral) and not isinstance(c, bool) for c in counts)
+                    or not 1 <= counts[0] <= counts[1] <= MAX_PATTERN_COUNT):
+                problems.append(f"counts must be two whole numbers 1 ≤ low ≤ high ≤ {MAX_PATTERN_COUNT:,}, or None, "
+                                f"got {self.counts!r}")
+            else:
+                self.counts = (int(counts[0]), int(counts[1]))
+        if problems:
+            raise ValueError("invalid sampling config: " + "; ".join(problems))
+        self.patterns = {name: float(weight) for name, weight in self.patterns.items()}
+
+    @property
+    def paper(self) -> bool:
+        """Whether steps draw as the paper does (random valid bins, ``context_samples`` of them): the batches,
+        and the generator's use, are exactly those of runs from before this option."""
+        return self.counts is None and all(w == 0 for name, w in self.patterns.items() if name != "merl-bins")
+
+    def most_context(self, context_samples: int) -> int:
+        """The most context samples a step draws."""
+        return context_samples if self.counts is None else self.counts[1]
+
+
 @dataclass
 class TrainConfig:
     """One training run. Saved as ``config.json`` in the run folder and in every checkpoint."""
@@ -165,6 +236,7 @@ class TrainConfig:
     model: ModelConfig = field(default_factory=ModelConfig)
     loss: LossConfig = field(default_factory=LossConfig)
     augment: AugmentConfig = field(default_factory=AugmentConfig)
+    sampling: SamplingConfig = field(default_factory=SamplingConfig)
 
     def __post_init__(self):
         problems = []
@@ -187,6 +259,9 @@ class TrainConfig:
                 problems.append(f"{name} must be ≥ 0, got {getattr(self, name)}")
         if not 0.0 <= self.context_jitter <= 1.0:
             problems.append(f"context_jitter must lie in [0, 1], got {self.context_jitter}")
+        elif self.context_jitter > 0 and self.sampling.counts is not None:
+            problems.append(f"context_jitter ({self.context_jitter:g}) and sampling.counts {self.sampling.counts} both "
+                            "draw each step's context count; give one of them")
         if int(self.patience) < 0 or int(self.lr_plateau) < 0:
             problems.append(f"patience and lr_plateau must be ≥ 0, got {self.patience} and {self.lr_plateau}")
         if int(self.render_every) < 0 or not 8 <= int(self.render_resolution) <= 1024:
@@ -229,12 +304,14 @@ class TrainConfig:
     def _step_memory_problems(self) -> list[str]:
         """The largest sizes a step of this config may have within :data:`MAX_STEP_BYTES`, named, when it has more."""
         context, query, fixed, state = self.step_bytes()
-        batch, n_context, n_query = int(self.batch_materials), int(self.context_samples), int(self.query_samples)
+        batch, n_query = int(self.batch_materials), int(self.query_samples)
+        n_context = self.sampling.most_context(int(self.context_samples))
         total = state + batch * (n_context * context + n_query * query + fixed)
         if total <= MAX_STEP_BYTES:
             return []
         room = MAX_STEP_BYTES - state  # what the samples of a batch may take
-        limits = {"context_samples": (room // batch - n_query * query - fixed) // context,
+        limits = {"context_samples" if self.sampling.counts is None else "sampling.counts' high":
+                  (room // batch - n_query * query - fixed) // context,
                   "query_samples": (room // batch - n_context * context - fixed) // query,
                   "batch_materials": room // (n_context * context + n_query * query + fixed)}
         allowed = [f"{name} in 1 … {limit:,}" for name, limit in limits.items() if limit >= 1]
@@ -252,24 +329,31 @@ class TrainConfig:
 
 
 def config_for(method: str, *, training: str | None = None, augmentation: str | None = None,
-               frequency: str | None = None, **overrides) -> TrainConfig:
+               frequency: str | None = None, sampling: str | dict | SamplingConfig | None = None,
+               **overrides) -> TrainConfig:
     """The preset of a method (:data:`frenbrdf.presets.METHODS`), optionally with a training length
     (``"demo"``, ``"sweep"``), an augmentation (:data:`frenbrdf.presets.AUGMENTATION`; by default
-    :class:`AugmentConfig`'s, the ``"augmented"`` preset) and an L_fre variant
-    (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`, ``"paper"`` by default), with top-level fields overridden."""
+    :class:`AugmentConfig`'s, the ``"augmented"`` preset), an L_fre variant
+    (:data:`frenbrdf.presets.FREQUENCY_VARIANTS`, ``"paper"`` by default) and a sampling
+    (:data:`frenbrdf.presets.SAMPLING` by name, ``"paper"`` by default, or :class:`SamplingConfig` values as a dict
+    or a config), with top-level fields overridden."""
     check_method(method)
     layers = [METHODS[method]]
     if training is not None:
         layers.append(training_overrides(training))
     if augmentation is not None:
         layers.append({"augment": augmentation_overrides(augmentation)})
+    if isinstance(sampling, str):
+        layers.append({"sampling": sampling_overrides(sampling)})
+    elif sampling is not None:  # values: a config section like any other
+        overrides["sampling"] = sampling
     if frequency is not None:
         layers.append({"loss": {"frequency": frequency_overrides(frequency)}})
     layers.append({key: to_dict(value) if dataclasses.is_dataclass(value) else value
                    for key, value in overrides.items()})
     settings = to_dict(TrainConfig(method=method))
     for layer in layers:
-        settings = merge(settings, layer)
+        settings = merge(settings, layer, TrainConfig)
     return from_dict(TrainConfig, settings, f"the {method} preset")
 
 
@@ -281,7 +365,7 @@ def load_config(path: str | os.PathLike, **overrides) -> TrainConfig:
     data.update({key: value for key, value in overrides.items() if value is not None})
     base = to_dict(config_for(data.get("method", "frenbrdf")))
     try:
-        return from_dict(TrainConfig, merge(base, data), str(path))
+        return from_dict(TrainConfig, merge(base, data, TrainConfig), str(path))
     except ValueError as error:  # the dataclasses' own checks do not know the file
         if str(path) in str(error):
             raise

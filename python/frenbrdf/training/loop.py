@@ -22,13 +22,14 @@ from pathlib import Path
 import torch
 from tqdm.auto import tqdm
 
-from ..configs import to_dict
+from ..configs import from_dict, to_dict
 from ..data.folders import Split, list_materials, split_materials
 from ..exceptions import TrainingDiverged
 from ..io import checkpoints
 from ..io.atomic import save_json
 from ..io.outputs import OutputFolder
-from ..models.autoencoder import AutoEncoder, Model, load_model
+from ..models.autoencoder import AutoEncoder, Model, ModelConfig, load_model
+from ..models.encoder import POOLING_FIELDS
 from ..models.losses import FrequencyLoss
 from ..presets import SELECTION_RULES
 from ..render.scoring import ScoringSet
@@ -283,7 +284,11 @@ def check_source(cfg: TrainConfig, source: Model):
     """That the model ``cfg.decoder_from`` or ``cfg.init_from`` names fits this run: for ``decoder_from`` the same
     decoder, NBRDF, latent size and mapping (the encoder may differ), for ``init_from`` the same model config."""
     ours, theirs = to_dict(cfg.model), to_dict(source.config)
-    if cfg.init_from:
+    if cfg.init_from:  # how the codes are pooled has no weights: a model may be fine-tuned with another pooling
+        for config in (ours, theirs):
+            for encoder in (config["encoder"], *config["extra_encoders"]):
+                for name in POOLING_FIELDS:
+                    encoder.pop(name)
         differ = [name for name in ours if ours[name] != theirs[name]]
     else:
         differ = [name for name in ("decoder", "nbrdf", "mapping") if ours[name] != theirs[name]]
@@ -305,7 +310,7 @@ def checked_resume(run_dir: Path, cfg: TrainConfig) -> dict:
     if cfg.decoder_from:
         network.decoder.requires_grad_(False)  # as train() freezes it: the optimiser holds the encoder's only
     path = run_dir / "last.pt"
-    checkpoint = checkpoints.load_for_resume(path, network, make_optimizer(network, cfg), to_dict(cfg))
+    checkpoint = checkpoints.load_for_resume(path, network, make_optimizer(network, cfg), to_dict(cfg), model_as_read)
     try:
         Split.from_json(checkpoint["split"], "split")
     except ValueError as error:
@@ -313,10 +318,20 @@ def checked_resume(run_dir: Path, cfg: TrainConfig) -> dict:
     return checkpoint
 
 
+def model_as_read(model: dict) -> dict:
+    """A saved model config (a dict) with the fields added since it was saved at their defaults, as a model loads
+    it (a run from before ``encoder.pooling`` has the plain mean), so that it compares equal to the same config
+    written today; as it is where it is no valid config."""
+    try:
+        return to_dict(from_dict(ModelConfig, model, "model"))
+    except (ValueError, TypeError):
+        return model
+
+
 def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Path) -> Split:
     """The split of the checkpoint being resumed, checked against ``cfg`` and the data folder."""
     saved = json.loads(checkpoint["config"])
-    if saved["model"] != to_dict(cfg)["model"] or saved["seed"] != cfg.seed:
+    if model_as_read(saved["model"]) != to_dict(cfg)["model"] or saved["seed"] != cfg.seed:
         raise ValueError(f"{run_dir / 'last.pt'} was trained with another model config or seed; "
                          "resume with the run's own config.json")
     split = Split.from_json(checkpoint["split"])
