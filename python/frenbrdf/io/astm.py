@@ -67,7 +67,7 @@ import numpy as np
 from .._native import __version__
 from .atomic import atomic_path
 from .paths import input_file
-from .samples import MAX_SAMPLES, Measurements, _checked, _columns
+from .samples import MAX_SAMPLES, Measurements, _checked, _columns, is_number
 
 #: The suffix of ASTM E1392 files.
 SUFFIX = ".astm"
@@ -177,14 +177,6 @@ def _lines(file: TextIO, path: Path) -> Iterator[tuple[int, str]]:
         yield number, line.strip()
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _cells(line: str) -> list[str]:
     return line.split(",") if "," in line else line.split()
 
@@ -202,7 +194,7 @@ def _read(path: Path) -> tuple[list[str], array.array, array.array]:
                 if not line or line.startswith("#"):
                     continue
                 cells = _cells(line)
-                if names is None and not _is_number(cells[0]):
+                if names is None and not is_number(cells[0]):
                     _keyword(path, number, line, header)
                     continue
                 if names is None:
@@ -213,7 +205,7 @@ def _read(path: Path) -> tuple[list[str], array.array, array.array]:
                 try:
                     data.extend(map(float, cells))
                 except ValueError:
-                    column = next(i for i, cell in enumerate(cells) if not _is_number(cell))
+                    column = next(i for i, cell in enumerate(cells) if not is_number(cell))
                     raise ValueError(f"{path}: line {number}, column {names[column]}: "
                                      f"{cells[column].strip()[:40]!r} is not a number") from None
                 rows.append(number)

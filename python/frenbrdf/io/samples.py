@@ -162,7 +162,7 @@ def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], np.ndarray]:
                 try:
                     data.extend(map(float, cells))
                 except ValueError:
-                    column = next(i for i, cell in enumerate(cells) if not _is_number(cell))
+                    column = next(i for i, cell in enumerate(cells) if not is_number(cell))
                     raise ValueError(f"{path}: row {number}, column {header[column]}: {cells[column].strip()[:40]!r} "
                                      "is not a number") from None
                 rows.append(number)
@@ -182,7 +182,7 @@ def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], np.ndarray]:
 def _header(path: Path, cells: list[str], number: int) -> list[str]:
     """The column names of a CSV's first row, checked."""
     header = [cell.strip() for cell in cells]
-    if any(_is_number(cell) for cell in header):
+    if any(is_number(cell) for cell in header):
         raise ValueError(f"{path}: row {number} must be a header naming the columns, "
                          f"e.g. {','.join(FORMS['vectors'])}")
     if len(set(header)) != len(header):
@@ -191,7 +191,8 @@ def _header(path: Path, cells: list[str], number: int) -> list[str]:
     return header
 
 
-def _is_number(text: str) -> bool:
+def is_number(text: str) -> bool:
+    """Whether ``float()`` reads ``text`` (a header cell is a name, a data cell a number)."""
     try:
         float(text)
     except ValueError:
