@@ -253,6 +253,30 @@ def reconstruct(args: argparse.Namespace) -> int:
     return 0
 
 
+def edit(args: argparse.Namespace) -> int:
+    from ..material.edit import DEFAULT_T, edit_files
+
+    given = given_options(args, "samples", "pattern")
+    if given and _holds_samples(args.input_a) and _holds_samples(args.input_b):
+        raise ValueError(f"--{next(iter(given))} picks samples from a MERL file or a .bsdf; both inputs are files "
+                         "of samples, read whole")
+    if given.get("samples", 1) is None and given.get("pattern", "merl-bins") != "merl-bins":
+        raise ValueError(f"--samples all draws every MERL bin; --pattern {given['pattern']} draws N pairs: give a "
+                         "number")
+    report = edit_files(args.input_a, args.input_b, args.out, DEFAULT_T if args.t is None else args.t,
+                        model=args.model, latent=args.latent, refine=args.refine, seed=args.seed,
+                        resolution=args.resolution, progress=not args.quiet, overwrite=args.overwrite, **given)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        ends = "; ".join(f"{side} PSNR {m['psnr']:.2f} dB against its render" for side, m in report["ends"].items())
+        what = "latent interpolation" if report["mode"] == "latent" else "edit keeping each material"
+        print(f"{what} between {args.input_a} and {args.input_b} at t = "
+              f"{', '.join(f'{t:g}' for t in report['t'])}{f' (ends: {ends})' if ends else ''}; wrote "
+              f"{os.path.join(args.out, '')}")
+    return 0
+
+
 def convert(args: argparse.Namespace) -> int:
     from ..material.convert import convert
 

@@ -60,6 +60,17 @@ def decibels(text: str) -> float:
     return value
 
 
+def unit_interval(text: str) -> float:
+    """An argparse type: a number in [0, 1] (an edit's position t; NaN and inf are numbers to ``float()``)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"expected a number in 0 … 1, got {text!r}")
+    return value
+
+
 def sample_count(text: str) -> int | None:
     from ..io.samples import MIN_SAMPLES
 

@@ -215,6 +215,41 @@ def _reconstruct(subparsers) -> None:
     rec.set_defaults(run=commands.reconstruct)
 
 
+def _edit(subparsers) -> None:
+    edit = subparsers.add_parser("edit", help="the edit between two measured materials that keeps each (at t = 0 and "
+                                 "1 each one's reconstruction, unlike the latent interpolation): MERL tables and "
+                                 "renders along t in one folder")
+    edit.add_argument("input_a", metavar="A", help="the material at t = 0: a file of samples (.csv, .npz, .astm), a "
+                      "MERL .binary file or an RGL .bsdf measurement, as reconstruct reads it")
+    edit.add_argument("input_b", metavar="B", help="the material at t = 1 (the same file as A is allowed)")
+    edit.add_argument("--t", type=options.unit_interval, nargs="+", action="extend", metavar="T",
+                      help="positions along the edit, each in 0 … 1 (0: A, 1: B); --t 0 0.5 1 or --t 0.3 --t 0.6 "
+                      "(default 0 0.25 0.5 0.75 1)")
+    edit.add_argument("--out", required=True, help="result folder: a new or empty one, or an earlier edit's "
+                      "folder, which is replaced (never an input's folder)")
+    edit.add_argument("--latent", action="store_true", help="the plain latent interpolation instead: the model's "
+                      "decodings of (1 − t) z_A + t z_B, whose ends are the decodings, not the materials "
+                      "(the inputs then refined with --refine latent unless given)")
+    edit.add_argument("--model", default="pretrained", help="training run folder, checkpoint, packed model's "
+                      "folder or 'pretrained' (the default): the model that reconstructs both and holds the "
+                      "latent space")
+    edit.add_argument("--refine", choices=("none", "latent", "full"),
+                      help="how each input is reconstructed (as reconstruct's --refine; default full, latent with "
+                      "--latent)")
+    edit.add_argument("--samples", type=options.sample_count, default=argparse.SUPPRESS, metavar="N|all",
+                      help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
+    edit.add_argument("--pattern", type=options.pattern, default=argparse.SUPPRESS, metavar="NAME",
+                      help="MERL or .bsdf input: the sampling pattern (default merl-bins; see reconstruct)")
+    edit.add_argument("--resolution", type=options.resolution, default=256, help="render size (default 256)")
+    edit.add_argument("--seed", type=options.seed, default=0, help="seeds the sampling and the refinement "
+                      "(default 0)")
+    edit.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files "
+                      "(they are kept)")
+    edit.add_argument("--json", action="store_true", help="print the report as JSON")
+    edit.add_argument("--quiet", action="store_true", help="no progress bars")
+    edit.set_defaults(run=commands.edit)
+
+
 def _convert(subparsers) -> None:
     convert = subparsers.add_parser("convert", help="an RGL .bsdf measurement into a MERL .binary table, a .bsdf "
                                   "or MERL file into a CSV/NPZ/ASTM E1392 file of samples that reconstruct reads, "
@@ -279,4 +314,4 @@ def _demo(subparsers) -> None:
 
 
 #: Every command, in the order ``--help`` lists them.
-COMMANDS = (_info, _synth, _import_nbrdf, _train, _fit_nbrdf, _evaluate, _render, _select, _reconstruct, _convert, _view, _spectrum, _demo)
+COMMANDS = (_info, _synth, _import_nbrdf, _train, _fit_nbrdf, _evaluate, _render, _select, _reconstruct, _edit, _convert, _view, _spectrum, _demo)

@@ -91,7 +91,7 @@ class AutoEncoder(nn.Module):
 
 
 class Model:
-    """A trained FreNBRDF (or baseline) model: encode samples, decode latents, edit.
+    """A trained FreNBRDF (or baseline) model: encode samples, decode latents, reconstruct, edit.
 
     Examples
     --------
@@ -220,6 +220,18 @@ class Model:
         from .reconstruct import reconstruct
 
         return reconstruct(self, values, directions, refine=refine)
+
+    def edit(self, a, b, t):
+        """The edit between two reconstructions of this model that keeps each (:func:`frenbrdf.models.editing.edit`).
+
+        ``a``, ``b``: :class:`frenbrdf.models.reconstruct.Reconstruction` s (``refine="full"``: what refinement
+        added beyond the decoding is carried along and faded out); ``t``: a position in [0, 1] or a 1-D array of
+        them. Returns a :class:`frenbrdf.models.editing.EditedMaterial`, each material itself at t = 0 and 1. The
+        plain latent interpolation stays ``model.decode(interpolate(a.z, b.z, t))``.
+        """
+        from .editing import edit
+
+        return edit(self, a, b, t)
 
 
 def encode_in_chunks(encoder: SetEncoder, samples: torch.Tensor) -> np.ndarray:
