@@ -69,6 +69,8 @@ COMMANDS = [
     Command("spectrum", lambda i, o: ["spectrum", str(i / "grey.binary"), "--out", str(o), "--lmax", "7"]),
     Command("select", lambda i, o: ["select", "--data", str(i), "--target-psnr", "20", "--front",
                                     str(i / "front.json"), "--out", str(o), "--quiet"]),
+    Command("edit", lambda i, o: ["edit", str(i / "samples.csv"), str(i / "samples.csv"), "--out", str(o), "--refine",
+                                  "none", "--t", "0.5", "--resolution", "16", "--quiet"], slow=True),
 ]
 FILE_COMMANDS = [
     Command("render", lambda i, o: ["render", str(i / "grey.binary"), "--out", str(o), "--resolution", "16"]),

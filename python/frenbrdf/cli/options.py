@@ -45,6 +45,7 @@ bank_size = whole(1, limit(".data.synth", "MAX_BANK"))
 table_samples = whole(1, limit(".io.merl", "N_BINS"))  # drawn from a MERL table's bins
 resolution = whole(8, limit(".render.renderer", "MAX_RESOLUTION"))
 evaluate_resolution = whole(8, limit(".evaluation.evaluate", "MAX_RESOLUTION"))
+edit_resolution = whole(8, limit(".material.edit", "MAX_RESOLUTION"))
 nbrdf_width = whole(1, limit(".models.nbrdf", "MAX_WIDTH"))
 lmax = whole(1, limit(".models.losses", "MAX_LMAX"))
 

@@ -223,8 +223,8 @@ def _edit(subparsers) -> None:
                       "MERL .binary file or an RGL .bsdf measurement, as reconstruct reads it")
     edit.add_argument("input_b", metavar="B", help="the material at t = 1 (the same file as A is allowed)")
     edit.add_argument("--t", type=options.unit_interval, nargs="+", action="extend", metavar="T",
-                      help="positions along the edit, each in 0 … 1 (0: A, 1: B); --t 0 0.5 1 or --t 0.3 --t 0.6 "
-                      "(default 0 0.25 0.5 0.75 1)")
+                      help="positions along the edit, each in 0 … 1 (0: A, 1: B), at most 33; --t 0 0.5 1 or --t 0.3 "
+                      "--t 0.6 (default 0 0.25 0.5 0.75 1)")
     edit.add_argument("--out", required=True, help="result folder: a new or empty one, or an earlier edit's "
                       "folder, which is replaced (never an input's folder)")
     edit.add_argument("--latent", action="store_true", help="the plain latent interpolation instead: the model's "
@@ -240,7 +240,8 @@ def _edit(subparsers) -> None:
                       help="MERL or .bsdf input: random valid bins given to the model (default 4000), or all")
     edit.add_argument("--pattern", type=options.pattern, default=argparse.SUPPRESS, metavar="NAME",
                       help="MERL or .bsdf input: the sampling pattern (default merl-bins; see reconstruct)")
-    edit.add_argument("--resolution", type=options.resolution, default=256, help="render size (default 256)")
+    edit.add_argument("--resolution", type=options.edit_resolution, default=256, help="render size (8 … 1024, "
+                      "default 256)")
     edit.add_argument("--seed", type=options.seed, default=0, help="seeds the sampling and the refinement "
                       "(default 0)")
     edit.add_argument("--overwrite", action="store_true", help="write into --out although it holds other files "

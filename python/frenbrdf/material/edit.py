@@ -30,16 +30,22 @@ from tqdm.auto import tqdm
 
 from ..io.atomic import save_json
 from ..io.formats import read_samples, write_material
-from ..io.outputs import OutputFolder
+from ..io.merl import FILE_BYTES
+from ..io.outputs import OutputFolder, check_free_space
 from ..io.patterns import DEFAULT as DEFAULT_PATTERN
 from ..io.patterns import pattern as find_pattern
 from ..io.samples import Measurements
-from ..models.autoencoder import interpolate, load_model
+from ..models.autoencoder import load_model
+from ..models.editing import interpolate
 from ..models.reconstruct import refine_config
 from ..render.renderer import Scene, material_mask, render, render_linear, save_png
 
 #: The positions ``frenbrdf edit`` writes when none are given.
 DEFAULT_T = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: The most positions one edit writes (a MERL table of 35 MB and a render each): t every 1/32, as the viewer's slider.
+MAX_POSITIONS = 33
+#: The largest render (pixels per side): the strip holds every position's, 33 at 1024² about 0.4 GB in float32.
+MAX_RESOLUTION = 1024
 #: The file names of the folder besides each position's (:func:`position_name`).
 FILES = {"strip": "strip.png", "report": "edit.json"}
 
@@ -52,8 +58,8 @@ def position_name(t: float) -> str:
 def check_positions(t) -> list[float]:
     """The positions, rising: each a finite number in [0, 1], no two with the same files (:func:`position_name`)."""
     values = [float(value) for value in t]
-    if not values:
-        raise ValueError("give at least one position t")
+    if not 1 <= len(values) <= MAX_POSITIONS:
+        raise ValueError(f"give 1 to {MAX_POSITIONS} positions t (each writes a 35 MB MERL table), got {len(values)}")
     bad = [value for value in values if not (math.isfinite(value) and 0 <= value <= 1)]
     if bad:
         raise ValueError(f"each position t must be a number in [0, 1] (0 is the first material, 1 the second), got "
@@ -103,6 +109,8 @@ def edit_files(source_a: str | os.PathLike, source_b: str | os.PathLike, out_dir
         What ``edit.json`` holds.
     """
     positions = check_positions(t)
+    if not 8 <= resolution <= MAX_RESOLUTION:
+        raise ValueError(f"resolution must be 8 … {MAX_RESOLUTION}, got {resolution}")
     refine = refine or ("latent" if latent else "full")
     config = dataclasses.replace(refine_config(refine), seed=seed, progress=progress)
     find_pattern(pattern)  # an unknown name is refused before anything is read or written
@@ -110,6 +118,7 @@ def edit_files(source_a: str | os.PathLike, source_b: str | os.PathLike, out_dir
     out = OutputFolder.claim(out_dir, command="edit", inputs=inputs, overwrite=overwrite)
     names = [position_name(value) for value in positions]
     out.check_names([*FILES.values(), *(name + suffix for name in names for suffix in (".binary", ".png"))])
+    check_free_space(out.target, len(names) * FILE_BYTES, f"{len(names)} MERL tables")
 
     measured = [read_samples(source, samples=samples, seed=seed, pattern=pattern) for source in (source_a, source_b)]
     loaded = load_model(model)
@@ -127,7 +136,7 @@ def edit_files(source_a: str | os.PathLike, source_b: str | os.PathLike, out_dir
         ends = {"a": result_a.nbrdf, "b": result_b.nbrdf}
 
     scene = Scene(resolution=resolution)
-    renders = [render(material, scene) for material in tqdm(materials, desc="render", disable=not progress,
+    renders = [render(material, scene).astype(np.float32) for material in tqdm(materials, desc="render", disable=not progress,
                                                              leave=False)]
     truths, metrics = {}, {}
     for side, measurement, end, at in (("a", measured[0], ends["a"], 0.0), ("b", measured[1], ends["b"], 1.0)):

@@ -14,6 +14,8 @@ from torch import nn
 from ..configs import from_dict
 from ..io import checkpoints
 from ..io.jsonfile import parse_json
+from .editing import EditedMaterial, edit
+from .editing import interpolate as interpolate  # its home until editing had one; imported from here by many
 from .encoder import EncoderConfig, EncoderMean, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
 from .mapping import LogRelativeMapping, MappingConfig
@@ -221,7 +223,7 @@ class Model:
 
         return reconstruct(self, values, directions, refine=refine)
 
-    def edit(self, a, b, t):
+    def edit(self, a, b, t) -> EditedMaterial:
         """The edit between two reconstructions of this model that keeps each (:func:`frenbrdf.models.editing.edit`).
 
         ``a``, ``b``: :class:`frenbrdf.models.reconstruct.Reconstruction` s (``refine="full"``: what refinement
@@ -229,8 +231,6 @@ class Model:
         them. Returns a :class:`frenbrdf.models.editing.EditedMaterial`, each material itself at t = 0 and 1. The
         plain latent interpolation stays ``model.decode(interpolate(a.z, b.z, t))``.
         """
-        from .editing import edit
-
         return edit(self, a, b, t)
 
 
@@ -264,22 +264,3 @@ def load_model(model: str | os.PathLike) -> Model:
     if path.is_dir() and (path / "card.json").exists():  # a FIFO there is refused by the card's reader
         return Model.pretrained(path)
     return Model.load(path)
-
-
-def interpolate(z_a, z_b, t, *, extrapolate: bool = False) -> np.ndarray:
-    """Linear interpolation of latents, ``(1 − t) z_a + t z_b`` (material editing).
-
-    ``t`` is a number or an array (a leading axis is added). Values outside [0, 1]
-    extrapolate beyond the two materials, which decodes to materials nobody measured:
-    they raise ``ValueError`` unless ``extrapolate=True``.
-    """
-    z_a, z_b = np.asarray(z_a, dtype=np.float64), np.asarray(z_b, dtype=np.float64)
-    if z_a.shape != z_b.shape:
-        raise ValueError(f"latents must have the same shape, got {z_a.shape} and {z_b.shape}")
-    t = np.asarray(t, dtype=np.float64)
-    if not np.all(np.isfinite(t)):
-        raise ValueError("t must be finite")
-    if not extrapolate and (t.min() < 0 or t.max() > 1):
-        raise ValueError(f"t must lie in [0, 1], got {t.min()} … {t.max()}; pass extrapolate=True to go beyond")
-    t = t.reshape(t.shape + (1,) * z_a.ndim)
-    return (1 - t) * z_a + t * z_b

@@ -1,8 +1,9 @@
-"""Edits that keep each material: the latent interpolation plus what refinement added beyond the decoder.
+"""Editing: the latent interpolation (:func:`interpolate`), and edits that keep each material (:func:`edit`), the
+latent interpolation plus what refinement added beyond the decoder.
 
 A ``full`` reconstruction (:func:`frenbrdf.models.reconstruct.reconstruct`) is an NBRDF whose weights were refined
-beyond the decoding of its latent z, about 10 dB nearer a real measurement's render than ``model.decode(z)``. An
-edit along the latent interpolation alone (:func:`frenbrdf.models.interpolate`, then :meth:`frenbrdf.Model.decode`)
+beyond the decoding of its latent z, several dB nearer a real measurement's render than ``model.decode(z)``
+(docs/usage.md). An edit along the latent interpolation alone (:func:`interpolate`, then :meth:`frenbrdf.Model.decode`)
 starts and ends at those decodings, and so throws that away. :func:`edit` keeps it: in the model's mapped space
 y = ln((f + ε) / (f_ref + ε)) (:mod:`frenbrdf.models.mapping`), with z_t = (1 − t) z_a + t z_b,
 
@@ -13,7 +14,7 @@ decoding, faded out along t. At t = 0 and 1 it is each material itself; between 
 decoder does; with no residual (a ``latent`` reconstruction) it is the plain latent interpolation. The sum is
 evaluated as ``(1 − t) y_a + t y_b + (D(z_t) − (1 − t) D(z_a) − t D(z_b))``, which at t = 0 and 1 adds an exact 0
 to the material (each latent is decoded alone, so D(z_t) at an end is D(z_a) bit for bit): the ends are the
-materials up to the logarithm's round trip (about 1e-15 relative).
+materials up to the logarithm's round trip (within about 1e-15 of f + ε).
 
 Every term is the reflectance an NBRDF gives, clamped as it clamps it, taken into the mapped space: the edit is
 the viewer's "keeping each material" mode (:mod:`frenbrdf.render.viewer.sources`), here at any t.
@@ -160,6 +161,25 @@ class EditedMaterial:
         write_merl(path, self.merl_table())
 
 
+def interpolate(z_a, z_b, t, *, extrapolate: bool = False) -> np.ndarray:
+    """Linear interpolation of latents, ``(1 − t) z_a + t z_b`` (material editing).
+
+    ``t`` is a number or an array (a leading axis is added). Values outside [0, 1]
+    extrapolate beyond the two materials, which decodes to materials nobody measured:
+    they raise ``ValueError`` unless ``extrapolate=True``.
+    """
+    z_a, z_b = np.asarray(z_a, dtype=np.float64), np.asarray(z_b, dtype=np.float64)
+    if z_a.shape != z_b.shape:
+        raise ValueError(f"latents must have the same shape, got {z_a.shape} and {z_b.shape}")
+    t = np.asarray(t, dtype=np.float64)
+    if not np.all(np.isfinite(t)):
+        raise ValueError("t must be finite")
+    if not extrapolate and (t.min() < 0 or t.max() > 1):
+        raise ValueError(f"t must lie in [0, 1], got {t.min()} … {t.max()}; pass extrapolate=True to go beyond")
+    t = t.reshape(t.shape + (1,) * z_a.ndim)
+    return (1 - t) * z_a + t * z_b
+
+
 def _same_mapping(x: LogRelativeMapping, y: LogRelativeMapping) -> bool:
     return x.epsilon == y.epsilon and x.offset == y.offset and x.reference.shape == y.reference.shape \
         and np.array_equal(x.reference.astype(np.float32), y.reference.astype(np.float32))
@@ -189,8 +209,6 @@ def edit(model, a, b, t) -> EditedMaterial:
         t outside [0, 1] or not finite, or a reconstruction that is not of this model (its latent's size, its
         mapping).
     """
-    from .autoencoder import interpolate
-
     latent = model.config.encoder.latent
     latents = []
     for name, result in (("a", a), ("b", b)):
