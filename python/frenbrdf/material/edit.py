@@ -136,13 +136,13 @@ def edit_files(source_a: str | os.PathLike, source_b: str | os.PathLike, out_dir
         ends = {"a": result_a.nbrdf, "b": result_b.nbrdf}
 
     scene = Scene(resolution=resolution)
-    renders = [render(material, scene).astype(np.float32) for material in tqdm(materials, desc="render", disable=not progress,
-                                                             leave=False)]
+    renders = [render(material, scene).astype(np.float32)  # float32: the strip holds them all
+               for material in tqdm(materials, desc="render", disable=not progress, leave=False)]
     truths, metrics = {}, {}
     for side, measurement, end, at in (("a", measured[0], ends["a"], 0.0), ("b", measured[1], ends["b"], 1.0)):
         if measurement.truth is None or measurement.table is None:
             continue  # scattered samples: no whole material to render
-        truths[side] = render(measurement.truth, scene)
+        truths[side] = render(measurement.truth, scene).astype(np.float32)
         image = renders[positions.index(at)] if at in positions else render(end, scene)
         metrics[side] = _end_metrics(measurement, truths[side], image, scene)
 
@@ -167,7 +167,7 @@ def strip(renders: list[np.ndarray], truth_a: np.ndarray | None = None,
           truth_b: np.ndarray | None = None) -> np.ndarray:
     """The renders side by side, framed by the inputs' own renders where given, each set apart by a white gap of
     a sixteenth of a render's width."""
-    gap = np.ones((renders[0].shape[0], max(1, renders[0].shape[1] // 16), 3))
+    gap = np.ones((renders[0].shape[0], max(1, renders[0].shape[1] // 16), 3), dtype=renders[0].dtype)
     parts = ([truth_a, gap] if truth_a is not None else []) + list(renders) + \
         ([gap, truth_b] if truth_b is not None else [])
     return np.concatenate(parts, axis=1)
