@@ -61,7 +61,8 @@ nitpick_ignore_regex = [
     (r"py:.*", r"(np|numpy|torch|scipy|h5py|matplotlib|mitsuba|mi|drjit|dr|tqdm)(\..*)?"),  # third-party
     (r"py:.*", r"(os|pathlib|collections\.abc|typing|dataclasses|argparse|json|concurrent\.futures)\..*"),  # stdlib
     (r"py:class", r"(Path|PathLike|Callable|Iterable|Iterator|Sequence|Mapping)"),  # stdlib, as annotated
-    (r"py:class", r"frenbrdf\._native\..*"),  # the Rust core's classes, private, in some annotations
+    # Private names in public signatures: the Rust core's classes, helpers such as models.editing._Ends.
+    (r"py:class", r"frenbrdf\.(.+\.)?_\w+(\..*)?"),
 ]
 
 
