@@ -13,6 +13,9 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
+from frenbrdf.data.folders import list_materials, split_materials
+from frenbrdf.training import prepare
+
 # CI runs the same examples every time, so a red run is reproducible; locally each run
 # explores new ones.
 settings.register_profile("ci", derandomize=True)
@@ -177,3 +180,15 @@ def random_nbrdf_params(hidden=(8,), seed: int = 0):
 
     generator = torch.Generator().manual_seed(seed)
     return [torch.randn(1, *s, generator=generator) * 0.3 for s in NBRDFConfig(hidden).shapes()]
+
+
+#: Every augmentation kind at once (the drawer's tests).
+EVERY_KIND = {"mix": 0.3, "gain": 0.3, "procedural": 0.3, "preset": "custom"}
+
+@pytest.fixture(scope="module")
+def prepared(toy_materials, tmp_path_factory):
+    """The toy materials prepared once for the module (6 train, 1 validation, 1 test), albedos included."""
+    cfg = tiny("frenbrdf", toy_materials, tmp_path_factory.mktemp("prepared") / "run", batch_materials=6,
+               split=(0.75, 0.125, 0.125), augment=EVERY_KIND)
+    files = {path.stem: path for path in list_materials(toy_materials)}
+    return cfg, prepare(cfg, split_materials(files, cfg.seed, cfg.split), files)

@@ -12,33 +12,20 @@ from frenbrdf import presets
 from frenbrdf.data import analytic, synth
 from frenbrdf.data.folders import (
     ALBEDO_INCIDENT_DEGREES,
-    list_materials,
     mapped_bank,
     max_directional_albedo,
-    split_materials,
 )
 from frenbrdf.io.merl import merl_above_horizon
 from frenbrdf.io.sampling import bin_directions
 from frenbrdf.models.autoencoder import AutoEncoder
 from frenbrdf.models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
-from frenbrdf.training import config_for, loss_terms, prepare
+from frenbrdf.training import config_for, loss_terms
 from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, draw_gains, hue_turn
 from frenbrdf.training.config import AugmentConfig
 from frenbrdf.training.procedural import NodeTruth, draw_procedural
 
-from .conftest import tiny
-
-EVERY_KIND = {"mix": 0.3, "gain": 0.3, "procedural": 0.3, "preset": "custom"}
-
-
-@pytest.fixture(scope="module")
-def prepared(toy_materials, tmp_path_factory):
-    """The toy materials prepared once for the module (6 train, 1 validation, 1 test), albedos included."""
-    cfg = tiny("frenbrdf", toy_materials, tmp_path_factory.mktemp("augment") / "run", batch_materials=6,
-               split=(0.75, 0.125, 0.125), augment=EVERY_KIND)
-    files = {path.stem: path for path in list_materials(toy_materials)}
-    return cfg, prepare(cfg, split_materials(files, cfg.seed, cfg.split), files)
+from .conftest import EVERY_KIND
 
 
 def _drawer(prepared, context_jitter=0.0, **augment):

@@ -113,11 +113,14 @@ def test_model_encode_decode_and_input_errors():
         model.decode(np.full(4, np.nan))
 
 
-def test_model_encode_in_chunks_equals_the_whole_set(monkeypatch):
-    """Sets larger than ENCODE_CHUNK go through the encoder in chunks: the same mean."""
+@pytest.mark.parametrize("pooling", ["mean", "density"])
+def test_model_encode_in_chunks_equals_the_whole_set(monkeypatch, pooling):
+    """Sets larger than ENCODE_CHUNK go through the encoder in chunks: the same pooled code (density weights are
+    computed over the whole set)."""
     from frenbrdf.models import autoencoder
 
-    config = ModelConfig(nbrdf=NBRDFConfig((8,)), encoder=EncoderConfig((16,), 4), decoder=DecoderConfig((16,)))
+    config = ModelConfig(nbrdf=NBRDFConfig((8,)), encoder=EncoderConfig((16,), 4, pooling=pooling),
+                         decoder=DecoderConfig((16,)))
     model = Model(AutoEncoder(config), LogRelativeMapping(np.full(3, 0.1)), config)
     rng = np.random.default_rng(2)
     wi, wo = unit_vectors(rng, 230), unit_vectors(rng, 230)

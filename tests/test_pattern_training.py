@@ -12,34 +12,21 @@ import torch
 import frenbrdf
 from frenbrdf import cli, presets
 from frenbrdf.configs import from_dict, to_dict
-from frenbrdf.data.folders import list_materials, split_materials
 from frenbrdf.io import checkpoints
 from frenbrdf.io.merl import N_BINS, merl_lookup_directions
 from frenbrdf.io.patterns import PATTERNS, sample_pattern
 from frenbrdf.models import encoder as encoders
-from frenbrdf.models.autoencoder import AutoEncoder, Model, ModelConfig
+from frenbrdf.models.autoencoder import Model
 from frenbrdf.models.encoder import EncoderConfig, SetEncoder, density_weights, knn_radius
-from frenbrdf.models.hypernetwork import DecoderConfig
-from frenbrdf.models.mapping import LogRelativeMapping
-from frenbrdf.models.nbrdf import NBRDFConfig
-from frenbrdf.training import Run, config_for, load_config, prepare, train
+from frenbrdf.training import Run, config_for, load_config, train
 from frenbrdf.training.augment import TABLE, BatchDrawer
 from frenbrdf.training.config import MAX_PATTERN_COUNT, AugmentConfig, SamplingConfig, TrainConfig
 from frenbrdf.training.patterns import PatternSampler, nearest_bins
 
-from .conftest import tiny, unit_vectors
+from .conftest import EVERY_KIND, tiny, unit_vectors
 
-EVERY_KIND = {"mix": 0.3, "gain": 0.3, "procedural": 0.3, "preset": "custom"}
 NO_AUGMENT = {"mix": 0.0, "gain": 0.0, "procedural": 0.0, "preset": "paper"}
 
-
-@pytest.fixture(scope="module")
-def prepared(toy_materials, tmp_path_factory):
-    """The toy materials prepared once for the module (6 train, 1 validation, 1 test), albedos included."""
-    cfg = tiny("frenbrdf", toy_materials, tmp_path_factory.mktemp("patterns") / "run", batch_materials=6,
-               split=(0.75, 0.125, 0.125), augment=EVERY_KIND)
-    files = {path.stem: path for path in list_materials(toy_materials)}
-    return cfg, prepare(cfg, split_materials(files, cfg.seed, cfg.split), files)
 
 
 def _drawer(prepared, sampling: SamplingConfig | None = None, augment=None, with_truth=True, **fields):
@@ -322,21 +309,6 @@ def test_mean_pooling_is_the_paper_encoder_and_density_pooling_has_its_weights()
     for bad, match in (({"pooling": "attention"}, "pooling must be one of"), ({"density_k": 0}, "density_k")):
         with pytest.raises(ValueError, match=match):
             EncoderConfig(**bad)
-
-
-def test_density_pooling_encodes_a_large_set_in_chunks_as_whole(monkeypatch):
-    from frenbrdf.models import autoencoder
-
-    config = ModelConfig(nbrdf=NBRDFConfig((8,)), encoder=EncoderConfig((16,), 4, pooling="density"),
-                         decoder=DecoderConfig((16,)))
-    model = Model(AutoEncoder(config), LogRelativeMapping(np.full(3, 0.1)), config)
-    rng = np.random.default_rng(2)
-    wi, wo = unit_vectors(rng, 230), unit_vectors(rng, 230)
-    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
-    values = rng.uniform(0, 1, (230, 3))
-    whole = model.encode(values, (wi, wo))
-    monkeypatch.setattr(autoencoder, "ENCODE_CHUNK", 50)
-    np.testing.assert_allclose(model.encode(values, (wi, wo)), whole, rtol=1e-5, atol=1e-6)
 
 
 def test_a_model_saved_before_pooling_loads_with_the_mean_and_the_same_latents(toy_materials, tmp_path):
