@@ -546,6 +546,24 @@ def test_model_comparison_takes_a_baseline_of_several_runs(run_dir, toy_material
     assert summary["other"]["psnr_change"]["mean"] == pytest.approx(0, abs=1e-9)
 
 
+def test_model_comparison_reads_materials_through_each_pattern_and_count(run_dir, toy_materials, tmp_path):
+    table = sorted(toy_materials.glob("*.binary"))[0]
+    study = script_module("compare_models")
+    assert study.main(["--models", str(run_dir), "--labels", "base", "--tables", str(table), "--patterns",
+                       "merl-bins", "in-plane", "--samples", "300", "200", "--refine-counts", "300",
+                       "--resolution", "16", "--out", str(tmp_path / "out")]) == 0
+    report = json.loads((tmp_path / "out" / "compare.json").read_text())
+    done = {(r["pattern"], r["count"], r["budget"]) for r in report["rows"]}
+    assert done == {(p, c, "none") for p in ("merl-bins", "in-plane") for c in (300, 200)} | {
+        ("merl-bins", 300, "latent"), ("in-plane", 300, "latent")}  # refined at 300 samples only
+    assert set(report["summary"]["tables @ in-plane × 200"]) == {"none"}
+    in_plane = [r["psnr"] for r in report["rows"] if r["pattern"] == "in-plane" and r["count"] == 300]
+    bins = [r["psnr"] for r in report["rows"] if r["pattern"] == "merl-bins" and r["count"] == 300]
+    assert in_plane != bins  # another pattern's samples, not the random bins again
+    text = (tmp_path / "out" / "compare.md").read_text()
+    assert "| in-plane × 200 |" in text and "**tables, latent**" in text
+
+
 @pytest.mark.slow  # trains, evaluates and packs: about 40 s on a shared 2-core machine
 def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
     config = tmp_path / "tiny.json"

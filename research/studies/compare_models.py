@@ -14,6 +14,12 @@ material that model trained on (a fold of a cross-validation is then judged on i
 only); ``--group NAME=MATERIAL,...`` summarises some of the scored materials apart as well. Writes
 ``compare.json``, ``compare.md`` and ``compare.png`` (the measurements, draw 0: truth, then each variant's
 first run that was scored on it, under the first of ``--budgets``).
+
+``--patterns`` and several ``--samples`` counts read every material through each sampling pattern of
+:mod:`frenbrdf.io.patterns` at each count (a condition ``PATTERN × COUNT``): every condition is summarised apart
+(its groups named ``GROUP @ PATTERN × COUNT``) and ``compare.md`` adds one table per group and budget with a row
+per condition. ``--refine-counts`` runs the budgets other than ``none`` only at those counts (refining costs
+about a second a material).
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import argparse
 import dataclasses
 import json
 import sys
+import zlib
 from collections import defaultdict
 from pathlib import Path
 
@@ -32,7 +39,9 @@ from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io import read_material
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.io.bsdf import MeasuredBSDF
-from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
+from frenbrdf.io.patterns import DEFAULT as DEFAULT_PATTERN
+from frenbrdf.io.patterns import PATTERNS, pattern_samples
+from frenbrdf.io.sampling import as_table
 from frenbrdf.models.autoencoder import Model, load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
@@ -46,10 +55,17 @@ BUDGETS = ("none", "latent")
 METRICS = ("psnr", "delta_e")
 
 
-def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples: int, scene: Scene,
-          trained_on: set[tuple[str, str]], budgets=BUDGETS):
-    """Rows ``{model, material, group, draw, budget, psnr, delta_e}`` and the draw-0 encoder images; no row for a
-    ``(label, material)`` pair of ``trained_on``."""
+def condition_rng(draw: int, pattern: str) -> np.random.Generator:
+    """The generator of a draw's samples of one pattern: ``draw`` itself for ``merl-bins`` (the draws of every
+    earlier comparison), else seeded by the draw and the pattern's name (the same whatever else runs)."""
+    return np.random.default_rng(draw if pattern == DEFAULT_PATTERN else [draw, zlib.crc32(pattern.encode())])
+
+
+def score(models: dict[str, Model], paths: list[Path], draws: list[int], conditions: list[tuple[str, int]],
+          scene: Scene, trained_on: set[tuple[str, str]], budgets=BUDGETS, refine_counts=None):
+    """Rows ``{model, material, group, draw, pattern, count, budget, psnr, delta_e}`` and the draw-0 images of the
+    first condition; no row for a ``(label, material)`` pair of ``trained_on``, none of a budget other than
+    ``none`` at a count outside ``refine_counts`` (None: every count)."""
     mask, rows, images = material_mask(scene), [], defaultdict(dict)
     for path in tqdm(paths, desc="materials"):
         truth = read_material(path)
@@ -57,19 +73,23 @@ def score(models: dict[str, Model], paths: list[Path], draws: list[int], samples
         group = "measured" if isinstance(truth, MeasuredBSDF) else "tables"
         images[path.stem]["truth"] = truth_image
         for draw in draws:
-            rng = np.random.default_rng(draw)
-            drawn = truth_samples(truth, sample_bins(table, rng, samples), rng)
-            for label, model in models.items():
-                if (label, path.stem) in trained_on:
-                    continue
-                for budget in budgets:
-                    config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
-                    _, image, _ = refined_reconstruction(model, drawn, scene, config)
-                    metrics = image_metrics(truth_image, image, mask)
-                    rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
-                                 "budget": budget, **{key: metrics[key] for key in METRICS}})
-                    if draw == draws[0] and budget == budgets[0] and group == "measured":
-                        images[path.stem][label] = image
+            for pattern, count in conditions:
+                drawn = pattern_samples(truth, pattern, count, condition_rng(draw, pattern), table=table)
+                for label, model in models.items():
+                    if (label, path.stem) in trained_on:
+                        continue
+                    for budget in budgets:
+                        if budget != "none" and refine_counts is not None and count not in refine_counts:
+                            continue
+                        config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
+                        _, image, _ = refined_reconstruction(model, drawn, scene, config)
+                        metrics = image_metrics(truth_image, image, mask)
+                        rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
+                                     "pattern": pattern, "count": count, "budget": budget,
+                                     **{key: metrics[key] for key in METRICS}})
+                        first = draw == draws[0] and (pattern, count) == conditions[0] and budget == budgets[0]
+                        if first and group == "measured":
+                            images[path.stem][label] = image
     return rows, images
 
 
@@ -113,6 +133,52 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], bud
     return out
 
 
+def condition_name(group: str, pattern: str, count: int) -> str:
+    return f"{group} @ {pattern} × {count}"
+
+
+def summarise_conditions(rows: list[dict], baseline: str, groups: dict[str, list[str]], budgets,
+                         conditions: list[tuple[str, int]]) -> dict:
+    """:func:`summarise` of each condition's rows apart: its groups named :func:`condition_name` (plainly
+    ``GROUP`` when there is one condition)."""
+    if len(conditions) == 1:
+        return summarise(rows, baseline, groups, budgets)
+    out = {}
+    for pattern, count in conditions:
+        mine = [r for r in rows if r["pattern"] == pattern and r["count"] == count]
+        summary = summarise(mine, baseline, groups, budgets)
+        out |= {condition_name(group, pattern, count): value for group, value in summary.items()}
+    return out
+
+
+def conditions_markdown(summary: dict, groups: dict, budgets, conditions: list[tuple[str, int]]) -> str:
+    """Per group and budget, a row per condition: each variant's PSNR (sd between runs) / ΔE, and beside every
+    variant but the baseline its PSNR change from it, mean [95 % interval over the materials]."""
+    lines = ["PSNR dB (sd between runs) / ΔE per variant; Δ: per-material PSNR difference from the first variant, "
+             "mean [95 % interval over the materials].", ""]
+    for group in groups:
+        for budget in budgets:
+            found = [(c, summary[condition_name(group, *c)][budget]) for c in conditions
+                     if budget in summary.get(condition_name(group, *c), {})]
+            if not found:
+                continue
+            names = list(dict.fromkeys(name for _, variants in found for name in variants))
+            header = [names[0], *(f"{name} | Δ" for name in names[1:])]
+            lines += [f"**{group}, {'encoder only' if budget == 'none' else budget}**", "",
+                      "| pattern × count | " + " | ".join(header) + " |",
+                      "|---|" + "---|" * (2 * len(names) - 1)]
+            for (pattern, count), variants in found:
+                cells = []
+                for name in names:
+                    e = variants.get(name)
+                    cells.append("–" if e is None else f"{e['psnr']:.2f}{_spread(e, 'psnr')} / {e['delta_e']:.2f}")
+                    if name != names[0]:
+                        cells.append("–" if e is None else _change(e, "psnr"))
+                lines.append(f"| {pattern} × {count} | " + " | ".join(cells) + " |")
+            lines.append("")
+    return "\n".join(lines)
+
+
 def _spread(entry: dict, key: str) -> str:
     """`` (sd)`` between a variant's runs, empty with one run."""
     return f" ({entry[f'{key}_run_sd']:.2f})" if entry[f"{key}_run_sd"] is not None else ""
@@ -153,7 +219,11 @@ def main(argv=None) -> int:
                         help="also the tables a training config holds out (its `holdout`), as DIR/NAME.binary")
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
     parser.add_argument("--budgets", nargs="+", default=list(BUDGETS), choices=("none", "latent", "full"))
-    parser.add_argument("--samples", type=int, default=4000)
+    parser.add_argument("--samples", type=int, nargs="+", default=[4000], help="samples per material: one or more counts")
+    parser.add_argument("--patterns", nargs="+", default=[DEFAULT_PATTERN], choices=tuple(PATTERNS), metavar="NAME",
+                        help=f"sampling patterns the materials are read through (default {DEFAULT_PATTERN})")
+    parser.add_argument("--refine-counts", type=int, nargs="+", metavar="N",
+                        help="run the budgets other than none only at these of --samples (default: at every one)")
     parser.add_argument("--resolution", type=int, default=256)
     parser.add_argument("--trained-on", nargs="*", default=[], metavar="LABEL=MATERIAL",
                         help="a material that model trained on: not scored for it")
@@ -178,19 +248,21 @@ def main(argv=None) -> int:
     for name, members in extra_groups.items():
         if missing := set(members) - scored:
             parser.error(f"--group {name}: not among the scored materials: {sorted(missing)}")
-    rows, images = score(models, measured + tables, args.draws, args.samples, Scene(resolution=args.resolution),
-                         trained_on, args.budgets)
+    conditions = [(pattern, count) for pattern in args.patterns for count in args.samples]
+    rows, images = score(models, measured + tables, args.draws, conditions, Scene(resolution=args.resolution),
+                         trained_on, args.budgets, args.refine_counts)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     report = {"run": run_metadata(), "models": dict(zip(args.labels, args.models, strict=True)),
               "trained_on": sorted(args.trained_on),
-              "draws": args.draws, "samples": args.samples, "rows": rows}
+              "draws": args.draws, "samples": args.samples, "patterns": args.patterns, "rows": rows}
     save_json(out / "compare.json", report)  # the scores are kept whatever the summary does
     groups = {name: [p.stem for p in paths] for name, paths in (("measured", measured), ("tables", tables)) if paths}
     groups |= extra_groups
-    summary = summarise(rows, variant(args.labels[0]), groups, args.budgets)
+    summary = summarise_conditions(rows, variant(args.labels[0]), groups, args.budgets, conditions)
     save_json(out / "compare.json", report | {"summary": summary})
-    write_text(out / "compare.md", markdown(summary))
+    text = markdown(summary) if len(conditions) == 1 else conditions_markdown(summary, groups, args.budgets, conditions)
+    write_text(out / "compare.md", text)
     if measured:
         names = list(dict.fromkeys(map(variant, models)))
         sheet, labels = {}, {}
@@ -202,7 +274,7 @@ def main(argv=None) -> int:
                     sheet[path.stem][name], labels[path.stem, name] = shown[label], label
         render_sheet(sheet, out / "compare.png", columns=["truth", *names],
                      title=lambda m, name: f"{labels[m, name]}, {args.budgets[0]}" if (m, name) in labels else name)
-    print(markdown(summary))
+    print(text)
     return 0
 
 

@@ -1,0 +1,70 @@
+"""The sampling-patterns study's decision, by the rule fixed before its runs (research/results/sampling-patterns).
+
+    python research/studies/sampling_patterns/decide.py research/results/sampling-patterns/compare.json
+
+Reads the rows of ``compare_models.py`` and, on the held-out tables only (the 19 real measurements are judged
+afterwards and decide nothing), at ``COUNT`` samples, encoder only:
+
+1. *Sampling*: ``instruments-mean`` replaces ``paper-mean`` if its PSNR averaged over the ``INSTRUMENT_PATTERNS``
+   is higher, the 95 % interval over the materials of the per-material difference above 0, and its random-bin
+   (``merl-bins``) PSNR is not worse beyond noise (that difference's interval not wholly below 0).
+2. *Pooling*: ``instruments-density`` replaces the mean-pooled winner of 1 by the same test against it.
+
+Each variant's figure per material is the mean over its runs (seeds). Prints the two tests and the choice, and
+writes ``decision.json`` beside the rows.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io.atomic import save_json
+
+INSTRUMENT_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+COUNT = 1500
+
+
+def per_material(rows: list[dict], variant: str, patterns) -> dict[str, float]:
+    """Material → the variant's encoder PSNR averaged over ``patterns`` (at ``COUNT``) and its runs."""
+    mine = [r for r in rows if r["model"].split("/")[0] == variant and r["group"] == "tables"
+            and r["budget"] == "none" and r["count"] == COUNT and r["pattern"] in patterns]
+    materials = sorted({r["material"] for r in mine})
+    return {m: float(np.mean([r["psnr"] for r in mine if r["material"] == m])) for m in materials}
+
+
+def test(rows: list[dict], candidate: str, incumbent: str) -> dict:
+    """The rule's test of ``candidate`` against ``incumbent``: both intervals and whether the candidate wins."""
+    out = {}
+    for name, patterns in (("instruments", INSTRUMENT_PATTERNS), ("merl-bins", ("merl-bins",))):
+        new, old = per_material(rows, candidate, patterns), per_material(rows, incumbent, patterns)
+        out[name] = paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
+    out["wins"] = bool(out["instruments"]["low"] > 0 and out["merl-bins"]["high"] > 0)
+    return out
+
+
+def main(argv=None) -> int:
+    path = Path((argv or sys.argv[1:])[0])
+    rows = json.loads(path.read_text())["rows"]
+    sampling = test(rows, "instruments-mean", "paper-mean")
+    chosen = "instruments-mean" if sampling["wins"] else "paper-mean"
+    pooling = test(rows, "instruments-density", chosen)
+    chosen = "instruments-density" if pooling["wins"] else chosen
+    decision = {"count": COUNT, "patterns": INSTRUMENT_PATTERNS, "sampling": sampling, "pooling": pooling,
+                "chosen": chosen}
+    save_json(path.with_name("decision.json"), decision)
+    for name, result in (("sampling: instruments-mean vs paper-mean", sampling),
+                         (f"pooling: instruments-density vs {'instruments-mean' if sampling['wins'] else 'paper-mean'}",
+                          pooling)):
+        print(name, {key: (f"{v['mean']:+.2f} [{v['low']:+.2f}, {v['high']:+.2f}]" if isinstance(v, dict) else v)
+                     for key, v in result.items()})
+    print("chosen:", chosen)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
