@@ -8,7 +8,8 @@ afterwards and decide nothing), at ``COUNT`` samples, encoder only:
 1. *Sampling*: ``instruments-mean`` replaces ``paper-mean`` if its PSNR averaged over the ``INSTRUMENT_PATTERNS``
    is higher, the 95 % interval over the materials of the per-material difference above 0, and its random-bin
    (``merl-bins``) PSNR is not worse beyond noise (that difference's interval not wholly below 0).
-2. *Pooling*: ``instruments-density`` replaces the mean-pooled winner of 1 by the same test against it.
+2. *Pooling*: the density-pooled variant of the winner of 1 (``instruments-density`` or ``paper-density``)
+   replaces it by the same test against it.
 
 Each variant's figure per material is the mean over its runs (seeds). Prints the two tests and the choice, and
 writes ``decision.json`` beside the rows.
@@ -51,15 +52,14 @@ def main(argv=None) -> int:
     path = Path((argv or sys.argv[1:])[0])
     rows = json.loads(path.read_text())["rows"]
     sampling = test(rows, "instruments-mean", "paper-mean")
-    chosen = "instruments-mean" if sampling["wins"] else "paper-mean"
-    pooling = test(rows, "instruments-density", chosen)
-    chosen = "instruments-density" if pooling["wins"] else chosen
+    mixture = "instruments" if sampling["wins"] else "paper"
+    pooling = test(rows, f"{mixture}-density", f"{mixture}-mean")
+    chosen = f"{mixture}-density" if pooling["wins"] else f"{mixture}-mean"
     decision = {"count": COUNT, "patterns": INSTRUMENT_PATTERNS, "sampling": sampling, "pooling": pooling,
                 "chosen": chosen}
     save_json(path.with_name("decision.json"), decision)
     for name, result in (("sampling: instruments-mean vs paper-mean", sampling),
-                         (f"pooling: instruments-density vs {'instruments-mean' if sampling['wins'] else 'paper-mean'}",
-                          pooling)):
+                         (f"pooling: {mixture}-density vs {mixture}-mean", pooling)):
         print(name, {key: (f"{v['mean']:+.2f} [{v['low']:+.2f}, {v['high']:+.2f}]" if isinstance(v, dict) else v)
                      for key, v in result.items()})
     print("chosen:", chosen)

@@ -16,8 +16,8 @@ COMMON=(--measurements ../shared/data/rgl-measured/*.bsdf --held-out "$HERE/pape
 labels() { for run in "$@"; do echo "${run%-s*}/${run##*-s}"; done; }
 half() { local runs=("$@"); local models=(); for run in "${runs[@]}"; do models+=("$WORK/$run"); done
          echo "${models[@]}"; }
-A=(paper-mean-s0 instruments-mean-s0 instruments-density-s0 paper-mean-s1 instruments-mean-s1)
-B=(instruments-density-s1 paper-mean-s2 instruments-mean-s2 instruments-density-s2)
+A=(paper-mean-s0 instruments-mean-s0 instruments-density-s0 paper-density-s0 paper-mean-s1 instruments-mean-s1)
+B=(instruments-density-s1 paper-density-s1 paper-mean-s2 instruments-mean-s2 instruments-density-s2 paper-density-s2)
 trained_on=(); while read -r name; do trained_on+=("v4=$name"); done < "$HERE/v4-trained-on.txt"
 OMP_NUM_THREADS=1 $COMPARE --models $(half "${A[@]}") --labels $(labels "${A[@]}") "${COMMON[@]}" \
     --out "$OUT/a" > "$OUT/a.log" 2>&1 &
