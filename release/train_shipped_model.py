@@ -35,6 +35,10 @@ from common import run_metadata  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 METRICS = ("rmse", "psnr", "ssim", "delta_e")
+#: The sampling patterns the card reports the held-out split through (encoder only, ``PATTERN_SAMPLES`` pairs
+#: each): the devices of research/results/sampling-patterns.
+CARD_PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+PATTERN_SAMPLES = 1500
 
 
 def linked_data(folders: list[Path], data: Path) -> list[str]:
@@ -84,7 +88,10 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
             "training_seconds": round(run.history[-1].get("seconds", run.seconds or 0.0), 1),
             "trained_on": trained_on or run_metadata()["cpu"],
             "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
-            "held_out_refined_by_source": by_source(refined, folders)}
+            "held_out_refined_by_source": by_source(refined, folders),
+            "held_out_by_pattern": {pattern: summary(reconstruction_rows(
+                run.model(), test, samples=PATTERN_SAMPLES, seed=seed, frequency_metric=False, progress=progress,
+                pattern=pattern)) for pattern in CARD_PATTERNS}}
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)
     packed = Model.pretrained(dest)
     card["held_out"]["packed"] = summary(reconstruction_rows(packed, test, seed=seed, frequency_metric=False,
@@ -127,7 +134,25 @@ By source (float32), encoder only: {by_source_text(card['held_out_by_source'])}.
 With the latent refined on the same samples (`--refine latent`; `frenbrdf reconstruct` defaults to `full`):
 {by_source_text(card['held_out_refined_by_source'])}.
 
+{patterns_text(card)}
 Real gonio-photometer measurements that no training saw: [research/measurements.md](../research/measurements.md).
+"""
+
+
+def patterns_text(card: dict) -> str:
+    """The card's table of the held-out split read through each sampling pattern (cards before version 5 have
+    none)."""
+    if "held_out_by_pattern" not in card:
+        return ""
+    rows = "\n".join(f"| {pattern} | {m['psnr']:.2f} | {m['delta_e']:.2f} |"
+                     for pattern, m in card["held_out_by_pattern"].items())
+    return f"""
+The same held-out materials read through the sampling patterns of real devices (`frenbrdf.io.patterns`,
+[docs/usage.md](usage.md#sampling-patterns)), {PATTERN_SAMPLES} pairs each, encoder only (float32):
+
+| pattern | PSNR (dB) | ΔE |
+|---|---|---|
+{rows}
 """
 
 

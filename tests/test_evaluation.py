@@ -465,3 +465,23 @@ def test_an_edit_at_its_ends_is_the_reconstruction_of_that_material(tiny_runs, t
         assert edit_metrics(model, z_a, z_b, a, b, t, scene, material_mask(scene))["psnr"] == pytest.approx(row["psnr"])
     middle = edit_metrics(model, z_a, z_b, a, b, 0.5, scene, material_mask(scene))
     assert middle["psnr"] != pytest.approx(rows[0]["psnr"]) and np.isfinite(middle["psnr"])
+
+
+def test_reconstruction_rows_read_materials_through_a_sampling_pattern(tiny_runs, toy_materials):
+    """``pattern`` encodes each material from that device's pairs; the default is the random bins as before."""
+    from frenbrdf.io import read_material
+    from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
+    from frenbrdf.render.scoring import reconstruction_rows
+
+    model = Run(tiny_runs[0]).model()
+    files = sorted(toy_materials.glob("*.binary"))[:2]
+    latents: dict[str, dict] = {"merl-bins": {}, "in-plane": {}}
+    for pattern, found in latents.items():
+        reconstruction_rows(model, files, samples=300, resolution=16, frequency_metric=False, progress=False,
+                            latents=found, pattern=pattern)
+    rng = np.random.default_rng(0)  # the random bins drawn as they always were
+    for path in files:
+        table = as_table(read_material(path))
+        drawn = truth_samples(table, sample_bins(table, rng, 300), rng)
+        assert np.allclose(latents["merl-bins"][path.stem], model.encode(*drawn))
+        assert not np.allclose(latents["in-plane"][path.stem], latents["merl-bins"][path.stem])

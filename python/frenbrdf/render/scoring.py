@@ -23,6 +23,8 @@ from tqdm.auto import tqdm
 
 from ..io.formats import read_measured
 from ..io.merl import N_BINS
+from ..io.patterns import DEFAULT as DEFAULT_PATTERN
+from ..io.patterns import pattern_samples
 from ..io.sampling import as_table, sample_bins, truth_samples
 from ..models.autoencoder import Model
 from ..models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth, spectral_distance
@@ -203,11 +205,13 @@ class Scoring:
 
 def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution: int = 256, seed: int = 0,
                         frequency_metric: FrequencyMetric | Literal[False] | None = None, refine: str = "none",
-                        progress: bool = True, latents: dict | None = None) -> list[dict]:
+                        progress: bool = True, latents: dict | None = None,
+                        pattern: str = DEFAULT_PATTERN) -> list[dict]:
     """Reconstruction metrics of one model on MERL files (e.g. a validation split), one row each.
 
     Each material is encoded from ``samples`` random valid bins (drawn from ``seed``, in the
-    order of ``files``, as :func:`~frenbrdf.evaluation.evaluate.evaluate_runs` draws them), refined on them with the budget
+    order of ``files``, as :func:`~frenbrdf.evaluation.evaluate.evaluate_runs` draws them; ``pattern``: from
+    ``samples`` pairs of that sampling pattern of :mod:`frenbrdf.io.patterns` instead), refined on them with the budget
     ``refine`` (:data:`frenbrdf.models.reconstruct.BUDGETS`; ``"none"``: the encoder alone), decoded,
     rendered and compared with the render of the true table: RMSE, PSNR, SSIM, ΔE, the highlights' PSNR and ΔE
     (:func:`highlight_mask`) and L_fre
@@ -225,7 +229,7 @@ def reconstruction_rows(model: Model, files, *, samples: int = 4000, resolution:
         path = Path(path)
         truth = read_measured(path)
         table = as_table(truth)
-        measured = truth_samples(truth, sample_bins(table, rng, samples), rng)
+        measured = pattern_samples(truth, pattern, samples, rng, table=table)
         decoded: np.ndarray | NBRDF
         if refine == "none":
             z, image = encode_and_render(model, *measured, scene)
