@@ -19,15 +19,9 @@ import decide  # noqa: E402
 from frenbrdf.io.atomic import save_json, write_text  # noqa: E402
 
 BASELINE = "paper-mean"
-#: The kinds of ../shared/data/rgl-measured/README.md (organic with paper, paints with and without metal apart).
-KINDS = {
-    "fabric": ["acrylic_felt_green_rgb", "acrylic_felt_pink_rgb", "acrylic_felt_purple_rgb", "acrylic_felt_white_rgb"],
-    "paper": ["cardboard_rgb", "paper_blue_rgb", "paper_white_rgb", "leaf_maple_rgb"],
-    "paint": ["colodur_azure_4e_rgb", "colodur_connemara_4c_rgb", "ilm_l3_37_matte_rgb"],
-    "metallic": ["ilm_l3_37_metallic_rgb", "cm_toxic_green_rgb"],
-    "flake": ["irid_flake_paint2_rgb", "vch_dragon_eye_red_rgb", "vch_golden_yellow_rgb", "vch_ultra_pink_rgb"],
-    "car wrap": ["cg_sunflower_rgb", "satin_purple_rgb"],
-}
+#: The kinds of the real measurements (../shared/data/rgl-measured/README.md, grouped as issue 48 reports them):
+#: one table with the folds of the real-measurements study.
+KINDS = json.loads((Path(__file__).resolve().parents[1] / "measured_folds" / "folds.json").read_text())["kinds"]
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The real-measurements fold study's trainings (research/results/measured-folds): for each of the three folds of
+# folds.json and seeds 0, 1, 2, one run on DATA (the sampling-patterns study's folders: no measurement and no fit of
+# one) plus the .bsdf measurements of the two other folds, with CONFIG (the sampling-patterns study's winner),
+# two at a time on one thread each. The runs without measurements are that study's own runs of CONFIG.
+#
+#   bash research/studies/measured_folds/train.sh DATA CONFIG WORK [MEASURED]
+set -euo pipefail
+DATA=${1:?DATA folder}; CONFIG=${2:?CONFIG json}; WORK=${3:?WORK folder}
+MEASURED=${4:-../shared/data/rgl-measured}
+HERE=$(dirname "$0")
+for fold in 0 1 2; do
+    folder="$WORK/data-f$fold"
+    mkdir -p "$folder"
+    for path in "$DATA"/*; do ln -sfn "$(realpath "$path")" "$folder/"; done
+    python - "$HERE/folds.json" "$fold" <<'PY' | while read -r name; do ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$folder/"; done
+import json, sys
+folds = json.load(open(sys.argv[1]))["folds"]
+print("\n".join(name for k, fold in enumerate(folds) if k != int(sys.argv[2]) for name in fold))
+PY
+done
+for seed in 0 1 2; do for fold in 0 1 2; do echo "$fold $seed"; done; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
+    'frenbrdf train --data "$1/data-f$2" --config "$0" --seed "$3" --out "$1/measured-f$2-s$3" --quiet > "$1/measured-f$2-s$3.log" 2>&1' \
+    "$CONFIG" "$WORK"
