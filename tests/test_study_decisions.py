@@ -43,30 +43,35 @@ def test_the_rule_takes_a_mixture_that_helps_the_patterns_and_keeps_random_bins(
     path = tmp_path / "compare.json"
     path.write_text(json.dumps(report(rows({"paper-mean/0": (0, 0), "paper-mean/1": (0, 0),
                                             "instruments-mean/0": (3, 0), "instruments-density/0": (3, 0),
+                                            "mixed-mean/0": (2, 0), "mixed-density/0": (9, 0),
                                             "paper-density/0": (0, 0)}))))
     assert decide.main([str(path)]) == 0
     decision = json.loads((tmp_path / "decision.json").read_text())
-    assert decision["chosen"] == "instruments-mean"  # density is no better than the mean beyond noise
-    assert decision["sampling"]["instruments"]["mean"] == pytest.approx(3, abs=0.2)
+    # both mixtures pass; instruments gains more; its density variant is no better beyond noise
+    assert decision["chosen"] == "instruments-mean"
+    assert decision["sampling"]["instruments"]["instruments"]["mean"] == pytest.approx(3, abs=0.2)
 
 
 def test_the_rule_refuses_a_mixture_that_costs_random_bins(study, tmp_path):
     decide, _ = study
     path = tmp_path / "compare.json"
     path.write_text(json.dumps(report(rows({"paper-mean/0": (0, 0), "instruments-mean/0": (3, -2),
-                                            "instruments-density/0": (5, 0), "paper-density/0": (2, 0)}))))
+                                            "instruments-density/0": (5, 0), "mixed-mean/0": (1, -2),
+                                            "mixed-density/0": (5, 0), "paper-density/0": (2, 0)}))))
     decide.main([str(path)])
     decision = json.loads((tmp_path / "decision.json").read_text())
-    # the mixture loses; the pooling is then tested on the paper's sampling (instruments-density is not a candidate)
-    assert not decision["sampling"]["wins"] and decision["chosen"] == "paper-density"
+    # both mixtures cost random bins; the pooling is then tested on the paper's sampling alone
+    assert not decision["sampling"]["instruments"]["wins"] and not decision["sampling"]["mixed"]["wins"]
+    assert decision["chosen"] == "paper-density"
 
 
 def test_the_measurements_decide_nothing(study, tmp_path):
     """Rows of the real measurements that favour another variant do not change the choice."""
     _, merge = study
-    names = ("paper-mean/0", "instruments-mean/0", "instruments-density/0", "paper-density/0")
+    names = ("paper-mean/0", "instruments-mean/0", "instruments-density/0", "paper-density/0", "mixed-mean/0",
+             "mixed-density/0")
     tables = rows(dict.fromkeys(names, (0, 0)))
-    measured = rows(dict(zip(names, [(0, 0), (5, 5), (9, 9), (9, 9)], strict=True)), group="measured")
+    measured = rows(dict(zip(names, [(0, 0), (5, 5), (9, 9), (9, 9), (5, 5), (9, 9)], strict=True)), group="measured")
     for part, chosen in (("a", tables), ("b", measured)):
         (tmp_path / part).mkdir()
         (tmp_path / part / "compare.json").write_text(json.dumps(report(chosen)))

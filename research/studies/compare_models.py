@@ -163,6 +163,7 @@ def conditions_markdown(summary: dict, groups: dict, budgets, conditions: list[t
             if not found:
                 continue
             names = list(dict.fromkeys(name for _, variants in found for name in variants))
+            names.sort(key=lambda name: any("psnr_change" in v[name] for _, v in found if name in v))  # baseline 1st
             header = [names[0], *(f"{name} | Δ" for name in names[1:])]
             lines += [f"**{group}, {'encoder only' if budget == 'none' else budget}**", "",
                       "| pattern × count | " + " | ".join(header) + " |",
