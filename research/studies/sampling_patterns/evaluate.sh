@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The sampling-patterns study's scores (research/results/sampling-patterns): every run of train.sh and the
 # shipped version 4 read the 39 held-out tables and the 19 real measurements through six patterns at 300, 1,500
-# and 4,000 samples (encoder only), and at 1,500 refined (`latent`). Version 4 is not scored on what it trained
-# on (its split's train and validation materials, the fits of 13 of the measurements among them:
-# v4-trained-on.txt). One scoring per model, two at a time, then one summary over all rows (merge.py).
+# and 4,000 samples (encoder only), and the seed-0 runs and version 4 at 1,500 refined (`latent`: a second a
+# material, so one seed). Version 4 is not scored on what it trained on (its split's train and validation
+# materials, the fits of 13 of the measurements among them: v4-trained-on.txt). One scoring per model, two at a
+# time, each waiting for its run's training to end (the log's last line), then one summary over all rows.
 #
 #   bash research/studies/sampling_patterns/evaluate.sh DATA WORK OUT
 set -euo pipefail
@@ -13,7 +14,10 @@ export HERE DATA OUT
 trained_on=""; while read -r name; do [[ -n "$name" ]] && trained_on+=" v4=$name"; done < "$HERE/v4-trained-on.txt"
 export trained_on
 score() {  # MODEL LABEL NAME
-    local extra=(); [[ "$2" == v4 ]] && extra=(--trained-on $trained_on)
+    local extra=(--budgets none)
+    [[ "$2" == v4 || "$2" == */s0 ]] && extra=(--budgets none latent)
+    [[ "$2" == v4 ]] && extra+=(--trained-on $trained_on)
+    [[ "$2" == v4 ]] || until grep -qs "run folder" "$1.log"; do sleep 20; done
     python "$HERE/../compare_models.py" --models "$1" --labels "$2" --measurements ../shared/data/rgl-measured/*.bsdf \
         --held-out "$HERE/paper-mean.json" "$DATA" \
         --patterns merl-bins uniform in-plane gonioreflectometer image-based specular --samples 300 1500 4000 \
