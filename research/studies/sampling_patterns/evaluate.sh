@@ -4,7 +4,8 @@
 # and 4,000 samples (encoder only), and the seed-0 runs and version 4 at 1,500 refined (`latent`: a second a
 # material, so one seed). Version 4 is not scored on what it trained on (its split's train and validation
 # materials, the fits of 13 of the measurements among them: v4-trained-on.txt). One scoring per model, two at a
-# time, each waiting for its run's training to end (the log's last line), then one summary over all rows.
+# time, each waiting for its run's training to end (the log's last line; a scoring already in OUT is kept), then
+# one summary over all rows.
 #
 #   bash research/studies/sampling_patterns/evaluate.sh DATA WORK OUT
 set -euo pipefail
@@ -14,6 +15,7 @@ export HERE DATA OUT
 trained_on=""; while read -r name; do [[ -n "$name" ]] && trained_on+=" v4=$name"; done < "$HERE/v4-trained-on.txt"
 export trained_on
 score() {  # MODEL LABEL NAME
+    [[ -f "$OUT/$3/compare.json" ]] && return 0
     local extra=(--budgets none)
     [[ "$2" == v4 || "$2" == */s0 ]] && extra=(--budgets none latent)
     [[ "$2" == v4 ]] && extra+=(--trained-on $trained_on)
