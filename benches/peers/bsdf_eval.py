@@ -4,7 +4,8 @@
     python benches/peers/bsdf_eval.py [--file PATH.bsdf] [--n 20000] [--repeats 5] [--json results.json]
 
 1. The same ``--n`` random direction pairs (float32-rounded, so both see identical inputs)
-   evaluated by ``frenbrdf._native.BsdfMeasurement.eval`` (one batched call, rayon) and by
+   evaluated by ``frenbrdf._native.BsdfMeasurement.eval`` (one batched call, rayon), in its
+   default float32 path (vectorised across pairs) and in float64 (``double=True``), and by
    Mitsuba's ``measured`` BSDF twice: in ``llvm_ad_rgb``, one vectorised ``eval`` over all
    pairs (its kernel compiled in the warm-up), and in ``scalar_rgb``, one ``eval`` call per
    pair from a Python loop. (Mitsuba 3.9.1 evaluates these files in its JIT variants;
@@ -12,9 +13,10 @@
    cos θ_o and checked against ours before anything is timed. The scalar ratio includes
    Python's per-call overhead on Mitsuba's side.
 2. One MERL table's 1,458,000 bins (90 θ_h × 90 θ_d × 180 φ_d, each at its bin position
-   ``frenbrdf._native.merl_bin_to_angles``, φ_h = 0) converted to direction pairs and
-   evaluated in one call (goal: well under a second on 2 cores). Pairs with a direction
-   below the horizon (MERL's unmeasured bins) are 0 and cheap.
+   ``frenbrdf._native.merl_bin_to_angles``, φ_h = 0) evaluated into a MERL table by
+   ``BsdfMeasurement.merl_table`` (float32; goal ≤ 0.05 s on 2 cores), what
+   ``MeasuredBSDF.table`` calls. Bins with a direction below the horizon (MERL's unmeasured
+   bins) are cheap.
 
 Prints the CPU's model (``lscpu``) and the thread count. Times are medians after a warm-up.
 """
@@ -118,20 +120,24 @@ def main() -> None:
 
     measurement = _native.BsdfMeasurement.read(args.file)
     wi, wo = direction_pairs(args.n)
-    ours = measurement.eval(wi, wo)
+    ours, ours_double = measurement.eval(wi, wo), measurement.eval(wi, wo, double=True)
     reference, mitsuba_s = mitsuba_eval(args.file, wi, wo)
     scale = reference.max()
-    np.testing.assert_allclose(ours, reference, rtol=2e-4, atol=2e-6 * scale)
+    for values in (ours, ours_double):
+        np.testing.assert_allclose(values, reference, rtol=2e-4, atol=2e-6 * scale)
     error = np.abs(ours - reference)
     llvm = mitsuba_llvm_eval(args.file, wi, wo, args.repeats)
     if llvm is not None:
         np.testing.assert_allclose(ours, llvm[0], rtol=2e-4, atol=2e-6 * scale)
 
     ours_s = median_seconds(lambda: measurement.eval(wi, wo), args.repeats)
+    ours_double_s = median_seconds(lambda: measurement.eval(wi, wo, double=True), args.repeats)
     big_wi, big_wo = direction_pairs(1_000_000, seed=1)
     ours_big_s = median_seconds(lambda: measurement.eval(big_wi, big_wo), args.repeats)
+    measurement.merl_table()  # the bins' directions are computed on the first call, and kept
+    merl_s = median_seconds(measurement.merl_table, args.repeats)
+    merl_double_s = median_seconds(lambda: measurement.merl_table(double=True), args.repeats)
     merl_wi, merl_wo = merl_bin_directions()
-    merl_s = median_seconds(lambda: measurement.eval(merl_wi, merl_wo), args.repeats)
     above = float(np.mean((merl_wi[:, 2] > 0) & (merl_wo[:, 2] > 0)))
 
     results = {
@@ -142,28 +148,33 @@ def main() -> None:
         "max_abs_error": float(error.max()),
         "max_value": float(scale),
         "ours_evals_per_s": args.n / ours_s,
+        "ours_double_evals_per_s": args.n / ours_double_s,
         "ours_evals_per_s_1M_batch": 1e6 / ours_big_s,
         "mitsuba_scalar_rgb_evals_per_s": args.n / mitsuba_s,
         "ratio_ours_over_mitsuba": mitsuba_s / ours_s,
         "mitsuba_llvm_ad_rgb_evals_per_s": None if llvm is None else args.n / llvm[1],
         "ratio_ours_over_mitsuba_llvm": None if llvm is None else llvm[1] / ours_s,
+        "ratio_ours_double_over_mitsuba_llvm": None if llvm is None else llvm[1] / ours_double_s,
         "merl_table_bins": len(merl_wi),
         "merl_table_fraction_above_horizon": above,
         "merl_table_s": merl_s,
+        "merl_table_double_s": merl_double_s,
     }
     print(f"CPU: {results['cpu']} ({results['threads']} threads); {args.file.name}")
     print(f"agreement on {args.n} pairs: max abs error {error.max():.2e} (max value {scale:.3g})")
-    print(f"ours:    {results['ours_evals_per_s']:,.0f} evaluations/s ({args.n} pairs), "
+    print(f"ours float32: {results['ours_evals_per_s']:,.0f} evaluations/s ({args.n} pairs), "
           f"{results['ours_evals_per_s_1M_batch']:,.0f}/s (1,000,000 pairs)")
+    print(f"ours float64: {results['ours_double_evals_per_s']:,.0f} evaluations/s ({args.n} pairs)")
     print(f"Mitsuba: {results['mitsuba_scalar_rgb_evals_per_s']:,.0f} evaluations/s (scalar_rgb, one call per pair)")
-    print(f"ratio ours / Mitsuba scalar_rgb: {results['ratio_ours_over_mitsuba']:.1f}×")
+    print(f"ratio ours float32 / Mitsuba scalar_rgb: {results['ratio_ours_over_mitsuba']:.1f}×")
     if llvm is None:
         print("Mitsuba llvm_ad_rgb: not usable here (no libLLVM that works)")
     else:
         print(f"Mitsuba: {results['mitsuba_llvm_ad_rgb_evals_per_s']:,.0f} evaluations/s (llvm_ad_rgb, one "
-              f"vectorised call); ratio ours / Mitsuba llvm_ad_rgb: {results['ratio_ours_over_mitsuba_llvm']:.2f}×")
+              f"vectorised call); ratio ours / Mitsuba llvm_ad_rgb: {results['ratio_ours_over_mitsuba_llvm']:.2f}× "
+              f"(float32), {results['ratio_ours_double_over_mitsuba_llvm']:.2f}× (float64)")
     print(f"one MERL table ({len(merl_wi):,} bins, {above:.0%} with both directions above the horizon): "
-          f"{merl_s:.3f} s")
+          f"{merl_s:.3f} s (float32), {merl_double_s:.3f} s (float64)")
     if args.json:
         args.json.write_text(json.dumps(results, indent=2) + "\n")
 

@@ -19,7 +19,9 @@ use std::f64::consts::{FRAC_2_PI, PI, TAU};
 
 use rayon::prelude::*;
 
-use super::MeasuredBsdf;
+use super::batch::Tables;
+use super::simd::LANES;
+use super::{MeasuredBsdf, Precision};
 use crate::coords::{self, Vec3};
 use crate::error::{invalid_argument, Result};
 use crate::parallel;
@@ -28,6 +30,9 @@ use crate::parallel;
 /// f·cos θ_o does not vanish at the horizon, so f = (f·cos θ_o) / cos θ_o grows as 1/cos θ_o there; without the
 /// tolerance a pair that lies on the horizon but for rounding (MERL bins with z = 1e-16) would be worth 1e14/sr.
 pub const HORIZON: f64 = 1e-9;
+
+/// Pairs per parallel task: a few hundred microseconds of work, a whole number of lanes.
+pub(super) const CHUNK: usize = 256 * LANES;
 
 /// Elevation of a unit vector, 2·asin(|v − z|/2): exact near the pole, unlike acos(v_z).
 #[inline]
@@ -84,26 +89,49 @@ impl MeasuredBsdf {
         rgb.map(|value| value.max(0.0) * scale)
     }
 
-    /// The BRDF at rows of direction pairs, in parallel; see [`MeasuredBsdf::eval_pair`].
-    /// Rows must be finite and non-zero.
-    pub fn eval(&self, wi: &[Vec3], wo: &[Vec3]) -> Result<Vec<[f64; 3]>> {
+    /// The BRDF at rows of direction pairs, in parallel, in either precision; see
+    /// [`MeasuredBsdf::eval_pair`]. Rows must be finite and non-zero.
+    pub fn eval(&self, wi: &[Vec3], wo: &[Vec3], precision: Precision) -> Result<Vec<[f64; 3]>> {
         if wi.len() != wo.len() {
             return invalid_argument!("wi has {} rows but wo has {}", wi.len(), wo.len());
         }
-        coords::validate_directions("wi", wi)?;
-        coords::validate_directions("wo", wo)?;
-        Ok(parallel::in_pool(|| {
-            wi.par_iter()
-                .zip(wo)
-                .with_min_len(2048)
-                .map(|(&wi, &wo)| self.eval_pair(wi, wo))
-                .collect()
-        }))
+        let validate = || -> Result<()> {
+            coords::validate_directions("wi", wi)?;
+            coords::validate_directions("wo", wo)
+        };
+        if precision == Precision::Double {
+            validate()?;
+        }
+        let mut out = vec![[0.0; 3]; wi.len()];
+        let valid = parallel::in_pool(|| {
+            (wi.par_chunks(CHUNK).zip(wo.par_chunks(CHUNK)))
+                .zip(out.par_chunks_mut(CHUNK))
+                .all(|((wi, wo), out)| self.eval_chunk(wi, wo, out, precision))
+        });
+        // The float32 path checks the rows as it goes; the error names the first bad one.
+        if !valid {
+            validate()?;
+        }
+        Ok(out)
+    }
+
+    /// [`MeasuredBsdf::eval`] on one task's rows; false where the float32 path finds a row
+    /// that is not finite and non-zero (the float64 path is given checked rows).
+    pub(super) fn eval_chunk(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]], precision: Precision) -> bool {
+        match precision {
+            Precision::Single => (self.batch.get_or_init(|| Tables::new(self))).eval_chunk(wi, wo, out),
+            Precision::Double => {
+                for ((&wi, &wo), out) in wi.iter().zip(wo).zip(out) {
+                    *out = self.eval_pair(wi, wo);
+                }
+                true
+            }
+        }
     }
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use std::f64::consts::FRAC_PI_2;
     use std::path::{Path, PathBuf};
 
@@ -264,20 +292,27 @@ mod tests {
         let mut rng = Rng(6);
         let wi: Vec<Vec3> = (0..10_000).map(|_| rng.upper(-0.2)).collect();
         let wo: Vec<Vec3> = (0..10_000).map(|_| rng.upper(-0.2)).collect();
-        let batch = bsdf.eval(&wi, &wo).unwrap();
+        let batch = bsdf.eval(&wi, &wo, Precision::Double).unwrap();
         for k in 0..wi.len() {
             assert_eq!(batch[k], bsdf.eval_pair(wi[k], wo[k]));
         }
         assert!(bsdf
-            .eval(&wi, &wo[1..])
+            .eval(&wi, &wo[1..], Precision::Double)
             .unwrap_err()
             .to_string()
             .contains("wo has 9999"));
         let mut bad = wo.clone();
         bad[17] = [0.0, f64::NAN, 1.0];
-        assert!(bsdf.eval(&wi, &bad).unwrap_err().to_string().contains("wo row 17"));
+        assert!(bsdf
+            .eval(&wi, &bad, Precision::Double)
+            .unwrap_err()
+            .to_string()
+            .contains("wo row 17"));
         bad[17] = [0.0; 3];
-        assert!(matches!(bsdf.eval(&bad, &wi), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            bsdf.eval(&bad, &wi, Precision::Single),
+            Err(Error::InvalidArgument(_))
+        ));
     }
 
     fn format_error(arrays: &MaterialArrays, edit: impl FnOnce(&mut Vec<u8>)) -> String {
@@ -354,7 +389,7 @@ mod tests {
     }
 
     /// The RGL files beside the checkout, if present.
-    fn real_files() -> Vec<PathBuf> {
+    pub(in crate::bsdf) fn real_files() -> Vec<PathBuf> {
         let data = std::env::var_os("FRENBRDF_SHARED_DATA")
             .map(PathBuf::from)
             .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
@@ -392,8 +427,8 @@ mod tests {
             let n = 20_000;
             let wi: Vec<Vec3> = (0..n).map(|_| rng.upper(0.02)).collect();
             let wo: Vec<Vec3> = (0..n).map(|_| rng.upper(0.02)).collect();
-            let forward = bsdf.eval(&wi, &wo).unwrap();
-            let backward = bsdf.eval(&wo, &wi).unwrap();
+            let forward = bsdf.eval(&wi, &wo, Precision::Double).unwrap();
+            let backward = bsdf.eval(&wo, &wi, Precision::Double).unwrap();
             assert!(forward.iter().flatten().all(|v| v.is_finite() && *v >= 0.0), "{name}");
             assert!(forward.iter().any(|v| v.iter().all(|&c| c > 0.0)), "{name}");
             // Reciprocity holds approximately (the parameterisation is not symmetric):

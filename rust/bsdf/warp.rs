@@ -84,6 +84,11 @@ impl ParamAxes {
         self.values.len()
     }
 
+    /// Per axis, the slices between neighbouring values (0 for an axis of one value).
+    pub fn strides(&self) -> &[usize] {
+        &self.strides
+    }
+
     pub fn is_empty(&self) -> bool {
         self.values.is_empty()
     }
@@ -211,11 +216,11 @@ fn check_table(data: &[f32], nx: usize, ny: usize, slices: usize) -> Result<(), 
 /// stored (not normalised). Layout: `[slice][channel][y][x]`.
 #[derive(Clone, Debug)]
 pub struct Interpolant {
-    axes: ParamAxes,
-    nx: usize,
-    ny: usize,
+    pub(super) axes: ParamAxes,
+    pub(super) nx: usize,
+    pub(super) ny: usize,
     channels: usize,
-    data: Vec<f32>,
+    pub(super) data: Vec<f32>,
 }
 
 impl Interpolant {
@@ -269,16 +274,16 @@ impl Interpolant {
 /// slice) with its marginal–conditional warp.
 #[derive(Clone, Debug)]
 pub struct Marginal2D {
-    axes: ParamAxes,
-    nx: usize,
-    ny: usize,
+    pub(super) axes: ParamAxes,
+    pub(super) nx: usize,
+    pub(super) ny: usize,
     /// The table divided by its integral in node units (so the density on [0, 1]² is
     /// these values times (nx − 1)(ny − 1)).
-    data: Vec<f32>,
+    pub(super) data: Vec<f32>,
     /// Per slice and row, the integral of the row from column 0 to each node.
-    conditional_cdf: Vec<f32>,
+    pub(super) conditional_cdf: Vec<f32>,
     /// Per slice, the integral of the rows from row 0 to each row.
-    marginal_cdf: Vec<f32>,
+    pub(super) marginal_cdf: Vec<f32>,
 }
 
 impl Marginal2D {

@@ -1,16 +1,25 @@
 use std::path::PathBuf;
 
-use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArray4, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use super::{as_vec3s, to_numpy};
-use crate::bsdf::MeasuredBsdf;
+use crate::bsdf::{MeasuredBsdf, Precision};
+use crate::merl::{N_PHI_D, N_THETA_D, N_THETA_H};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<BsdfMeasurement>()?;
     m.add("BSDF_HORIZON", crate::bsdf::HORIZON)?;
     Ok(())
+}
+
+fn precision(double: bool) -> Precision {
+    if double {
+        Precision::Double
+    } else {
+        Precision::Single
+    }
 }
 
 /// A measured RGB BRDF of the RGL material database (an `*_rgb.bsdf` file: Dupuy &
@@ -33,16 +42,28 @@ impl BsdfMeasurement {
     /// The BRDF at `(n, 3)` direction pairs `wi`, `wo` (float64, C-contiguous, local
     /// frame with z the normal; normalised here): `(n, 3)` RGB reflectance in 1/sr, not
     /// multiplied by cos θ_o, negative measurements clamped to 0, and 0 where either
-    /// direction is at or below the horizon.
+    /// direction is at or below the horizon. Computed in float32, vectorised across pairs,
+    /// or with `double`, in float64 (several times slower, the reference).
+    #[pyo3(signature = (wi, wo, double = false))]
     fn eval<'py>(
         &self,
         py: Python<'py>,
         wi: PyReadonlyArray2<'py, f64>,
         wo: PyReadonlyArray2<'py, f64>,
+        double: bool,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let (wi, wo) = (as_vec3s("wi", &wi)?, as_vec3s("wo", &wo)?);
-        let rgb = py.detach(|| self.inner.eval(wi, wo))?;
+        let rgb = py.detach(|| self.inner.eval(wi, wo, precision(double)))?;
         Ok(to_numpy(py, (rgb.len(), 3), rgb.into_flattened()))
+    }
+
+    /// The BRDF at every MERL bin, as `eval` gives it: `(3, 90, 90, 180)` in 1/sr, with
+    /// MERL's missing marker -1 where a bin's directions do not both lie strictly above
+    /// the surface.
+    #[pyo3(signature = (double = false))]
+    fn merl_table<'py>(&self, py: Python<'py>, double: bool) -> Bound<'py, PyArray4<f64>> {
+        let table = py.detach(|| self.inner.merl_table(precision(double)));
+        to_numpy(py, (3, N_THETA_H, N_THETA_D, N_PHI_D), table)
     }
 
     /// The file the measurement was read from.

@@ -151,7 +151,8 @@ def test_agrees_with_mitsuba_measured(index, name, mitsuba_reference):
     path = rgl_file(name)
     references, timings = mitsuba_reference
     wi, wo = direction_pairs(index, N_PAIRS)
-    ours = BsdfMeasurement.read(path).eval(wi, wo)
+    measurement = BsdfMeasurement.read(path)
+    ours, fast = measurement.eval(wi, wo, double=True), measurement.eval(wi, wo)
 
     # Mitsuba returns f·cos θ_o without clamping negative (out-of-gamut) values.
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -168,6 +169,9 @@ def test_agrees_with_mitsuba_measured(index, name, mitsuba_reference):
           f"Mitsuba {timings[name]:.2f} s")
     np.testing.assert_allclose(ours, reference, rtol=2e-4, atol=2e-6 * scale)
     assert np.median(relative) < 2e-6
+    # The float32 default agrees with Mitsuba as well, and with float64 to ~1e-5 (rust/bsdf/batch_tests.rs).
+    np.testing.assert_allclose(fast, reference, rtol=2e-4, atol=2e-6 * scale)
+    np.testing.assert_allclose(fast, ours, rtol=1e-4, atol=1e-6 * scale)
 
 
 def test_real_file_properties():
@@ -186,16 +190,19 @@ def test_flat_material_is_exact(tmp_path):
     measurement = BsdfMeasurement.read(path)
     rng = np.random.default_rng(5)
     wi, wo = upper_hemisphere(rng, 1000, 1e-3), upper_hemisphere(rng, 1000, 1e-3)
-    f = measurement.eval(wi, wo)
+    f = measurement.eval(wi, wo, double=True)
     # f·cos θ_o = rgb · D / (4σ) = rgb; inputs need not be unit vectors.
     np.testing.assert_allclose(f * wo[:, 2:], np.broadcast_to(np.float32([0.2, 0.5, 0.7]), f.shape), rtol=1e-7)
-    np.testing.assert_allclose(measurement.eval(3 * wi, 0.5 * wo), f, rtol=1e-12)
+    np.testing.assert_allclose(measurement.eval(3 * wi, 0.5 * wo, double=True), f, rtol=1e-12)
+    # The float32 default, to float32's precision.
+    np.testing.assert_allclose(measurement.eval(3 * wi, 0.5 * wo), f, rtol=1e-6)
     wo[:, 2] *= -1
-    assert np.all(measurement.eval(wi, wo) == 0)
+    assert np.all(measurement.eval(wi, wo) == 0) and np.all(measurement.eval(wi, wo, double=True) == 0)
     # Without the Jacobian flag the table is used as it is; negative values clamp to 0.
     path = write(tmp_path, tensor_file(flat_material(colour=(0.3, -0.1, 0.0), sigma=1e-3, jacobian=0)), "b.bsdf")
-    f = BsdfMeasurement.read(path).eval(np.array([[0.0, 0.0, 1.0]]), np.array([[0.6, 0.0, 0.8]]))
-    np.testing.assert_allclose(f, [[0.3 / 0.8, 0.0, 0.0]], rtol=1e-7)
+    for double in (True, False):
+        f = BsdfMeasurement.read(path).eval(np.array([[0.0, 0.0, 1.0]]), np.array([[0.6, 0.0, 0.8]]), double)
+        np.testing.assert_allclose(f, [[0.3 / 0.8, 0.0, 0.0]], rtol=1e-7 if double else 1e-6)
 
 
 def test_eval_checks_its_arguments(tmp_path):
