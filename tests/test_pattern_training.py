@@ -51,6 +51,8 @@ def test_the_sampling_config_round_trips_and_its_presets_name_every_pattern(tmp_
     cfg = config_for("nbrdf", sampling="instruments")
     assert cfg.sampling.preset == "instruments" and cfg.sampling.counts == (300, 4000)
     assert set(cfg.sampling.patterns) == set(PATTERNS) and not cfg.sampling.paper
+    mixed = config_for("frenbrdf", sampling="mixed").sampling  # random bins half the time, the rest the others
+    assert mixed.patterns["merl-bins"] == sum(w for name, w in mixed.patterns.items() if name != "merl-bins")
     assert from_dict(TrainConfig, json.loads(json.dumps(to_dict(cfg)))) == cfg
     # A config file's patterns replace the preset's whole: the uniform pattern alone, not merl-bins and it.
     path = tmp_path / "config.json"

@@ -75,7 +75,8 @@ def _train(subparsers) -> None:
     train.add_argument("--sampling", choices=sorted(SAMPLING),
                        help="how the encoder's samples of each material are drawn (frenbrdf.presets.SAMPLING; default: "
                        "paper, random valid MERL bins; instruments: the sampling patterns of real devices, 300 … 4000 "
-                       "samples)")
+                       "samples; mixed: random bins half the time, the devices' patterns the rest, which reads devices "
+                       "best)")
     train.add_argument("--holdout", nargs="+", metavar="PATTERN",
                        help="glob patterns over material names: the matching materials are the test split "
                        "(a held-out family), the others train and validate")
