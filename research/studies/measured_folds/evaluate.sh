@@ -1,25 +1,26 @@
 #!/usr/bin/env bash
 # The real-measurements fold study's scores (research/results/measured-folds): the runs without measurements
-# (BASE-s0, -s1, -s2: the sampling-patterns study's runs of the same config) and the nine fold runs of train.sh
-# read the 19 measurements from 4,000 random valid bins (draw 0) with the encoder, `latent` and `full`; a fold
-# run is scored only on the measurements of its own fold (it trained on the others). Then the 39 held-out tables,
+# (BASE-s0, -s1, …: the sampling-patterns study's runs of the same config, as many seeds as it has) and the
+# nine fold runs of train.sh read the 19 measurements from 4,000 random valid bins (draw 0) with the encoder,
+# `latent` and `full`; a fold run is scored only on the measurements of its own fold (it trained on the others). Then the 39 held-out tables,
 # encoder and `latent`, by every run (no run trained on them). Two processes.
 #
 #   bash research/studies/measured_folds/evaluate.sh BASE CONFIG DATA WORK OUT
-#   (BASE e.g. local/v5/study/paper-mean; CONFIG the runs' config, whose `holdout` names the tables in DATA)
+#   (BASE e.g. local/v5/study/mixed-mean; CONFIG the runs' config, whose `holdout` names the tables in DATA)
 set -euo pipefail
 BASE=${1:?BASE runs prefix}; CONFIG=${2:?CONFIG json}; DATA=${3:?DATA folder}; WORK=${4:?WORK folder}
 OUT=${5:?OUT folder}
 HERE=$(dirname "$0")
 COMPARE="python $HERE/../compare_models.py"
 models=(); labels=(); trained_on=()
-for seed in 0 1 2; do models+=("$BASE-s$seed"); labels+=("fits/s$seed"); done
-for fold in 0 1 2; do for seed in 0 1 2; do
-    models+=("$WORK/measured-f$fold-s$seed"); labels+=("measured/f$fold-s$seed")
-    for name in $(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$HERE/folds.json"); do
-        trained_on+=("measured/f$fold-s$seed=$name")
+for run in "$BASE"-s[0-9]; do models+=("$run"); labels+=("fits/${run##*-}"); done  # the seeds the study has
+for fold in 0 1 2; do
+    others=$(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$HERE/folds.json")
+    for seed in 0 1 2; do
+        models+=("$WORK/measured-f$fold-s$seed"); labels+=("measured/f$fold-s$seed")
+        for name in $others; do trained_on+=("measured/f$fold-s$seed=$name"); done
     done
-done; done
+done
 groups=$(python -c "import json,sys; k=json.load(open(sys.argv[1]))['kinds']; print(' '.join(n.replace(' ', '-') + '=' + ','.join(m) for n, m in k.items()))" "$HERE/folds.json")
 mkdir -p "$OUT"
 OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
