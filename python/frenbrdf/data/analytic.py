@@ -45,7 +45,10 @@ A material is a *base* under an optional clear *coat*:
   Here ``E(μ)`` is the directional albedo of the top lobes ``w · f_spec + f_sheen + f_retro``
   and ``Ē = 2 ∫ E(μ) μ dμ`` its cosine-weighted average;
 - flakes (car paints) cover a share ``s`` of a dielectric base: ``(1 − s) · f_dielectric +
-  s · c_flake · f_aluminium``, a mixture of two bases each reflecting at most all light;
+  s · c_flake · f_aluminium``, a mixture of two bases each reflecting at most all light.
+  Interference (pearlescent) pigments replace the aluminium by mica flakes under a thin
+  high-index film (titanium dioxide): their lobe's Fresnel factor is Airy's, so the colour
+  the flakes reflect turns with θ_d, as in colour-shift paints and films;
 - coat of weight ``c``: ``f = c · f_coat + (1 − c E_c(μ_i)) (1 − c E_c(μ_o)) · f_base``,
   with ``f_coat`` a GGX dielectric lobe (white, or coloured by a thin film) and ``E_c`` its
   directional albedo, the fraction of light the coat reflects (its Fresnel reflectance
@@ -120,6 +123,8 @@ SHEEN_ROUGHNESS_RANGE = (0.3, 1.0)
 RETRO_MIN_ROUGHNESS = 0.05
 #: Thin-film thicknesses accepted, in nm: from the first interference colours to where they wash out.
 FILM_THICKNESS_RANGE = (50.0, 2000.0)
+#: Refractive index of the mica flakes under an interference pigment's film.
+MICA_IOR = 1.55
 
 RGB = tuple[float, float, float]
 
@@ -165,6 +170,10 @@ class AnalyticMaterial:
     """Multiplies the flakes' aluminium lobe (tinted flakes)."""
     flake_roughness: float = 0.3
     """GGX α of the flakes' orientations."""
+    flake_film_thickness: float = 0.0
+    """Thickness in nm of a thin film on mica flakes (0: aluminium flakes): interference pigments."""
+    flake_film_ior: float = 2.5
+    """Refractive index of the film on the flakes (titanium dioxide: about 2.5)."""
     retro: RGB = (0.0, 0.0, 0.0)
     """Weight per channel of a dielectric base's retro-reflective lobe (0: none)."""
     retro_roughness: float = 0.3
@@ -200,16 +209,22 @@ class AnalyticMaterial:
         _check_range(self.name, "flake_roughness", self.flake_roughness, MIN_ROUGHNESS, 1.0)
         _check_range(self.name, "retro_roughness", self.retro_roughness, RETRO_MIN_ROUGHNESS, 1.0)
         _check_range(self.name, "film_ior", self.film_ior, 1.0, 3.0)
-        if self.film_thickness:
-            _check_range(self.name, "film_thickness", self.film_thickness, *FILM_THICKNESS_RANGE)
+        _check_range(self.name, "flake_film_ior", self.flake_film_ior, 1.0, 3.0)
+        for field in ("film_thickness", "flake_film_thickness"):
+            if getattr(self, field):
+                _check_range(self.name, field, getattr(self, field), *FILM_THICKNESS_RANGE)
+        if self.flake_film_thickness and not self.flakes:
+            raise ValueError(f"{self.name}: a flake film lies on flakes; give flakes > 0")
 
     @property
     def kind(self) -> str:
         """The feature that names the material, the first that applies of ``"iridescent"``
-        (thin film), ``"carpaint"`` (flakes), ``"coated"``, ``"metal"``, ``"retroreflective"``,
-        ``"fabric"`` (sheen), ``"plastic"`` and ``"diffuse"``."""
+        (thin film), ``"pearlescent"`` (interference flakes), ``"carpaint"`` (flakes), ``"coated"``,
+        ``"metal"``, ``"retroreflective"``, ``"fabric"`` (sheen), ``"plastic"`` and ``"diffuse"``."""
         if self.film_thickness:
             return "iridescent"
+        if self.flake_film_thickness:
+            return "pearlescent"
         if self.flakes:
             return "carpaint"
         if self.coat > 0:
@@ -276,8 +291,11 @@ def _metal_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
 
 
 def _flake_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
-    """Tinted aluminium flakes whose orientations spread as a GGX distribution."""
-    return np.asarray(m.flake_colour) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
+    """Tinted flakes whose orientations spread as a GGX distribution: aluminium, or mica under a thin film."""
+    if not m.flake_film_thickness:
+        return np.asarray(m.flake_colour) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
+    film = thin_film_fresnel(g.cos_d, m.flake_film_ior, m.flake_film_thickness, MICA_IOR)
+    return np.asarray(m.flake_colour) * film * _facets(g, m.flake_roughness)
 
 
 def _top_lobes(m: AnalyticMaterial, g: Geometry) -> np.ndarray | float:

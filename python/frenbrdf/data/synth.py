@@ -45,7 +45,7 @@ from .analytic import (
 )
 from .microfacet import ggx_d, ggx_visibility
 
-__all__ = ["FEATURE_SHARES", "KINDS", "KIND_SHARES", "MANIFEST_NAME", "MIXES", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
+__all__ = ["FAMILY_SHARES", "FEATURE_SHARES", "KINDS", "KIND_SHARES", "MANIFEST_NAME", "MIXES", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
            "AnalyticMaterial", "draw_material", "evaluate", "ggx_d", "ggx_visibility", "material_bank", "merl_table", "write_bank"]
 
 #: The kinds of material in the default bank, and the share of each.
@@ -58,8 +58,14 @@ KINDS = tuple(KIND_SHARES)
 #: (felts) and clear coats over saturated bases.
 FEATURE_SHARES = {"carpaint": 0.30, "retroreflective": 0.20, "iridescent": 0.15, "fabric": 0.20, "coated": 0.15}
 
+#: The ``families`` mix: the kinds of the real measurements that no measurement here covers
+#: enough (issue 48), modelled on their physics: thin-film iridescence on the coat (Belcour &
+#: Barla 2017), interference (pearlescent) pigments whose colour turns with angle under a clear
+#: coat (colour-shift paints and wraps), and glitter: sparkles of one hue over a base of another.
+FAMILY_SHARES = {"iridescent": 1 / 3, "pearlescent": 1 / 3, "glitter": 1 / 3}
+
 #: The banks :func:`material_bank` can draw, by name.
-MIXES = {"default": KIND_SHARES, "features": FEATURE_SHARES}
+MIXES = {"default": KIND_SHARES, "features": FEATURE_SHARES, "families": FAMILY_SHARES}
 
 #: The manifest written next to the tables by :func:`write_bank`.
 MANIFEST_NAME = "bank.json"
@@ -197,9 +203,28 @@ def _sample_iridescent(rng: np.random.Generator) -> tuple[str, dict]:
     return label, {**base, **_clear_coat(rng), "coat_roughness": _log_uniform(rng, 0.01, 0.15), **film}
 
 
+def _sample_pearlescent(rng: np.random.Generator) -> tuple[str, dict]:
+    # Mica flakes under a titanium-dioxide film over a darker base, under a clear coat: the flakes'
+    # interference colour turns with angle (RGL's colour-shift wraps: a mauve base, cyan highlights).
+    base = _saturated_colour(rng, rng.uniform(), saturation=(0.2, 0.9), value=(0.03, 0.45))
+    flakes = {"flakes": rng.uniform(0.3, 0.9), "flake_film_thickness": rng.uniform(150.0, 700.0),
+              "flake_film_ior": rng.uniform(2.2, 2.7), "flake_roughness": _log_uniform(rng, 0.05, 0.4)}
+    return _colour_name(base), {"diffuse": base, **flakes, **_clear_coat(rng)}
+
+
+def _sample_glitter(rng: np.random.Generator) -> tuple[str, dict]:
+    # Narrow, saturated sparkles of a hue far from the base's (RGL's vch_dragon_eye_red, vch_ultra_pink).
+    hue = rng.uniform()
+    base = _saturated_colour(rng, hue, value=(0.05, 0.6))
+    sparkle = _linear(colorsys.hsv_to_rgb((hue + rng.uniform(0.2, 0.8)) % 1.0, rng.uniform(0.6, 1.0), 1.0))
+    return _colour_name(base), {"diffuse": base, "flakes": rng.uniform(0.1, 0.5), "flake_colour": sparkle,
+                                "flake_roughness": _log_uniform(rng, 0.02, 0.15), **_clear_coat(rng)}
+
+
 _SAMPLERS = {"diffuse": _sample_diffuse, "plastic": _sample_plastic, "metal": _sample_metal,
              "fabric": _sample_fabric, "coated": _sample_coated, "carpaint": _sample_carpaint,
-             "retroreflective": _sample_retroreflective, "iridescent": _sample_iridescent}
+             "retroreflective": _sample_retroreflective, "iridescent": _sample_iridescent,
+             "pearlescent": _sample_pearlescent, "glitter": _sample_glitter}
 
 
 def draw_material(rng: np.random.Generator, kind: str | None = None, name: str = "{label}-{kind}") -> AnalyticMaterial:

@@ -13,7 +13,8 @@ OUT=${5:?OUT folder}
 HERE=$(dirname "$0")
 COMPARE="python $HERE/../compare_models.py"
 models=(); labels=(); trained_on=()
-for run in "$BASE"-s[0-9]; do models+=("$run"); labels+=("fits/${run##*-}"); done  # the seeds the study has
+shopt -s nullglob
+for run in "$BASE"-s[0-9] "$WORK"/fits-s[0-9]; do models+=("$run"); labels+=("fits/${run##*-}"); done
 for fold in 0 1 2; do
     others=$(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$HERE/folds.json")
     for seed in 0 1 2; do
