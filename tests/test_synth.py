@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import colorsys
 import dataclasses
 import itertools
 import json
@@ -15,7 +16,7 @@ import frenbrdf
 from frenbrdf.data import synth
 from frenbrdf.data.analytic import FILM_THICKNESS_RANGE
 from frenbrdf.data.microfacet import fresnel, thin_film_fresnel
-from frenbrdf.data.synth import FEATURE_SHARES, KIND_SHARES, KINDS, METALS, AnalyticMaterial
+from frenbrdf.data.synth import FAMILY_SHARES, FEATURE_SHARES, KIND_SHARES, KINDS, METALS, AnalyticMaterial
 from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.io.outputs import MARKER
 
@@ -43,6 +44,9 @@ EXTREMES = {
                                      coat_roughness=0.01),
     "thick-film": AnalyticMaterial("thick-film", diffuse=(0.02, 0.02, 0.02), coat=1.0, coat_roughness=0.01,
                                    film_thickness=FILM_THICKNESS_RANGE[1], film_ior=2.5),
+    "white-pearl-flakes": AnalyticMaterial("white-pearl-flakes", diffuse=WHITE, flakes=1.0, flake_roughness=0.05,
+                                           flake_film_thickness=FILM_THICKNESS_RANGE[0], flake_film_ior=3.0,
+                                           coat=1.0, coat_roughness=0.01),
 }
 #: White dielectric bases are energy-preserving: they reflect all the light they receive.
 PRESERVING = ("white-lambert", "white-mirror-plastic", "white-rough-plastic", "white-fabric", "white-retro")
@@ -59,9 +63,15 @@ def features() -> list[AnalyticMaterial]:
 
 
 @pytest.fixture(scope="module")
-def one_of_each_kind(bank, features) -> dict[str, AnalyticMaterial]:
-    """A material of every kind either mix draws."""
-    return {kind: next(m for m in bank + features if m.kind == kind) for kind in {*KINDS, *FEATURE_SHARES}}
+def families() -> list[AnalyticMaterial]:
+    return synth.material_bank(45, seed=0, mix="families")
+
+
+@pytest.fixture(scope="module")
+def one_of_each_kind(bank, features, families) -> dict[str, AnalyticMaterial]:
+    """A material of every kind any mix draws (names end in the kind drawn: a glitter is a "carpaint")."""
+    return {kind: next(m for m in bank + features + families if m.name.endswith(f"-{kind}"))
+            for kind in {*KINDS, *FEATURE_SHARES, *FAMILY_SHARES}}
 
 
 def directional_albedo(material: AnalyticMaterial, theta_i: float, n: int = 128) -> np.ndarray:
@@ -160,6 +170,30 @@ def test_bank_parameters_lie_in_physical_ranges(bank):
     roughness = np.array([m.roughness for m in bank if m.kind in ("plastic", "metal")])
     assert roughness.min() < 0.03 and roughness.max() > 0.3
     assert len({m.metal_n for m in bank if m.kind == "metal"}) >= 5
+
+
+def test_the_families_mix_holds_its_three_kinds_as_their_physics_says(families):
+    assert Counter(m.name.rsplit("-", 1)[1] for m in families) == {"iridescent": 15, "pearlescent": 15, "glitter": 15}
+    pearls = [m for m in families if m.kind == "pearlescent"]
+    assert all(m.flake_film_thickness > 0 and m.flakes > 0 and m.coat > 0 for m in pearls)
+    # glitter: sparkles of a hue at least a fifth of a turn from the base's
+    for m in (m for m in families if m.name.endswith("-glitter")):
+        base, sparkle = (colorsys.rgb_to_hsv(*(c ** (1 / 2.2) for c in rgb))[0] for rgb in (m.diffuse, m.flake_colour))
+        assert min(abs(base - sparkle), 1 - abs(base - sparkle)) > 0.19, m.name
+
+
+def test_pearlescent_flakes_turn_their_colour_with_the_angle():
+    """The flakes' interference colour at the mirror direction changes from normal to grazing incidence."""
+    pearl = AnalyticMaterial("pearl", diffuse=(0.02, 0.02, 0.02), flakes=1.0, flake_roughness=0.1,
+                             flake_film_thickness=400.0)
+    chromaticities = []
+    for theta in np.radians([5.0, 45.0, 70.0]):
+        wi = np.array([np.sin(theta), 0.0, np.cos(theta)])
+        f = synth.evaluate(pearl, wi, wi * [-1, -1, 1])
+        chromaticities.append(f / f.sum())
+    assert np.ptp(np.array(chromaticities), axis=0).max() > 0.05
+    with pytest.raises(ValueError, match="flake film lies on flakes"):
+        AnalyticMaterial("bad", diffuse=WHITE, flake_film_thickness=400.0)
 
 
 def test_the_features_mix_holds_its_kinds_in_their_shares(features):

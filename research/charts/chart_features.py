@@ -1,11 +1,14 @@
-"""Real measurements beside the ``features`` bank: what each family was made to show.
+"""Real measurements beside a procedural bank: what each family was made to show.
 
     python research/charts/chart_features.py ../shared/data/rgl-measured/*.bsdf --out research/results/features.png
+    python research/charts/chart_features.py --mix families --n 45 --seed 0 \
+        ../shared/data/rgl-measured/{irid_flake_paint2,satin_purple,vch_ultra_pink}_rgb.bsdf \
+        --out research/results/families.png
 
-Top row: the measurements (``frenbrdf.read_bsdf``, rendered directly). Below, one column per
-kind of ``frenbrdf synth --mix features`` (car paint, retro-reflective, iridescent, fabric,
-coated), the first ``--per-kind`` materials of that kind in the bank of ``--n`` and ``--seed``
-(the shipped model's: 60, seed 1), each on the metric renderer.
+Top row: the measurements (``frenbrdf.read_bsdf``, rendered directly), in the order of the kinds when each
+imitates one. Below, one column per kind of ``frenbrdf synth --mix MIX`` (``features``: car paint,
+retro-reflective, iridescent, fabric, coated; ``families``: iridescent, pearlescent, glitter), the first
+``--per-kind`` materials of that kind in the bank of ``--n`` and ``--seed``, each on the metric renderer.
 """
 
 from __future__ import annotations
@@ -28,13 +31,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, default=60)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--per-kind", type=int, default=3)
+    parser.add_argument("--mix", choices=("features", "families"), default="features")
     parser.add_argument("--resolution", type=int, default=160)
     parser.add_argument("--out", default="features.png")
     args = parser.parse_args(argv)
 
     scene = Scene(resolution=args.resolution)
-    bank = synth.material_bank(args.n, seed=args.seed, mix="features")
-    kinds = list(synth.FEATURE_SHARES)
+    bank = synth.material_bank(args.n, seed=args.seed, mix=args.mix)
+    kinds = list(synth.MIXES[args.mix])
     columns = max(len(kinds), len(args.measurements))
     plt = pyplot()
     figure, axes = plt.subplots(1 + args.per_kind, columns, figsize=(3 * columns, 3 * (1 + args.per_kind)),
@@ -45,7 +49,8 @@ def main(argv: list[str] | None = None) -> int:
         ax.imshow(render(frenbrdf.read_bsdf(path), scene))
         ax.set_title(f"measured: {Path(path).stem}", fontsize=8)
     for column, kind in enumerate(kinds):
-        for row, material in enumerate([m for m in bank if m.kind == kind][:args.per_kind], start=1):
+        # names end in the kind drawn (a glitter's analytic kind is "carpaint")
+        for row, material in enumerate([m for m in bank if m.name.endswith(f"-{kind}")][:args.per_kind], start=1):
             axes[row, column].imshow(render(synth.merl_table(material), scene))
             axes[row, column].set_title(material.name, fontsize=8)
     figure.tight_layout()

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The real-measurements fold study's scores (research/results/measured-folds): the runs without measurements
 # (BASE-s0, -s1, …: the sampling-patterns study's runs of the same config, as many seeds as it has) and the
-# nine fold runs of train.sh read the 19 measurements from 4,000 random valid bins (draw 0) with the encoder,
+# fold runs of train.sh and train_families.sh, and version 4, read the 19 measurements from 4,000 random valid bins (draw 0) with the encoder,
 # `latent` and `full`; a fold run is scored only on the measurements of its own fold (it trained on the others). Then the 39 held-out tables,
 # encoder and `latent`, by every run (no run trained on them). Two processes.
 #
@@ -17,18 +17,22 @@ shopt -s nullglob
 for run in "$BASE"-s[0-9] "$WORK"/fits-s[0-9]; do models+=("$run"); labels+=("fits/${run##*-}"); done
 for fold in 0 1 2; do
     others=$(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$HERE/folds.json")
-    for seed in 0 1 2; do
-        models+=("$WORK/measured-f$fold-s$seed"); labels+=("measured/f$fold-s$seed")
-        for name in $others; do trained_on+=("measured/f$fold-s$seed=$name"); done
-    done
+    for arm in measured families; do for seed in 0 1 2; do  # the families arm's runs that exist (train_families.sh)
+        [[ -f "$WORK/$arm-f$fold-s$seed/best.pt" ]] || continue
+        models+=("$WORK/$arm-f$fold-s$seed"); labels+=("$arm/f$fold-s$seed")
+        for name in $others; do trained_on+=("$arm/f$fold-s$seed=$name"); done
+    done; done
 done
+# Version 4, on what it did not train on (its split's train and validation materials: v4-trained-on.txt).
+models+=(pretrained); labels+=(v4)
+while read -r name; do [[ -n "$name" ]] && trained_on+=("v4=$name"); done < "$HERE/../sampling_patterns/v4-trained-on.txt"
 groups=$(python -c "import json,sys; k=json.load(open(sys.argv[1]))['kinds']; print(' '.join(n.replace(' ', '-') + '=' + ','.join(m) for n, m in k.items()))" "$HERE/folds.json")
 mkdir -p "$OUT"
 OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
     --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full --samples 4000 --resolution 128 \
     --group $groups comparison-four=acrylic_felt_green_rgb,paper_white_rgb,vch_golden_yellow_rgb,cg_sunflower_rgb \
     --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
-OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" \
+OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
     --held-out "$CONFIG" "$DATA" \
     --budgets none latent --samples 4000 --resolution 128 --out "$OUT/tables" > "$OUT/tables.log" 2>&1 &
 wait
