@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The real-measurements fold study's scores (research/results/measured-folds): the runs without measurements
-# (BASE-s0, -s1, …: the sampling-patterns study's runs of the same config, as many seeds as it has) and the
-# fold runs of train.sh and train_families.sh, and version 4, read the 19 measurements from 4,000 random valid bins (draw 0) with the encoder,
-# `latent` and `full`; a fold run is scored only on the measurements of its own fold (it trained on the others). Then the 39 held-out tables,
-# encoder and `latent`, by every run (no run trained on them). Two processes.
+# (BASE-s0, -s1, …: the sampling-patterns study's runs of the same config, and WORK/fits-s2), the fold runs of
+# train.sh and train_families.sh, and version 4 read the 19 measurements from 4,000 random valid bins (draw 0)
+# with the encoder, `latent` and `full`; a fold run is scored only on the measurements of its own fold (it trained on the others).
+# Then the 39 held-out tables: encoder by every run, `latent` by the seed-0 runs and v4 (v4 not on the tables it
+# trained on). Two processes.
 #
 #   bash research/studies/measured_folds/evaluate.sh BASE CONFIG DATA WORK OUT
 #   (BASE e.g. local/v5/study/mixed-mean; CONFIG the runs' config, whose `holdout` names the tables in DATA)
@@ -32,7 +33,19 @@ OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --tra
     --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full --samples 4000 --resolution 128 \
     --group $groups comparison-four=acrylic_felt_green_rgb,paper_white_rgb,vch_golden_yellow_rgb,cg_sunflower_rgb \
     --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
-OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
-    --held-out "$CONFIG" "$DATA" \
-    --budgets none latent --samples 4000 --resolution 128 --out "$OUT/tables" > "$OUT/tables.log" 2>&1 &
+# The tables: every run encoder only (the rules' figure), then `latent` by the seed-0 runs and version 4 (a second a
+# material: the sampling-patterns study's economy).
+first=(); first_labels=()
+for i in "${!labels[@]}"; do
+    [[ "${labels[$i]}" == */s0 || "${labels[$i]}" == */f?-s0 || "${labels[$i]}" == v4 ]] || continue
+    first+=("${models[$i]}"); first_labels+=("${labels[$i]}")
+done
+{
+    OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
+        --held-out "$CONFIG" "$DATA" --budgets none --samples 4000 --resolution 128 \
+        --out "$OUT/tables" > "$OUT/tables.log" 2>&1
+    OMP_NUM_THREADS=1 $COMPARE --models "${first[@]}" --labels "${first_labels[@]}" --trained-on "${trained_on[@]}" \
+        --held-out "$CONFIG" "$DATA" --budgets latent --samples 4000 --resolution 128 \
+        --out "$OUT/tables-latent" > "$OUT/tables-latent.log" 2>&1
+} &
 wait
