@@ -35,16 +35,17 @@ OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --tra
     --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
 # The tables: every run encoder only (the rules' figure), then `latent` by the seed-0 runs and version 4 (a second a
 # material: the sampling-patterns study's economy).
-first=(); first_labels=()
+first=(); first_labels=(); first_trained_on=()
 for i in "${!labels[@]}"; do
     [[ "${labels[$i]}" == */s0 || "${labels[$i]}" == */f?-s0 || "${labels[$i]}" == v4 ]] || continue
     first+=("${models[$i]}"); first_labels+=("${labels[$i]}")
+    for pair in "${trained_on[@]}"; do [[ "$pair" == "${labels[$i]}="* ]] && first_trained_on+=("$pair"); done
 done
 {
     OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
         --held-out "$CONFIG" "$DATA" --budgets none --samples 4000 --resolution 128 \
         --out "$OUT/tables" > "$OUT/tables.log" 2>&1
-    OMP_NUM_THREADS=1 $COMPARE --models "${first[@]}" --labels "${first_labels[@]}" --trained-on "${trained_on[@]}" \
+    OMP_NUM_THREADS=1 $COMPARE --models "${first[@]}" --labels "${first_labels[@]}" --trained-on "${first_trained_on[@]}" \
         --held-out "$CONFIG" "$DATA" --budgets latent --samples 4000 --resolution 128 \
         --out "$OUT/tables-latent" > "$OUT/tables-latent.log" 2>&1
 } &
