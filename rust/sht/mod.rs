@@ -23,7 +23,7 @@
 //! degrees meets only one of them, which halves the work. Analysis gets both parts of a
 //! ring pair from one complex FFT (rustfft), split into the parts and transposed to the
 //! product's layout (maps innermost) in vector registers ([`split`], [`transpose`]), while
-//! the next pair's rings are prefetched; synthesis ends in a real inverse FFT per ring
+//! later pairs' rings are prefetched; synthesis ends in a real inverse FFT per ring
 //! (realfft). Chunks of maps, rings and orders run in parallel with rayon. Legendre
 //! tables are built once per plan and kept while they fit in [`LEGENDRE_CACHE_BYTES`].
 //! Analysis of single maps, and of every map where the table is not kept or exceeds
