@@ -170,15 +170,20 @@ def _clear_coat(rng: np.random.Generator) -> dict:
             "coat_ior": rng.uniform(1.45, 1.6)}
 
 
-def _sample_carpaint(rng: np.random.Generator) -> tuple[str, dict]:
-    # A saturated paint with metallic flakes of a nearby, paler hue under a glossy clear coat.
-    # Bases run darker and flakes more saturated than in paints: RGL's vch_golden_yellow is a dark
-    # golden base under broad, strongly yellow flake highlights.
+def _flake_paint(rng: np.random.Generator, hue_offset, saturation, share, roughness) -> tuple[str, dict]:
+    """A saturated base (darker than paints) under metallic flakes tinted a hue ``hue_offset(rng)`` turns
+    away, covering a share ``share`` of it, GGX-spread over ``roughness``, under a glossy clear coat."""
     hue = rng.uniform()
     colour = _saturated_colour(rng, hue, value=(0.05, 0.6))
-    flakes = _linear(colorsys.hsv_to_rgb((hue + rng.normal(0.0, 0.04)) % 1.0, rng.uniform(0.3, 1.0), 1.0))
-    return _colour_name(colour), {"diffuse": colour, "flakes": rng.uniform(0.2, 0.8), "flake_colour": flakes,
-                                  "flake_roughness": _log_uniform(rng, 0.08, 0.4), **_clear_coat(rng)}
+    flakes = _linear(colorsys.hsv_to_rgb((hue + hue_offset(rng)) % 1.0, rng.uniform(*saturation), 1.0))
+    return _colour_name(colour), {"diffuse": colour, "flakes": rng.uniform(*share), "flake_colour": flakes,
+                                  "flake_roughness": _log_uniform(rng, *roughness), **_clear_coat(rng)}
+
+
+def _sample_carpaint(rng: np.random.Generator) -> tuple[str, dict]:
+    # Flakes of a nearby, paler hue: RGL's vch_golden_yellow is a dark golden base under broad, strongly
+    # yellow flake highlights.
+    return _flake_paint(rng, lambda r: r.normal(0.0, 0.04), (0.3, 1.0), (0.2, 0.8), (0.08, 0.4))
 
 
 def _sample_retroreflective(rng: np.random.Generator) -> tuple[str, dict]:
@@ -214,11 +219,7 @@ def _sample_pearlescent(rng: np.random.Generator) -> tuple[str, dict]:
 
 def _sample_glitter(rng: np.random.Generator) -> tuple[str, dict]:
     # Narrow, saturated sparkles of a hue far from the base's (RGL's vch_dragon_eye_red, vch_ultra_pink).
-    hue = rng.uniform()
-    base = _saturated_colour(rng, hue, value=(0.05, 0.6))
-    sparkle = _linear(colorsys.hsv_to_rgb((hue + rng.uniform(0.2, 0.8)) % 1.0, rng.uniform(0.6, 1.0), 1.0))
-    return _colour_name(base), {"diffuse": base, "flakes": rng.uniform(0.1, 0.5), "flake_colour": sparkle,
-                                "flake_roughness": _log_uniform(rng, 0.02, 0.15), **_clear_coat(rng)}
+    return _flake_paint(rng, lambda r: r.uniform(0.2, 0.8), (0.6, 1.0), (0.1, 0.5), (0.02, 0.15))
 
 
 _SAMPLERS = {"diffuse": _sample_diffuse, "plastic": _sample_plastic, "metal": _sample_metal,
