@@ -5,7 +5,9 @@
 
 The base (``--base``: ``pretrained`` or a packed model's folder) gives the decoder, the mapping, the
 training config and the first encoder; each member (a run trained with ``--decoder-from`` the base)
-adds its encoder, after a check that its decoder and mapping are exactly the base's. The card is the
+adds its encoder, after a check that its decoder and mapping are exactly the base's; with
+``--without-base-encoder`` z is the members' mean alone (version 5: encoders trained on other sampling
+patterns than the base's). The card is the
 base's with the members named, the version given, and the held-out test split (``WORK/split.json``'s
 ``test``, files in ``WORK/data``; by source: ``WORK/merl``, ``WORK/bank``, ``WORK/rgl-train``) measured
 anew, encoder only and refined, as assembled (float32) and as packed.
@@ -30,31 +32,35 @@ from frenbrdf.render.scoring import reconstruction_rows
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/
 from common import run_metadata  # noqa: E402
-from train_shipped_model import ROOT, by_source, card_markdown, summary  # noqa: E402
+from train_shipped_model import ROOT, by_pattern, by_source, card_markdown, summary  # noqa: E402
 
 
-def assemble(base: str | None, members: list[str]) -> tuple[dict, dict, dict]:
-    """The checkpoint of the base's decoder with every encoder (the base's first), its mapping and its card."""
+def assemble(base: str | None, members: list[str], *, base_encoder: bool = True) -> tuple[dict, dict, dict]:
+    """The checkpoint of the base's decoder with every encoder (the base's first, unless ``base_encoder`` is
+    false: then the members' only), its mapping and its card."""
     packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
     base_decoder = {name: value.float() for name, value in packed["model"].items() if name.startswith("decoder.")}
-    weights = dict(base_decoder)
-    first = {name[len("encoder."):]: value.float() for name, value in packed["model"].items()
-             if name.startswith("encoder.")}
     config = json.loads(packed["config"])
-    extras = []
-    for index, spec in enumerate([None, *members]):
-        if spec is None:
-            encoder = first
-        else:
-            member = load_model(spec)
-            decoder = member.network.decoder.state_dict()
-            if any(not torch.equal(decoder[name[len("decoder."):]], value) for name, value in base_decoder.items()) or \
-                    not np.array_equal(member.mapping.state()["reference"], mapping["reference"].astype(np.float32)):
-                raise ValueError(f"{spec}: its decoder or mapping is not the base's (train it with --decoder-from)")
-            encoder = member.network.encoder.state_dict()
-            extras.append(to_dict(member.config.encoder))
-        weights.update({f"encoder.members.{index}.{name}": value for name, value in encoder.items()})
-    config["model"]["extra_encoders"] = extras
+    encoders = []  # (state dict, encoder config) of each encoder, in order
+    if base_encoder:
+        encoders.append(({name[len("encoder."):]: value.float() for name, value in packed["model"].items()
+                          if name.startswith("encoder.")}, config["model"]["encoder"]))
+    for spec in members:
+        member = load_model(spec)
+        decoder = member.network.decoder.state_dict()
+        if any(not torch.equal(decoder[name[len("decoder."):]], value) for name, value in base_decoder.items()) or \
+                not np.array_equal(member.mapping.state()["reference"], mapping["reference"].astype(np.float32)):
+            raise ValueError(f"{spec}: its decoder or mapping is not the base's (train it with --decoder-from)")
+        encoders.append((member.network.encoder.state_dict(), to_dict(member.config.encoder)))
+    if not encoders:
+        raise ValueError("no encoder: give --members, or keep the base's encoder")
+    config["model"]["encoder"] = encoders[0][1]
+    config["model"]["extra_encoders"] = [encoder_config for _, encoder_config in encoders[1:]]
+    # One encoder is a plain SetEncoder (keys encoder.*); several an EncoderMean (encoder.members.K.*).
+    prefixes = ["encoder."] if len(encoders) == 1 else [f"encoder.members.{k}." for k in range(len(encoders))]
+    weights = dict(base_decoder)
+    for prefix, (state, _) in zip(prefixes, encoders, strict=True):
+        weights.update({prefix + name: value for name, value in state.items()})
     return {"method": packed["method"], "config": json.dumps(config), "model": weights}, mapping, card
 
 
@@ -63,11 +69,15 @@ def main(argv=None) -> int:
     parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
     parser.add_argument("--members", nargs="+", required=True, help="run folders of encoders for the base's decoder")
     parser.add_argument("--work", required=True, help="release/train_shipped_model.sh's folder (data/, split.json, sources)")
+    parser.add_argument("--without-base-encoder", action="store_true",
+                        help="z is the mean of the members' encoders only (the base gives the decoder and mapping)")
+    parser.add_argument("--members-config", help="the training config the members were trained with, for the card")
+    parser.add_argument("--why", help="a Markdown link to the study whose rule chose these encoders, for the card")
     parser.add_argument("--version", required=True, help="the packed model's version, for its card")
     parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR))
     parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"))
     args = parser.parse_args(argv)
-    checkpoint, mapping, card = assemble(args.base, args.members)
+    checkpoint, mapping, card = assemble(args.base, args.members, base_encoder=not args.without_base_encoder)
     work = Path(args.work)
     test = [work / "data" / f"{name}.binary" for name in sorted(json.loads((work / "split.json").read_text())["test"])]
     folders = [work / name for name in ("merl", "bank", "rgl-train")]
@@ -75,9 +85,13 @@ def main(argv=None) -> int:
     held_out = reconstruction_rows(model, test, frequency_metric=False)
     refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
     card.update({"version": args.version,  # "command" stays the one that trained and packed the base
-                 "encoders": {"base": args.base, "members": args.members, "command": run_metadata()["command"]},
+                 "encoders": {"base": args.base, "members": args.members, "base_encoder": not args.without_base_encoder,
+                              "training_config": json.loads(Path(args.members_config).read_text())
+                              if args.members_config else None, "why": args.why,
+                              "command": run_metadata()["command"]},
                  "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
-                 "held_out_refined_by_source": by_source(refined, folders)})
+                 "held_out_refined_by_source": by_source(refined, folders),
+                 "held_out_by_pattern": by_pattern(model, test)})
     card.pop("bytes", None)
     pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
     card["held_out"]["packed"] = summary(reconstruction_rows(Model.pretrained(args.dest), test, frequency_metric=False))

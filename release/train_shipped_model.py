@@ -57,6 +57,13 @@ def summary(rows: list[dict]) -> dict[str, float]:
     return {key: float(np.mean([row[key] for row in rows])) for key in METRICS}
 
 
+def by_pattern(model: Model, test: list[Path], *, seed: int = 0, progress: bool = False) -> dict[str, dict]:
+    """:func:`summary` of the held-out materials read through each of :data:`CARD_PATTERNS`, encoder only."""
+    return {pattern: summary(reconstruction_rows(model, test, samples=PATTERN_SAMPLES, seed=seed,
+                                                 frequency_metric=False, progress=progress, pattern=pattern))
+            for pattern in CARD_PATTERNS}
+
+
 def by_source(rows: list[dict], folders: list[Path]) -> dict[str, dict]:
     """:func:`summary` of the rows of each source folder (MERL-derived and bank materials apart), and of all."""
     names = {folder.name: {path.stem for path in list_materials(folder)} for folder in folders}
@@ -89,9 +96,7 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
             "trained_on": trained_on or run_metadata()["cpu"],
             "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
             "held_out_refined_by_source": by_source(refined, folders),
-            "held_out_by_pattern": {pattern: summary(reconstruction_rows(
-                run.model(), test, samples=PATTERN_SAMPLES, seed=seed, frequency_metric=False, progress=progress,
-                pattern=pattern)) for pattern in CARD_PATTERNS}}
+            "held_out_by_pattern": by_pattern(run.model(), test, seed=seed, progress=progress)}
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)
     packed = Model.pretrained(dest)
     card["held_out"]["packed"] = summary(reconstruction_rows(packed, test, seed=seed, frequency_metric=False,
@@ -157,14 +162,19 @@ The same held-out materials read through the sampling patterns of real devices (
 
 
 def encoders_text(card: dict) -> str:
-    """The card's line on an encoder mean (release/pack_encoder_mean.py), if the model has one."""
+    """The card's line on the encoders of release/pack_encoder_mean.py, if the model's were packed by it."""
     if "encoders" not in card:
         return ""
-    members = ", ".join(f"`{m}`" for m in card["encoders"]["members"])
-    return (f"\n- **Encoders**: z is the mean of {len(card['encoders']['members']) + 1} encoders of this decoder: "
-            f"the training run's and {members}, each trained for the frozen decoder (`frenbrdf train "
-            f"--decoder-from`); why and the rule that chose it: [encoder-refit](../research/results/encoder-refit/README.md). "
-            f"Packed by `{card['encoders']['command']}`.")
+    encoders = card["encoders"]
+    members = ", ".join(f"`{m}`" for m in encoders["members"])
+    with_base = encoders.get("base_encoder", True)  # cards before version 5 always kept the base's encoder
+    count = len(encoders["members"]) + with_base
+    who = f"the training run's and {members}" if with_base else members
+    config = f" with `{json.dumps(encoders['training_config'])}`" if encoders.get("training_config") else ""
+    why = encoders.get("why", "[encoder-refit](../research/results/encoder-refit/README.md)")
+    return (f"\n- **Encoders**: z is the mean of {count} encoder{'s' * (count > 1)} of this decoder: {who}, each "
+            f"trained for the frozen decoder (`frenbrdf train --decoder-from`){config}; why and the rule that chose "
+            f"it: {why}. Packed by `{encoders['command']}`.")
 
 
 def by_source_text(groups: dict) -> str:

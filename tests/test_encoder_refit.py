@@ -123,3 +123,27 @@ def test_an_encoder_mean_averages_its_members_and_packs_and_loads(toy_materials,
     other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=3))  # another decoder
     with pytest.raises(ValueError, match="not the base's"):
         script_module("pack_encoder_mean").assemble(str(packed), [str(other.path)])
+
+
+def test_an_encoder_mean_without_the_base_encoder_is_the_members_alone(toy_materials, tmp_path):
+    from frenbrdf.models import pretrained
+
+    from .conftest import script_module
+
+    base_run = train(tiny("nbrdf", toy_materials, tmp_path / "base", epochs=1))
+    packed = tmp_path / "packed"
+    pretrained.pack_pretrained(base_run.path, packed, half=False)
+    members = [train(tiny("nbrdf", toy_materials, tmp_path / f"member{seed}", epochs=1, seed=seed,
+                          decoder_from=str(packed))) for seed in (1, 2)]
+    rng = np.random.default_rng(2)
+    wi, wo = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in np.abs(rng.normal(size=(2, 400, 3))))
+    values = rng.uniform(0.01, 1.0, (400, 3))
+    codes = [frenbrdf.Model.load(m.path).encode(values, (wi, wo)) for m in members]
+    assemble = script_module("pack_encoder_mean").assemble
+    for chosen, expected in (([members[0]], codes[0]), (members, np.mean(codes, axis=0))):
+        checkpoint, mapping, _ = assemble(str(packed), [str(m.path) for m in chosen], base_encoder=False)
+        model = frenbrdf.Model.from_checkpoint(checkpoint, mapping)
+        assert len(model.config.encoders) == len(chosen)
+        np.testing.assert_allclose(model.encode(values, (wi, wo)), expected, rtol=1e-5, atol=1e-6)
+    with pytest.raises(ValueError, match="no encoder"):
+        assemble(str(packed), [], base_encoder=False)
