@@ -53,3 +53,14 @@ def test_a_gain_on_measurements_that_costs_the_tables_is_refused(decide, tmp_pat
     assert not decision["measurements"]["wins"]
     assert decision["families"]["measurements"]["mean"] == pytest.approx(0, abs=0.1)  # judged against `measured`
     assert decision["ships"] == []
+
+
+def test_the_replication_tests_families_and_measurements_together_against_fits(decide, tmp_path):
+    decision = run(decide, tmp_path, {"fits/s3": 0, "fits/s4": 0, "families/f0-s2": 1.5, "v4": 9},
+                   {"fits/s3": 0, "families/f0-s2": 0.2})
+    assert set(decision) == {"together", "ships"}
+    assert decision["together"]["measurements"]["mean"] == pytest.approx(1.5, abs=0.1)
+    assert decision["ships"] == ["together"]
+    (tmp_path / "lost").mkdir()
+    lost = run(decide, tmp_path / "lost", {"fits/s3": 0, "families/f0-s2": -0.5}, {"fits/s3": 0, "families/f0-s2": 0})
+    assert lost["ships"] == []

@@ -18,7 +18,7 @@ shopt -s nullglob
 for run in "$BASE"-s[0-9] "$WORK"/fits-s[0-9]; do models+=("$run"); labels+=("fits/${run##*-}"); done
 for fold in 0 1 2; do
     others=$(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$HERE/folds.json")
-    for arm in measured families; do for seed in 0 1 2; do  # the finished runs (a log's last line names its folder)
+    for arm in measured families; do for seed in 0 1 2 3 4 5; do  # the finished runs (a log's last line names its folder)
         grep -qs "run folder" "$WORK/$arm-f$fold-s$seed.log" || continue
         models+=("$WORK/$arm-f$fold-s$seed"); labels+=("$arm/f$fold-s$seed")
         for name in $others; do trained_on+=("$arm/f$fold-s$seed=$name"); done
