@@ -3,7 +3,7 @@
 # and the families together (`families`) against neither (`fits`), on seeds no earlier run used. Each fold's data
 # with the measurements of the two other folds and the families is train_families.sh's (linked from OLDWORK);
 # `fits` trains on DATA alone. Seeds 3 and 4 for `fits` (0-2 exist), 2 and 3 for `families` (0-1 exist), two at a
-# time on one thread each.
+# time on one thread each (JOBS: how many at a time).
 #
 #   bash research/studies/measured_folds/replicate.sh DATA CONFIG OLDWORK WORK
 set -euo pipefail
@@ -14,6 +14,6 @@ for fold in 0 1 2; do ln -sfn "$(realpath "$OLDWORK/data-f$fold-families")" "$WO
 {
     for seed in 3 4; do echo "$DATA $seed fits-s$seed"; done
     for seed in 2 3; do for fold in 0 1 2; do echo "$WORK/data-f$fold-families $seed families-f$fold-s$seed"; done; done
-} | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
+} | OMP_NUM_THREADS=1 xargs -P "${JOBS:-2}" -L 1 bash -c \
     'frenbrdf train --data "$2" --config "$0" --seed "$3" --out "$1/$4" --quiet > "$1/$4.log" 2>&1' \
     "$CONFIG" "$WORK"
