@@ -1,4 +1,5 @@
-"""Packs the mean of several encoders of one decoder as the shipped model (research/results/encoder-refit).
+"""Packs several encoders of one decoder as the shipped model: z their mean (research/results/encoder-refit) or,
+with ``--choice best-fit``, the latent whose decoding fits the samples best (research/results/version-5).
 
     python release/pack_encoder_mean.py --members local/refit/plain-s0 local/refit/plain-s1 ... \\
         --work local/v2 --version 3
@@ -28,6 +29,7 @@ from frenbrdf.configs import to_dict
 from frenbrdf.io.atomic import write_text
 from frenbrdf.models import pretrained
 from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.encoder import ENCODER_CHOICES
 from frenbrdf.render.scoring import reconstruction_rows
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/
@@ -35,9 +37,10 @@ from common import run_metadata  # noqa: E402
 from train_shipped_model import ROOT, by_pattern, by_source, card_markdown, summary  # noqa: E402
 
 
-def assemble(base: str | None, members: list[str], *, base_encoder: bool = True) -> tuple[dict, dict, dict]:
+def assemble(base: str | None, members: list[str], *, base_encoder: bool = True,
+             choice: str = "mean") -> tuple[dict, dict, dict]:
     """The checkpoint of the base's decoder with every encoder (the base's first, unless ``base_encoder`` is
-    false: then the members' only), its mapping and its card."""
+    false: then the members' only) and ``choice`` (``ModelConfig.encoder_choice``), its mapping and its card."""
     packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
     base_decoder = {name: value.float() for name, value in packed["model"].items() if name.startswith("decoder.")}
     config = json.loads(packed["config"])
@@ -56,6 +59,7 @@ def assemble(base: str | None, members: list[str], *, base_encoder: bool = True)
         raise ValueError("no encoder: give --members, or keep the base's encoder")
     config["model"]["encoder"] = encoders[0][1]
     config["model"]["extra_encoders"] = [encoder_config for _, encoder_config in encoders[1:]]
+    config["model"]["encoder_choice"] = choice
     # One encoder is a plain SetEncoder (keys encoder.*); several an EncoderMean (encoder.members.K.*).
     prefixes = ["encoder."] if len(encoders) == 1 else [f"encoder.members.{k}." for k in range(len(encoders))]
     weights = dict(base_decoder)
@@ -71,13 +75,16 @@ def main(argv=None) -> int:
     parser.add_argument("--work", required=True, help="release/train_shipped_model.sh's folder (data/, split.json, sources)")
     parser.add_argument("--without-base-encoder", action="store_true",
                         help="z is the mean of the members' encoders only (the base gives the decoder and mapping)")
+    parser.add_argument("--choice", choices=ENCODER_CHOICES, default="mean",
+                        help="how the encoders' latents give z (ModelConfig.encoder_choice)")
     parser.add_argument("--members-config", help="the training config the members were trained with, for the card")
     parser.add_argument("--why", help="a Markdown link to the study whose rule chose these encoders, for the card")
     parser.add_argument("--version", required=True, help="the packed model's version, for its card")
     parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR))
     parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"))
     args = parser.parse_args(argv)
-    checkpoint, mapping, card = assemble(args.base, args.members, base_encoder=not args.without_base_encoder)
+    checkpoint, mapping, card = assemble(args.base, args.members, base_encoder=not args.without_base_encoder,
+                                      choice=args.choice)
     work = Path(args.work)
     test = [work / "data" / f"{name}.binary" for name in sorted(json.loads((work / "split.json").read_text())["test"])]
     folders = [work / name for name in ("merl", "bank", "rgl-train")]
@@ -86,6 +93,7 @@ def main(argv=None) -> int:
     refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
     card.update({"version": args.version,  # "command" stays the one that trained and packed the base
                  "encoders": {"base": args.base, "members": args.members, "base_encoder": not args.without_base_encoder,
+                              "choice": args.choice,
                               "training_config": json.loads(Path(args.members_config).read_text())
                               if args.members_config else None, "why": args.why,
                               "command": run_metadata()["command"]},

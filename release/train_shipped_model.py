@@ -172,7 +172,9 @@ def encoders_text(card: dict) -> str:
     who = f"the training run's and {members}" if with_base else members
     config = f" with `{json.dumps(encoders['training_config'])}`" if encoders.get("training_config") else ""
     why = encoders.get("why", "[encoder-refit](../research/results/encoder-refit/README.md)")
-    return (f"\n- **Encoders**: z is the mean of {count} encoder{'s' * (count > 1)} of this decoder: {who}, each "
+    how = ("the latent, of one of them, whose decoding fits the given samples best" if encoders.get("choice") == "best-fit"
+           else "the mean of their latents")
+    return (f"\n- **Encoders**: {count} encoder{'s' * (count > 1)} of this decoder, z {how}: {who}, each "
             f"trained for the frozen decoder (`frenbrdf train --decoder-from`){config}; why and the rule that chose "
             f"it: {why}. Packed by `{encoders['command']}`.")
 

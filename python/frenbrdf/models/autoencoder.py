@@ -16,8 +16,9 @@ from ..io import checkpoints
 from ..io.jsonfile import parse_json
 from .editing import EditedMaterial, edit
 from .editing import interpolate as interpolate  # its home until editing had one; imported from here by many
-from .encoder import EncoderConfig, EncoderMean, SetEncoder
+from .encoder import ENCODER_CHOICES, EncoderConfig, EncoderMean, SetEncoder
 from .hypernetwork import DecoderConfig, HyperNetwork
+from .losses import LossConfig, samples_loss
 from .mapping import LogRelativeMapping, MappingConfig
 from .nbrdf import NBRDF, NBRDFConfig, mapped_samples
 
@@ -37,11 +38,18 @@ class ModelConfig:
     decoder: DecoderConfig = field(default_factory=DecoderConfig)
     mapping: MappingConfig = field(default_factory=MappingConfig)
     extra_encoders: tuple[EncoderConfig, ...] = ()
-    """More set encoders of the same latent space: z is then the mean of every encoder's latent
-    (:class:`~.encoder.EncoderMean`; ``release/pack_encoder_mean.py`` builds one from encoders trained for one decoder)."""
+    """More set encoders of the same latent space (:class:`~.encoder.EncoderMean`; ``release/pack_encoder_mean.py``
+    builds one from encoders trained for one decoder); :attr:`encoder_choice` says how their latents give z."""
+    encoder_choice: str = "mean"
+    """With :attr:`extra_encoders`, how :meth:`Model.encode` takes z from the encoders' latents: ``"mean"``, their
+    mean; ``"best-fit"``, the one latent whose decoding fits the given samples best (the smallest reconstruction
+    loss on them: the objective ``latent`` refinement lowers next). Encoders trained on different sampling patterns
+    each read best what they trained on, and the samples say which that is (research/results/version-5)."""
 
     def __post_init__(self):
         self.extra_encoders = tuple(self.extra_encoders)
+        if self.encoder_choice not in ENCODER_CHOICES:
+            raise ValueError(f"encoder_choice must be one of {ENCODER_CHOICES}, got {self.encoder_choice!r}")
         if any(extra.latent != self.encoder.latent for extra in self.extra_encoders):
             raise ValueError(f"extra encoders must have the latent size of the encoder ({self.encoder.latent}), got "
                              f"{[extra.latent for extra in self.extra_encoders]}")
@@ -194,13 +202,20 @@ class Model:
         numpy.ndarray
             ``(latent,)``.
         """
-        mapped, coords, _ = mapped_samples(self.mapping, values, directions)
+        mapped, coords, cos_in = mapped_samples(self.mapping, values, directions)
         samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
         encoder = self.network.encoder
-        if len(samples) <= ENCODE_CHUNK:
-            return encoder(samples[None])[0].numpy().astype(np.float64)
         members = encoder.encoders() if isinstance(encoder, EncoderMean) else [encoder]
-        return np.mean([encode_in_chunks(member, samples) for member in members], axis=0)
+        latents = [member(samples[None])[0].numpy().astype(np.float64) if len(samples) <= ENCODE_CHUNK
+                   else encode_in_chunks(member, samples) for member in members]
+        if self.config.encoder_choice == "mean" or len(latents) == 1:
+            return np.mean(latents, axis=0)
+        # best-fit: each latent's decoding scored on the samples, as refinement scores it
+        truth = [torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in)]
+        kind = self.loss.get("kind", LossConfig.kind)
+        losses = [samples_loss(self.network.decoder(torch.from_numpy(z.astype(np.float32))[None]), *truth, kind)
+                  for z in latents]
+        return latents[int(np.argmin(losses))]
 
     @torch.no_grad()
     def decode(self, z) -> NBRDF:

@@ -27,6 +27,8 @@ SAMPLE_SIZE = 9
 COORDINATES = slice(3, 9)
 #: How the per-sample codes may be pooled (:attr:`EncoderConfig.pooling`).
 POOLINGS = ("mean", "density")
+#: How several encoders of one latent space give one z (:attr:`frenbrdf.models.autoencoder.ModelConfig.encoder_choice`).
+ENCODER_CHOICES = ("mean", "best-fit")
 #: The dimension of the set the coordinates of an isotropic material's pairs fill: H (φ_h = 0) runs along an arc
 #: (θ_h) and D over a sphere (θ_d, φ_d), a 3-dimensional set inside the 6 numbers. A k-NN density estimate there
 #: scales as 1 / r_k³: so do the weights' powers (:func:`density_weights`).
@@ -163,7 +165,8 @@ class SetEncoder(nn.Module):
 
 
 class EncoderMean(nn.Module):
-    """Several set encoders of one latent space; z is the mean of their latents.
+    """Several set encoders of one latent space; z is the mean of their latents (in training, and in
+    :meth:`frenbrdf.Model.encode` unless ``ModelConfig.encoder_choice`` is ``"best-fit"``).
 
     Encoders trained for one decoder agree on the materials they trained near, and give an unseen
     saturated one different hues, depending on their seed (research/results/encoder-refit); their mean

@@ -51,6 +51,19 @@ def reconstruction_loss(predicted: torch.Tensor, true: torch.Tensor, cos_in: tor
     return error.abs().mean() if kind == "l1" else error.square().mean()
 
 
+@torch.no_grad()
+def samples_loss(params: list[torch.Tensor], coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor,
+                 kind: str = "l1", chunk: int = 1 << 16) -> float:
+    """:func:`reconstruction_loss` of the NBRDF ``params`` (one material's) on all its samples, in chunks (a whole
+    MERL table is 1.1 million): ``coords`` ``(1, N, 6)``, ``values`` ``(1, N, 3)``, ``cos_in`` ``(1, N)``."""
+    total, count = 0.0, coords.shape[1]
+    for start in range(0, count, chunk):
+        rows = slice(start, start + chunk)
+        error = reconstruction_loss(nbrdf_forward(params, coords[:, rows]), values[:, rows], cos_in[:, rows], kind)
+        total += float(error) * coords[:, rows].shape[1]
+    return total / count
+
+
 def weight_penalty(params: list[torch.Tensor], kind: str = "per_tensor") -> torch.Tensor:
     """The NBRDF weights' penalty, averaged over materials.
 

@@ -47,7 +47,7 @@ import torch
 from tqdm.auto import tqdm
 
 from .. import _native
-from .losses import LossConfig, reconstruction_loss
+from .losses import LossConfig, reconstruction_loss, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
     NBRDF,
@@ -344,16 +344,9 @@ def _diverged(stage: str, step: int, lr: float, value: float) -> ValueError:
                       f"smaller {setting}")
 
 
-@torch.no_grad()
-def _sample_loss(params: list[torch.Tensor], samples: _Samples, kind: str, chunk: int = 1 << 16) -> float:
-    """The reconstruction loss on all samples (in chunks: a whole MERL table is 1.1 million)."""
-    total = 0.0
-    for start in range(0, len(samples), chunk):
-        rows = slice(start, start + chunk)
-        part = _Samples(samples.coords[:, rows], samples.values[:, rows], samples.cos_in[:, rows])
-        error = reconstruction_loss(nbrdf_forward(params, part.coords), part.values, part.cos_in, kind)
-        total += float(error) * part.coords.shape[1]
-    return total / len(samples)
+def _sample_loss(params: list[torch.Tensor], samples: _Samples, kind: str) -> float:
+    """The reconstruction loss on all samples."""
+    return samples_loss(params, samples.coords, samples.values, samples.cos_in, kind)
 
 
 @contextmanager
