@@ -170,7 +170,8 @@ def encoders_text(card: dict) -> str:
     with_base = encoders.get("base_encoder", True)  # cards before version 5 always kept the base's encoder
     count = len(encoders["members"]) + with_base
     who = f"the training run's and {members}" if with_base else members
-    config = f" with `{json.dumps(encoders['training_config'])}`" if encoders.get("training_config") else ""
+    sampling = (encoders.get("training_config") or {}).get("sampling")  # what the members' training changed
+    config = f" with the sampling `{json.dumps(sampling)}`" if sampling else ""
     why = encoders.get("why", "[encoder-refit](../research/results/encoder-refit/README.md)")
     how = ("the latent, of one of them, whose decoding fits the given samples best" if encoders.get("choice") == "best-fit"
            else "the mean of their latents")

@@ -147,3 +147,38 @@ def test_an_encoder_mean_without_the_base_encoder_is_the_members_alone(toy_mater
         np.testing.assert_allclose(model.encode(values, (wi, wo)), expected, rtol=1e-5, atol=1e-6)
     with pytest.raises(ValueError, match="no encoder"):
         assemble(str(packed), [], base_encoder=False)
+
+
+def test_a_best_fit_choice_takes_the_latent_whose_decoding_fits_the_samples_best(toy_materials, tmp_path):
+    from frenbrdf.io.sampling import draw_samples
+    from frenbrdf.models import pretrained
+    from frenbrdf.models.reconstruct import reconstruct
+
+    from .conftest import script_module
+
+    base_run = train(tiny("nbrdf", toy_materials, tmp_path / "base", epochs=2))
+    packed = tmp_path / "packed"
+    pretrained.pack_pretrained(base_run.path, packed, half=False)
+    members = [str(train(tiny("nbrdf", toy_materials, tmp_path / f"member{seed}", epochs=1 + seed, seed=seed,
+                              decoder_from=str(packed))).path) for seed in (1, 2)]
+    assemble = script_module("pack_encoder_mean").assemble
+    best_fit = frenbrdf.Model.from_checkpoint(*assemble(str(packed), members, choice="best-fit")[:2])
+    mean = frenbrdf.Model.from_checkpoint(*assemble(str(packed), members)[:2])
+    assert best_fit.config.encoder_choice == "best-fit" and mean.config.encoder_choice == "mean"
+    parts = [frenbrdf.Model.load(base_run.path), *map(frenbrdf.Model.load, members)]
+    truth = frenbrdf.read_merl(sorted(toy_materials.glob("*.binary"))[0])
+    drawn = draw_samples(truth, samples=800, seed=3)
+    values, directions = drawn.values, (drawn.wi, drawn.wo)
+    latents = [m.encode(values, directions) for m in parts]
+    losses = [reconstruct(m, values, directions, refine="none").losses["encode"] for m in parts]
+    assert len({round(loss, 6) for loss in losses}) == 3  # the three encoders disagree: the choice matters
+    np.testing.assert_allclose(best_fit.encode(values, directions), latents[int(np.argmin(losses))], rtol=1e-5,
+                               atol=1e-6)
+    np.testing.assert_allclose(mean.encode(values, directions), np.mean(latents, axis=0), rtol=1e-5, atol=1e-6)
+    refined = best_fit.reconstruct(values, directions, refine="none")  # refinement starts from the chosen latent
+    assert refined.losses["encode"] == pytest.approx(min(losses), rel=1e-4)
+
+
+def test_an_unknown_encoder_choice_is_refused_by_name():
+    with pytest.raises(ValueError, match="encoder_choice must be one of"):
+        ModelConfig(encoder_choice="vote")
