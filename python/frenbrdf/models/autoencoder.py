@@ -211,9 +211,9 @@ class Model:
         if self.config.encoder_choice == "mean" or len(latents) == 1:
             return np.mean(latents, axis=0)
         # best-fit: each latent's decoding scored on the samples, as refinement scores it
-        truth = [torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in)]
+        at, truth, cos = (torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in))
         kind = self.loss.get("kind", LossConfig.kind)
-        losses = [samples_loss(self.network.decoder(torch.from_numpy(z.astype(np.float32))[None]), *truth, kind)
+        losses = [samples_loss(self.network.decoder(torch.from_numpy(z.astype(np.float32))[None]), at, truth, cos, kind)
                   for z in latents]
         return latents[int(np.argmin(losses))]
 
