@@ -172,7 +172,7 @@ def encoders_text(card: dict) -> str:
     who = f"the training run's and {members}" if with_base else members
     sampling = (encoders.get("training_config") or {}).get("sampling")  # what the members' training changed
     config = f" with the sampling `{json.dumps(sampling)}`" if sampling else ""
-    why = encoders.get("why", "[encoder-refit](../research/results/encoder-refit/README.md)")
+    why = encoders.get("why") or "[encoder-refit](../research/results/encoder-refit/README.md)"  # None: not given
     how = ("the latent, of one of them, whose decoding fits the given samples best" if encoders.get("choice") == "best-fit"
            else "the mean of their latents")
     return (f"\n- **Encoders**: {count} encoder{'s' * (count > 1)} of this decoder, z {how}: {who}, each "

@@ -58,9 +58,9 @@ def samples_loss(params: list[torch.Tensor], coords: torch.Tensor, values: torch
     MERL table is 1.1 million): ``coords`` ``(1, N, 6)``, ``values`` ``(1, N, 3)``, ``cos_in`` ``(1, N)``."""
     total, count = 0.0, coords.shape[1]
     for start in range(0, count, chunk):
-        rows = slice(start, start + chunk)
+        rows = slice(start, min(start + chunk, count))
         error = reconstruction_loss(nbrdf_forward(params, coords[:, rows]), values[:, rows], cos_in[:, rows], kind)
-        total += float(error) * coords[:, rows].shape[1]
+        total += float(error) * (rows.stop - start)
     return total / count
 
 
