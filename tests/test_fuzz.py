@@ -147,7 +147,8 @@ JSON = st.recursive(st.none() | st.booleans() | st.integers(-10**12, 10**12) | s
                     | st.dictionaries(st.text(max_size=8), inner, max_size=4), max_leaves=8)
 KEYS = ["method", "epochs", "lr", "seed", "split", "holdout", "context_samples", "query_samples", "batch_materials",
         "grad_clip", "patience", "render_every", "select", "device", "progress", "context_jitter"]
-NESTED = {"model": {"nbrdf": ["hidden"], "encoder": ["hidden", "latent", "dropout", "pooling", "density_k"],
+NESTED = {"model": {"nbrdf": ["hidden"],
+                    "encoder": ["hidden", "latent", "dropout", "pooling", "density_k", "attention_heads"],
                     "decoder": ["hidden", "last_layer_scale"], "mapping": ["epsilon", "reference", "form"]},
           "loss": {"frequency": ["lmax", "grid", "slices", "k", "sigma", "extension"]},
           "augment": {"": ["mix", "gain", "gain_range", "procedural"]},

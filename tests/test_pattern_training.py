@@ -308,7 +308,7 @@ def test_mean_pooling_is_the_paper_encoder_and_density_pooling_has_its_weights()
     samples.requires_grad_(True)
     density(samples).sum().backward()  # the weights carry no gradient, the codes do
     assert samples.grad is not None and torch.isfinite(samples.grad).all()
-    for bad, match in (({"pooling": "attention"}, "pooling must be one of"), ({"density_k": 0}, "density_k")):
+    for bad, match in (({"pooling": "max"}, "pooling must be one of"), ({"density_k": 0}, "density_k")):
         with pytest.raises(ValueError, match=match):
             EncoderConfig(**bad)
 

@@ -252,7 +252,7 @@ class Model:
 def encode_in_chunks(encoder: SetEncoder, samples: torch.Tensor) -> np.ndarray:
     """The latent of a large sample set ``(N, 9)``: a set encoder is a per-sample MLP, a mean and ρ, so
     the set (all 1.1 million bins of a table) goes through in chunks, which bounds memory and runs several
-    times faster. With density pooling the weights are those of the whole set (its k-NN search runs once)."""
+    times faster. With density or attention pooling the weights are those of the whole set (computed once)."""
     weights = encoder.weights(samples[None])
     if weights is None:
         total = sum((len(chunk) * encoder.pooled_features(chunk[None])[0].double()

@@ -10,6 +10,9 @@ highlight densely moves z although the material is the same. ``EncoderConfig.poo
 weights each sample's code by the inverse of a k-nearest-neighbour estimate of the samples' density in
 their coordinates (H, D) (:func:`density_weights`), so that the pooled code approximates a mean over
 the domain the samples cover rather than over the samples (docs/method.md, "Pooling").
+``EncoderConfig.pooling = "attention"`` learns the weights instead: a small MLP scores each sample once per head,
+a softmax over the set turns the scores into weights, and each head pools its share of the code's features with
+them (its score layer starts at zero, so an untrained attention encoder is the plain mean).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ SAMPLE_SIZE = 9
 #: Where a sample's coordinates (H, D) lie in it: after the 3 mapped values.
 COORDINATES = slice(3, 9)
 #: How the per-sample codes may be pooled (:attr:`EncoderConfig.pooling`).
-POOLINGS = ("mean", "density")
+POOLINGS = ("mean", "density", "attention")
 #: How several encoders of one latent space give one z (:attr:`frenbrdf.models.autoencoder.ModelConfig.encoder_choice`).
 ENCODER_CHOICES = ("mean", "best-fit")
 #: The dimension of the set the coordinates of an isotropic material's pairs fill: H (φ_h = 0) runs along an arc
@@ -38,10 +41,15 @@ DENSITY_DIMENSION = 3
 RADIUS_FLOOR = 0.05
 #: Points of the exhaustive k-NN search a chunk compares at once (on the GPU; a CPU set uses scipy's k-d tree).
 _KNN_CHUNK = 1 << 24
+#: Samples whose attention scores are computed at once (bounds the memory of encoding a whole table).
+_SCORE_CHUNK = 1 << 16
 #: The most neighbours :attr:`EncoderConfig.density_k` may name.
 MAX_DENSITY_K = 256
-#: The fields of :class:`EncoderConfig` that say how the codes are pooled: they hold no weights.
-POOLING_FIELDS = ("pooling", "density_k")
+#: The fields of :class:`EncoderConfig` that say how the codes are pooled: only attention has weights of its own
+#: (:func:`pooling_weights`).
+POOLING_FIELDS = ("pooling", "density_k", "attention_heads")
+#: Hidden width of attention pooling's score network (one hidden layer).
+SCORE_HIDDEN = 64
 #: The widest layer (hidden or latent) and the most hidden layers of the encoder and the decoder's heads.
 MAX_WIDTH, MAX_LAYERS = 4096, 16
 
@@ -72,10 +80,14 @@ class EncoderConfig:
     """How the per-sample codes are pooled: ``"mean"``, the plain mean (the paper's; models saved before this
     option load with it), or ``"density"``, each code weighted by the inverse of a k-NN estimate of the samples'
     density in (H, D) (:func:`density_weights`), so that the pooled code depends less on how the material was
-    sampled. The weights are the same for every ρ; they carry no gradient and no parameters."""
+    sampled. The weights are the same for every ρ; they carry no gradient and no parameters. Or ``"attention"``:
+    weights learned from what each sample is and where it lies (a score network, :attr:`attention_heads`)."""
     density_k: int = 8
     """The neighbour whose distance estimates a sample's density with ``pooling="density"`` (the k of k-NN; a set of
     at most k samples uses its size − 1)."""
+    attention_heads: int = 4
+    """With ``pooling="attention"``: how many sets of weights; the pooled features (the latent, or the last hidden
+    layer when there is a ρ) are cut into this many equal shares, each pooled with its head's weights."""
 
     def __post_init__(self):
         self.hidden = tuple(int(h) for h in self.hidden)
@@ -92,6 +104,23 @@ class EncoderConfig:
             raise ValueError(f"encoder pooling must be one of {POOLINGS}, got {self.pooling!r}")
         if not 1 <= self.density_k <= MAX_DENSITY_K:
             raise ValueError(f"encoder density_k must lie in 1 … {MAX_DENSITY_K}, got {self.density_k}")
+        if self.pooling == "attention" and not (isinstance(self.attention_heads, int) and self.attention_heads >= 1
+                                                and self.pooled_width % self.attention_heads == 0):
+            raise ValueError(f"encoder attention_heads must be a whole number ≥ 1 that divides the pooled width "
+                             f"{self.pooled_width}, got {self.attention_heads!r}")
+
+    @property
+    def pooled_width(self) -> int:
+        """How many features are pooled: the latent, or the last hidden layer when there is a ρ."""
+        return self.hidden[-1] if self.pooled else self.latent
+
+
+def pooling_weights(config: dict) -> dict:
+    """What of an encoder config's (a dict's) pooling its weights depend on: attention's score network and its heads,
+    nothing for the mean and density pooling."""
+    if config.get("pooling") == "attention":
+        return {"attention_heads": config.get("attention_heads")}
+    return {}
 
 
 def knn_radius(points: torch.Tensor, k: int, *, exhaustive: bool | None = None) -> torch.Tensor:
@@ -143,22 +172,34 @@ class SetEncoder(nn.Module):
         else:  # the paper's encoder: the same state-dict keys as ever
             self.per_sample = mlp([SAMPLE_SIZE, *config.hidden, config.latent], config.dropout)
             self.after_pool = nn.Identity()
-        self.pooling, self.density_k = config.pooling, config.density_k
+        self.pooling, self.density_k, self.heads = config.pooling, config.density_k, config.attention_heads
+        if self.pooling == "attention":
+            self.scores = mlp([SAMPLE_SIZE, SCORE_HIDDEN, self.heads])
+            nn.init.zeros_(self.scores[-1].weight)  # even weights at the start: the plain mean
+            nn.init.zeros_(self.scores[-1].bias)
 
     def weights(self, samples: torch.Tensor) -> torch.Tensor | None:
-        """The pooling weights of the samples ``(B, N, 9)`` → ``(B, N)`` (:func:`density_weights`), or None for
-        the plain mean."""
-        return density_weights(samples[..., COORDINATES], self.density_k) if self.pooling == "density" else None
+        """The pooling weights of the samples ``(B, N, 9)``, summing to 1 over the set: ``(B, N)`` with density
+        pooling (:func:`density_weights`), ``(B, N, heads)`` with attention; None for the plain mean."""
+        if self.pooling == "density":
+            return density_weights(samples[..., COORDINATES], self.density_k)
+        if self.pooling == "attention":  # scored in chunks: a whole table is 1.1 million samples
+            scores = torch.cat([self.scores(chunk) for chunk in samples.split(_SCORE_CHUNK, dim=-2)], dim=-2)
+            return scores.softmax(dim=-2)
+        return None
 
     def pooled_features(self, samples: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
-        """The pooled per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads. The plain mean, or with
-        ``pooling="density"`` the weighted sum with :meth:`weights` (computed here unless given: ``(B, N)``)."""
+        """The pooled per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads. The plain mean, or the sum
+        weighted with :meth:`weights` (computed here unless given; attention's weight each head's share of F)."""
         features = self.per_sample(samples)
         if self.pooling == "mean":
             return features.mean(dim=-2)
         if weights is None:
-            weights = density_weights(samples[..., COORDINATES], self.density_k)
-        return (weights.unsqueeze(-1) * features).sum(dim=-2)
+            weights = self.weights(samples)
+        if self.pooling == "density":
+            return (weights.unsqueeze(-1) * features).sum(dim=-2)
+        shares = features.unflatten(-1, (self.heads, -1))  # (B, N, heads, F / heads)
+        return (weights.unsqueeze(-1) * shares).sum(dim=-3).flatten(-2)
 
     def forward(self, samples: torch.Tensor) -> torch.Tensor:
         return self.after_pool(self.pooled_features(samples))

@@ -29,7 +29,7 @@ from ..io import checkpoints
 from ..io.atomic import save_json
 from ..io.outputs import OutputFolder
 from ..models.autoencoder import AutoEncoder, Model, ModelConfig, load_model
-from ..models.encoder import POOLING_FIELDS
+from ..models.encoder import POOLING_FIELDS, pooling_weights
 from ..models.losses import FrequencyLoss
 from ..presets import SELECTION_RULES
 from ..render.scoring import ScoringSet
@@ -284,11 +284,13 @@ def check_source(cfg: TrainConfig, source: Model):
     """That the model ``cfg.decoder_from`` or ``cfg.init_from`` names fits this run: for ``decoder_from`` the same
     decoder, NBRDF, latent size and mapping (the encoder may differ), for ``init_from`` the same model config."""
     ours, theirs = to_dict(cfg.model), to_dict(source.config)
-    if cfg.init_from:  # how the codes are pooled has no weights: a model may be fine-tuned with another pooling
+    if cfg.init_from:  # the mean and density pooling have no weights: a model may be fine-tuned with another
         for config in (ours, theirs):
             for encoder in (config["encoder"], *config["extra_encoders"]):
+                kept = pooling_weights(encoder)
                 for name in POOLING_FIELDS:
-                    encoder.pop(name)
+                    encoder.pop(name, None)
+                encoder.update(kept)
         differ = [name for name in ours if ours[name] != theirs[name]]
     else:
         differ = [name for name in ("decoder", "nbrdf", "mapping") if ours[name] != theirs[name]]
