@@ -546,6 +546,19 @@ def test_model_comparison_takes_a_baseline_of_several_runs(run_dir, toy_material
     assert summary["other"]["psnr_change"]["mean"] == pytest.approx(0, abs=1e-9)
 
 
+def test_model_comparison_keeps_a_table_and_a_measurement_of_one_name_apart():
+    """An RGL fit's table and its .bsdf share a name; each group summarises its own rows (they were once pooled)."""
+    study = script_module("compare_models")
+    rows = [{"model": model, "material": "paper_blue_rgb", "group": group, "budget": "none", "psnr": psnr,
+             "delta_e": 1.0} for model, group, psnr in (("a", "tables", 30.0), ("b", "tables", 32.0),
+                                                         ("a", "measured", 20.0), ("b", "measured", 10.0))]
+    groups = {"tables": ["paper_blue_rgb"], "measured": ["paper_blue_rgb"], "both": ["paper_blue_rgb"]}
+    summary = study.summarise(rows, "a", groups, ("none",))
+    assert summary["tables"]["none"]["b"]["psnr"] == 32.0 and summary["measured"]["none"]["b"]["psnr"] == 10.0
+    assert summary["tables"]["none"]["b"]["psnr_change"]["mean"] == pytest.approx(2.0)
+    assert summary["both"]["none"]["b"]["psnr"] == 21.0  # a group of names takes the rows of both
+
+
 def test_model_comparison_reads_materials_through_each_pattern_and_count(run_dir, toy_materials, tmp_path):
     table = sorted(toy_materials.glob("*.binary"))[0]
     study = script_module("compare_models")

@@ -106,7 +106,10 @@ def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], bud
     out = {}
     for group, materials in groups.items():
         for budget in budgets:
-            chosen = [r for r in rows if r["budget"] == budget and r["material"] in materials]
+            # A table and a measurement may share a name (an RGL fit and its .bsdf): "tables" and "measured" take
+            # their own rows only.
+            chosen = [r for r in rows if r["budget"] == budget and r["material"] in materials
+                      and r["group"] in ((group,) if group in ("measured", "tables") else ("measured", "tables"))]
             for name in dict.fromkeys(variant(r["model"]) for r in chosen):
                 mine = [r for r in chosen if variant(r["model"]) == name]
                 runs = sorted({r["model"] for r in mine})

@@ -1,0 +1,55 @@
+"""The attention-pooling study's rule (README.md), from the rows of ``compare.sh``'s two comparisons.
+
+    python research/results/attention-pooling/decide.py OUT CANDIDATE BASELINE
+
+On the ``tables`` group, encoder only, each variant's PSNR per material the mean over its runs: (a) the per-material
+difference CANDIDATE − BASELINE averaged over the five device patterns at 1,500 samples (OUT/patterns), its 95 %
+interval above 0; (b) the difference from 4,000 random bins (OUT/random), its interval not wholly below 0. Prints
+both and whether the candidate passes; writes OUT/decision-CANDIDATE.json.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io.atomic import save_json
+
+DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+
+
+def per_material(rows: list[dict], variant: str, patterns) -> dict[str, float]:
+    """Material → the variant's encoder PSNR averaged over ``patterns`` and its runs (the ``tables`` group)."""
+    mine = [r for r in rows if r["model"].split("/")[0] == variant and r["group"] == "tables"
+            and r["budget"] == "none" and r["pattern"] in patterns]
+    return {m: float(np.mean([r["psnr"] for r in mine if r["material"] == m])) for m in {r["material"] for r in mine}}
+
+
+def difference(rows: list[dict], candidate: str, baseline: str, patterns) -> dict:
+    new, old = per_material(rows, candidate, patterns), per_material(rows, baseline, patterns)
+    if not new or not old:
+        raise SystemExit(f"no rows of {candidate!r} or {baseline!r} on the tables")
+    return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
+
+
+def main(argv=None) -> int:
+    out, candidate, baseline = (argv or sys.argv[1:])[:3]
+    rows = {name: json.loads((Path(out) / name / "compare.json").read_text())["rows"] for name in ("patterns", "random")}
+    devices = difference(rows["patterns"], candidate, baseline, DEVICE_PATTERNS)
+    random_bins = difference(rows["random"], candidate, baseline, ("merl-bins",))
+    decision = {"candidate": candidate, "baseline": baseline, "devices_1500": devices, "random_bins_4000": random_bins,
+                "passes": bool(devices["low"] > 0 and random_bins["high"] > 0)}
+    save_json(Path(out) / f"decision-{candidate}.json", decision)
+    for name in ("devices_1500", "random_bins_4000"):
+        value = decision[name]
+        print(f"{name}: {value['mean']:+.2f} [{value['low']:+.2f}, {value['high']:+.2f}]")
+    print(f"{candidate} against {baseline}: {'passes' if decision['passes'] else 'does not pass'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
