@@ -68,6 +68,12 @@ def assemble(base: str | None, members: list[str], *, base_encoder: bool = True,
     return {"method": packed["method"], "config": json.dumps(config), "model": weights}, mapping, card
 
 
+def poolings(checkpoint: dict) -> list[str]:
+    """How each packed encoder pools its codes, in order (``EncoderConfig.pooling``)."""
+    model = json.loads(checkpoint["config"])["model"]
+    return [encoder.get("pooling", "mean") for encoder in (model["encoder"], *model.get("extra_encoders", []))]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
@@ -93,7 +99,7 @@ def main(argv=None) -> int:
     refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
     card.update({"version": args.version,  # "command" stays the one that trained and packed the base
                  "encoders": {"base": args.base, "members": args.members, "base_encoder": not args.without_base_encoder,
-                              "choice": args.choice,
+                              "choice": args.choice, "poolings": poolings(checkpoint),
                               "training_config": json.loads(Path(args.members_config).read_text())
                               if args.members_config else None, "why": args.why,
                               "command": run_metadata()["command"]},

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -175,9 +176,12 @@ def encoders_text(card: dict) -> str:
     why = encoders.get("why") or "[encoder-refit](../research/results/encoder-refit/README.md)"  # None: not given
     how = ("the latent, of one of them, whose decoding fits the given samples best" if encoders.get("choice") == "best-fit"
            else "the mean of their latents")
+    pooled = Counter(encoders.get("poolings", []))  # cards before version 6 do not say: every encoder took the mean
+    pooling = (f"; pooled by {', '.join(f'{kind} ({n})' for kind, n in pooled.items())}" if set(pooled) - {"mean"}
+               else "")
     return (f"\n- **Encoders**: {count} encoder{'s' * (count > 1)} of this decoder, z {how}: {who}, each "
-            f"trained for the frozen decoder (`frenbrdf train --decoder-from`){config}; why and the rule that chose "
-            f"it: {why}. Packed by `{encoders['command']}`.")
+            f"trained for the frozen decoder (`frenbrdf train --decoder-from`){config}{pooling}; why and the rule "
+            f"that chose it: {why}. Packed by `{encoders['command']}`.")
 
 
 def by_source_text(groups: dict) -> str:

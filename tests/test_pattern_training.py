@@ -313,6 +313,52 @@ def test_mean_pooling_is_the_paper_encoder_and_density_pooling_has_its_weights()
             EncoderConfig(**bad)
 
 
+def test_attention_pooling_starts_as_the_mean_and_weighs_each_head_over_the_set():
+    torch.manual_seed(0)
+    mean = SetEncoder(EncoderConfig((16, 16), 8))
+    attention = SetEncoder(EncoderConfig((16, 16), 8, pooling="attention", attention_heads=4))
+    attention.load_state_dict(mean.state_dict(), strict=False)  # the same φ; the score network its own
+    samples = torch.randn(2, 300, 9)
+    torch.testing.assert_close(attention(samples), mean(samples))  # an untrained score layer: the plain mean
+    torch.nn.init.normal_(attention.scores[-1].weight)
+    weights = attention.weights(samples)
+    assert weights.shape == (2, 300, 4)
+    torch.testing.assert_close(weights.sum(dim=1), torch.ones(2, 4))
+    codes = mean.per_sample(samples)  # head h pools features 2h, 2h + 1 with its own weights
+    expected = torch.cat([(weights[..., h, None] * codes[..., 2 * h:2 * h + 2]).sum(dim=1) for h in range(4)], dim=-1)
+    torch.testing.assert_close(attention(samples), expected)
+    assert not torch.allclose(attention(samples), mean(samples))
+    samples.requires_grad_(True)
+    attention(samples).sum().backward()  # the weights carry gradient to the scores
+    assert attention.scores[-1].weight.grad is not None and attention.scores[-1].weight.grad.abs().sum() > 0
+    with_rho = SetEncoder(EncoderConfig((16, 12), 5, pooled=(8,), pooling="attention", attention_heads=3))
+    assert with_rho(samples).shape == (2, 5)  # ρ's input (12 features) is cut in 3
+    with pytest.raises(ValueError, match="attention_heads must be"):
+        EncoderConfig((16, 16), 8, pooling="attention", attention_heads=3)  # 3 does not divide 8
+    EncoderConfig((16, 16), 10, attention_heads=3)  # checked only where attention pools
+
+
+def test_an_attention_model_encodes_a_large_set_in_chunks_and_fine_tunes_only_as_attention(toy_materials, tmp_path,
+                                                                                         monkeypatch):
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1)
+    cfg.model.encoder.pooling = "attention"
+    run = train(cfg)
+    model = Model.load(run.path)
+    torch.nn.init.normal_(model.network.encoder.scores[-1].weight)  # weights that are not even
+    rng = np.random.default_rng(0)
+    wi, wo = sample_pattern("uniform", 3000, rng)
+    values = rng.uniform(0.01, 1.0, (3000, 3))
+    whole = model.encode(values, (wi, wo))
+    monkeypatch.setattr("frenbrdf.models.autoencoder.ENCODE_CHUNK", 700)  # one softmax over all the chunks
+    np.testing.assert_allclose(model.encode(values, (wi, wo)), whole, rtol=1e-5, atol=1e-6)
+    tuned = tiny("nbrdf", toy_materials, tmp_path / "tuned", epochs=1, init_from=str(run.path))
+    tuned.model.encoder.pooling = "attention"
+    assert train(tuned).history[-1]["epoch"] == 0
+    mean = tiny("nbrdf", toy_materials, tmp_path / "mean", epochs=1, init_from=str(run.path))
+    with pytest.raises(ValueError, match="init_from"):  # the score network has nowhere to go
+        train(mean)
+
+
 def test_a_model_saved_before_pooling_loads_with_the_mean_and_the_same_latents(toy_materials, tmp_path):
     run = train(tiny("nbrdf", toy_materials, tmp_path / "run", epochs=1))
     model = Model.load(run.path)
