@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import torch
@@ -175,18 +176,25 @@ class SetEncoder(nn.Module):
         self.pooling, self.density_k, self.heads = config.pooling, config.density_k, config.attention_heads
         if self.pooling == "attention":
             self.scores = mlp([SAMPLE_SIZE, SCORE_HIDDEN, self.heads])
-            nn.init.zeros_(self.scores[-1].weight)  # even weights at the start: the plain mean
-            nn.init.zeros_(self.scores[-1].bias)
+            last = cast(nn.Linear, self.scores[-1])
+            nn.init.zeros_(last.weight)  # even weights at the start: the plain mean
+            nn.init.zeros_(last.bias)
 
     def weights(self, samples: torch.Tensor) -> torch.Tensor | None:
         """The pooling weights of the samples ``(B, N, 9)``, summing to 1 over the set: ``(B, N)`` with density
-        pooling (:func:`density_weights`), ``(B, N, heads)`` with attention; None for the plain mean."""
+        pooling (:func:`density_weights`), ``(B, N, heads)`` with attention (:meth:`attention_weights`); None for the
+        plain mean."""
         if self.pooling == "density":
             return density_weights(samples[..., COORDINATES], self.density_k)
-        if self.pooling == "attention":  # scored in chunks: a whole table is 1.1 million samples
-            scores = torch.cat([self.scores(chunk) for chunk in samples.split(_SCORE_CHUNK, dim=-2)], dim=-2)
-            return scores.softmax(dim=-2)
+        if self.pooling == "attention":
+            return self.attention_weights(samples)
         return None
+
+    def attention_weights(self, samples: torch.Tensor) -> torch.Tensor:
+        """Each head's softmax over the set of its scores, ``(B, N, 9)`` → ``(B, N, heads)``; scored in chunks (a
+        whole table is 1.1 million samples)."""
+        scores = torch.cat([self.scores(chunk) for chunk in samples.split(_SCORE_CHUNK, dim=-2)], dim=-2)
+        return scores.softmax(dim=-2)
 
     def pooled_features(self, samples: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
         """The pooled per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads. The plain mean, or the sum
@@ -194,10 +202,12 @@ class SetEncoder(nn.Module):
         features = self.per_sample(samples)
         if self.pooling == "mean":
             return features.mean(dim=-2)
-        if weights is None:
-            weights = self.weights(samples)
         if self.pooling == "density":
+            if weights is None:
+                weights = density_weights(samples[..., COORDINATES], self.density_k)
             return (weights.unsqueeze(-1) * features).sum(dim=-2)
+        if weights is None:
+            weights = self.attention_weights(samples)
         shares = features.unflatten(-1, (self.heads, -1))  # (B, N, heads, F / heads)
         return (weights.unsqueeze(-1) * shares).sum(dim=-3).flatten(-2)
 
