@@ -32,7 +32,9 @@ def test_the_paper_encoder_keeps_its_state_dict_keys_and_parameter_count():
     keys = [k for k in AutoEncoder(config).state_dict() if k.startswith("encoder.")]
     assert keys == [f"encoder.per_sample.{i}.{p}" for i in (0, 2, 4, 6) for p in ("weight", "bias")]
     pooled = ModelConfig(encoder=EncoderConfig(pooled=(128,)))
-    for cfg in (config, pooled):
+    attention = ModelConfig(encoder=EncoderConfig(pooling="attention"),
+                            extra_encoders=(EncoderConfig(pooled=(64,), pooling="attention", attention_heads=8),))
+    for cfg in (config, pooled, attention):
         assert cfg.n_parameters == sum(p.numel() for p in AutoEncoder(cfg).parameters())
 
 
@@ -182,3 +184,31 @@ def test_a_best_fit_choice_takes_the_latent_whose_decoding_fits_the_samples_best
 def test_an_unknown_encoder_choice_is_refused_by_name():
     with pytest.raises(ValueError, match="encoder_choice must be one of"):
         ModelConfig(encoder_choice="vote")
+
+
+def test_an_attention_member_packs_beside_a_mean_base_and_the_card_names_the_poolings(toy_materials, tmp_path):
+    from frenbrdf.models import pretrained
+
+    from .conftest import script_module
+
+    base_run = train(tiny("nbrdf", toy_materials, tmp_path / "base", epochs=1))
+    packed = tmp_path / "packed"
+    pretrained.pack_pretrained(base_run.path, packed, half=False)
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "member", epochs=1, seed=1, decoder_from=str(packed))
+    cfg.model.encoder.pooling = "attention"
+    member = train(cfg)
+    pack = script_module("pack_encoder_mean")
+    checkpoint, mapping, _ = pack.assemble(str(packed), [str(member.path)], choice="best-fit")
+    model = frenbrdf.Model.from_checkpoint(checkpoint, mapping)
+    assert [e.pooling for e in model.network.encoder.encoders()] == ["mean", "attention"]
+    assert pack.poolings(checkpoint) == ["mean", "attention"]
+    rng = np.random.default_rng(4)
+    wi, wo = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in np.abs(rng.normal(size=(2, 300, 3))))
+    values = rng.uniform(0.01, 1.0, (300, 3))
+    choices = [frenbrdf.Model.load(run).encode(values, (wi, wo)) for run in (base_run.path, member.path)]
+    assert any(np.allclose(model.encode(values, (wi, wo)), z, rtol=1e-5, atol=1e-6) for z in choices)
+    text = script_module("train_shipped_model").encoders_text
+    card = {"encoders": {"members": ["m"], "choice": "best-fit", "command": "pack", "poolings": ["mean", "attention"]}}
+    assert "pooled by mean (1), attention (1)" in text(card)
+    del card["encoders"]["poolings"]  # a card from before version 6: every encoder took the mean
+    assert "pooled by" not in text(card)

@@ -313,7 +313,8 @@ def test_mean_pooling_is_the_paper_encoder_and_density_pooling_has_its_weights()
             EncoderConfig(**bad)
 
 
-def test_attention_pooling_starts_as_the_mean_and_weighs_each_head_over_the_set():
+def test_attention_pooling_starts_as_the_mean_and_weighs_each_head_over_the_set(monkeypatch):
+    monkeypatch.setattr(encoders, "_SCORE_CHUNK", 64)  # the scores of a set in several chunks, one softmax
     torch.manual_seed(0)
     mean = SetEncoder(EncoderConfig((16, 16), 8))
     attention = SetEncoder(EncoderConfig((16, 16), 8, pooling="attention", attention_heads=4))
@@ -335,6 +336,8 @@ def test_attention_pooling_starts_as_the_mean_and_weighs_each_head_over_the_set(
     assert with_rho(samples).shape == (2, 5)  # ρ's input (12 features) is cut in 3
     with pytest.raises(ValueError, match="attention_heads must be"):
         EncoderConfig((16, 16), 8, pooling="attention", attention_heads=3)  # 3 does not divide 8
+    with pytest.raises(ValueError, match="attention_heads must be"):
+        EncoderConfig((16, 16), 8, pooling="attention", attention_heads=True)
     EncoderConfig((16, 16), 10, attention_heads=3)  # checked only where attention pools
 
 

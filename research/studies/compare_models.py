@@ -232,7 +232,8 @@ def main(argv=None) -> int:
     parser.add_argument("--trained-on", nargs="*", default=[], metavar="LABEL=MATERIAL",
                         help="a material that model trained on: not scored for it")
     parser.add_argument("--group", nargs="*", default=[], metavar="NAME=MATERIAL,...",
-                        help="also summarise these of the scored materials apart (e.g. the real ones of a test split)")
+                        help="also summarise these of the scored materials apart (e.g. the real ones of a test split); "
+                             "a name both a table and a measurement have takes the rows of both")
     parser.add_argument("--out", required=True, help="folder for compare.json, compare.md, compare.png")
     args = parser.parse_args(argv)
     if len(args.models) != len(args.labels):
@@ -243,6 +244,8 @@ def main(argv=None) -> int:
     extra_groups = {name: members.split(",") for name, _, members in (g.partition("=") for g in args.group)}
     if any(not name or not all(members) for name, members in extra_groups.items()):
         parser.error("--group takes NAME=MATERIAL,MATERIAL,... with no empty name")
+    if reserved := set(extra_groups) & {"measured", "tables"}:
+        parser.error(f"--group: {sorted(reserved)} name the built-in groups; give the group another name")
     models = {label: load_model(spec) for label, spec in zip(args.labels, args.models, strict=True)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     if args.held_out:

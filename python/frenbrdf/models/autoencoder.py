@@ -64,13 +64,14 @@ class ModelConfig:
         def mlp(sizes) -> int:
             return sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:], strict=True))
 
-        from .encoder import SAMPLE_SIZE
+        from .encoder import SAMPLE_SIZE, SCORE_HIDDEN
 
         latent = self.encoder.latent
 
         def encoder_size(encoder: EncoderConfig) -> int:
-            return (mlp([SAMPLE_SIZE, *encoder.hidden]) + mlp([encoder.hidden[-1], *encoder.pooled, latent])
-                    if encoder.pooled else mlp([SAMPLE_SIZE, *encoder.hidden, latent]))
+            scores = mlp([SAMPLE_SIZE, SCORE_HIDDEN, encoder.attention_heads]) if encoder.pooling == "attention" else 0
+            return scores + (mlp([SAMPLE_SIZE, *encoder.hidden]) + mlp([encoder.hidden[-1], *encoder.pooled, latent])
+                             if encoder.pooled else mlp([SAMPLE_SIZE, *encoder.hidden, latent]))
 
         return sum(map(encoder_size, self.encoders)) + sum(
             mlp([latent, *self.decoder.hidden, math.prod(shape)]) for shape in self.nbrdf.shapes())

@@ -47,7 +47,7 @@ _SCORE_CHUNK = 1 << 16
 #: The most neighbours :attr:`EncoderConfig.density_k` may name.
 MAX_DENSITY_K = 256
 #: The fields of :class:`EncoderConfig` that say how the codes are pooled: only attention has weights of its own
-#: (:func:`pooling_weights`).
+#: (:func:`pooling_fields_with_weights`).
 POOLING_FIELDS = ("pooling", "density_k", "attention_heads")
 #: Hidden width of attention pooling's score network (one hidden layer).
 SCORE_HIDDEN = 64
@@ -105,8 +105,9 @@ class EncoderConfig:
             raise ValueError(f"encoder pooling must be one of {POOLINGS}, got {self.pooling!r}")
         if not 1 <= self.density_k <= MAX_DENSITY_K:
             raise ValueError(f"encoder density_k must lie in 1 … {MAX_DENSITY_K}, got {self.density_k}")
-        if self.pooling == "attention" and not (isinstance(self.attention_heads, int) and self.attention_heads >= 1
-                                                and self.pooled_width % self.attention_heads == 0):
+        heads = self.attention_heads
+        if self.pooling == "attention" and not (isinstance(heads, int) and not isinstance(heads, bool) and heads >= 1
+                                                and self.pooled_width % heads == 0):
             raise ValueError(f"encoder attention_heads must be a whole number ≥ 1 that divides the pooled width "
                              f"{self.pooled_width}, got {self.attention_heads!r}")
 
@@ -116,9 +117,9 @@ class EncoderConfig:
         return self.hidden[-1] if self.pooled else self.latent
 
 
-def pooling_weights(config: dict) -> dict:
-    """What of an encoder config's (a dict's) pooling its weights depend on: attention's score network and its heads,
-    nothing for the mean and density pooling."""
+def pooling_fields_with_weights(config: dict) -> dict:
+    """The pooling fields of an encoder config (a dict) that its weights depend on: attention's, whose score network
+    has ``attention_heads`` outputs; none for the mean and density pooling, which have no weights."""
     if config.get("pooling") == "attention":
         return {"attention_heads": config.get("attention_heads")}
     return {}
@@ -198,16 +199,14 @@ class SetEncoder(nn.Module):
 
     def pooled_features(self, samples: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
         """The pooled per-sample features, ``(B, N, 9)`` → ``(B, F)``: what ρ reads. The plain mean, or the sum
-        weighted with :meth:`weights` (computed here unless given; attention's weight each head's share of F)."""
+        weighted with :meth:`weights` (computed here unless given): attention weighs each head's share of F with
+        that head's weights."""
         features = self.per_sample(samples)
-        if self.pooling == "mean":
-            return features.mean(dim=-2)
-        if self.pooling == "density":
-            if weights is None:
-                weights = density_weights(samples[..., COORDINATES], self.density_k)
-            return (weights.unsqueeze(-1) * features).sum(dim=-2)
+        weights = self.weights(samples) if weights is None else weights
         if weights is None:
-            weights = self.attention_weights(samples)
+            return features.mean(dim=-2)
+        if weights.ndim == features.ndim - 1:  # one weight per sample (density)
+            return (weights.unsqueeze(-1) * features).sum(dim=-2)
         shares = features.unflatten(-1, (self.heads, -1))  # (B, N, heads, F / heads)
         return (weights.unsqueeze(-1) * shares).sum(dim=-3).flatten(-2)
 

@@ -14,7 +14,7 @@ from ..io.jsonfile import read_json
 from ..io.merl import N_BINS
 from ..io.patterns import PATTERNS
 from ..models.autoencoder import ModelConfig
-from ..models.encoder import SAMPLE_SIZE
+from ..models.encoder import SAMPLE_SIZE, SCORE_HIDDEN, EncoderConfig
 from ..models.losses import LossConfig
 from ..models.nbrdf import N_INPUTS, N_OUTPUTS
 from ..presets import (
@@ -167,6 +167,12 @@ class SamplingConfig:
         return context_samples if self.counts is None else self.counts[1]
 
 
+def _score_floats(encoder: EncoderConfig) -> int:
+    """Floats per sample that attention pooling's score network keeps for the backward pass: its hidden layer and
+    ReLU, its scores and their softmax (none for the other poolings)."""
+    return 2 * SCORE_HIDDEN + 2 * encoder.attention_heads if encoder.pooling == "attention" else 0
+
+
 @dataclass
 class TrainConfig:
     """One training run. Saved as ``config.json`` in the run folder and in every checkpoint."""
@@ -295,7 +301,8 @@ class TrainConfig:
         backward pass's gradients live a layer at a time). An upper bound: the encoder's step at the defaults and
         30,000 context samples holds 0.49 GB, this says 0.78."""
         model = self.model
-        encoder = sum(2 * sum((*e.hidden, *e.pooled)) + e.latent + SAMPLE_SIZE for e in model.encoders)
+        encoder = sum(2 * sum((*e.hidden, *e.pooled)) + e.latent + SAMPLE_SIZE + _score_floats(e)
+                      for e in model.encoders)
         nbrdf = 2 * sum(model.nbrdf.hidden) + N_INPUTS + N_OUTPUTS
         frequency = self.loss.frequency
         nodes = len(frequency.slices) * (frequency.nlat + 1) // 2 * (frequency.nlon // 2) if self.loss.eta > 0 else 0

@@ -29,7 +29,7 @@ from ..io import checkpoints
 from ..io.atomic import save_json
 from ..io.outputs import OutputFolder
 from ..models.autoencoder import AutoEncoder, Model, ModelConfig, load_model
-from ..models.encoder import POOLING_FIELDS, pooling_weights
+from ..models.encoder import POOLING_FIELDS, pooling_fields_with_weights
 from ..models.losses import FrequencyLoss
 from ..presets import SELECTION_RULES
 from ..render.scoring import ScoringSet
@@ -285,13 +285,16 @@ def check_source(cfg: TrainConfig, source: Model):
     decoder, NBRDF, latent size and mapping (the encoder may differ), for ``init_from`` the same model config."""
     ours, theirs = to_dict(cfg.model), to_dict(source.config)
     if cfg.init_from:  # the mean and density pooling have no weights: a model may be fine-tuned with another
+        poolings = []
         for config in (ours, theirs):
+            kept = [pooling_fields_with_weights(encoder) for encoder in (config["encoder"], *config["extra_encoders"])]
             for encoder in (config["encoder"], *config["extra_encoders"]):
-                kept = pooling_weights(encoder)
                 for name in POOLING_FIELDS:
                     encoder.pop(name, None)
-                encoder.update(kept)
+            poolings.append(kept)
         differ = [name for name in ours if ours[name] != theirs[name]]
+        if poolings[0] != poolings[1]:
+            differ.append("the encoders' attention pooling (its score network has weights; mean and density have none)")
     else:
         differ = [name for name in ("decoder", "nbrdf", "mapping") if ours[name] != theirs[name]]
         if ours["encoder"]["latent"] != theirs["encoder"]["latent"]:

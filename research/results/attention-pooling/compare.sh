@@ -27,5 +27,8 @@ COMPARE=(python research/studies/compare_models.py --models "${models[@]}" --lab
 mkdir -p "$OUT"
 OMP_NUM_THREADS=1 "${COMPARE[@]}" --patterns merl-bins uniform in-plane gonioreflectometer image-based specular \
     --samples 1500 --budgets none --out "$OUT/patterns" > "$OUT/patterns.log" 2>&1 &
+patterns=$!
 OMP_NUM_THREADS=1 "${COMPARE[@]}" --samples 4000 --budgets none ${LATENT:+latent} --out "$OUT/random" > "$OUT/random.log" 2>&1 &
-wait
+random=$!
+wait "$patterns" || { echo "the patterns' comparison failed: $OUT/patterns.log" >&2; exit 1; }
+wait "$random" || { echo "the random bins' comparison failed: $OUT/random.log" >&2; exit 1; }
