@@ -179,6 +179,13 @@ def test_a_best_fit_choice_takes_the_latent_whose_decoding_fits_the_samples_best
     np.testing.assert_allclose(mean.encode(values, directions), np.mean(latents, axis=0), rtol=1e-5, atol=1e-6)
     refined = best_fit.reconstruct(values, directions, refine="none")  # refinement starts from the chosen latent
     assert refined.losses["encode"] == pytest.approx(min(losses), rel=1e-4)
+    # What chose z is kept (reconstruction.json's "encoder"): which encoder and every one's loss.
+    chosen = int(np.argmin(losses))
+    assert refined.encoder["chosen"] == chosen and refined.encoder["pooling"] == "mean"
+    np.testing.assert_allclose(refined.encoder["losses"], losses, rtol=1e-4)
+    np.testing.assert_allclose(best_fit.encoding(values, directions).latents, latents, rtol=1e-5, atol=1e-6)
+    assert mean.reconstruct(values, directions, refine="none").summary()["encoder"] == {"encoders": 3,
+                                                                                       "choice": "mean"}
 
 
 def test_an_unknown_encoder_choice_is_refused_by_name():

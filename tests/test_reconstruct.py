@@ -265,6 +265,7 @@ def test_the_command_end_to_end(run_dir, toy_materials, tmp_path, capsys):
     assert {"rmse", "psnr", "ssim", "delta_e", "lfre"} <= set(report["metrics"])
     assert report["input"] == {"path": str(source), "kind": "merl", "samples": 500, "pattern": "merl-bins"}
     assert set(report["timings_s"]) == {"encode", "latent", "weights"} and len(report["z"]) == 8
+    assert report["encoder"] == {"encoders": 1, "choice": "mean"}  # a run's one encoder: z is its latent
     # What was written is what the renderers and the MERL reader take.
     assert frenbrdf.read_merl(out / "material.binary").shape == (3, 90, 90, 180)
     assert cli.main(["render", str(out / "material.pt"), "--out", str(tmp_path / "x.png"), "--resolution", "32"]) == 0

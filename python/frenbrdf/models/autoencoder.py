@@ -101,6 +101,29 @@ class AutoEncoder(nn.Module):
         return z, self.decoder(z)
 
 
+@dataclass
+class Encoding:
+    """What :meth:`Model.encoding` found: z and every encoder's latent, and for a best-fit choice what chose it."""
+
+    z: np.ndarray
+    """The latent ``(latent,)``: the chosen encoder's, or the mean of all of them."""
+    latents: np.ndarray
+    """Each encoder's latent, ``(encoders, latent)``, in the model's order."""
+    poolings: list[str]
+    """Each encoder's pooling (``EncoderConfig.pooling``)."""
+    losses: np.ndarray | None = None
+    """With ``encoder_choice="best-fit"``: each latent's decoding's reconstruction loss on the samples."""
+    chosen: int | None = None
+    """With ``encoder_choice="best-fit"``: the index of the encoder whose latent is z; None: z is their mean."""
+
+    def summary(self) -> dict:
+        """JSON-ready: how z was chosen (the latents themselves are left out)."""
+        if self.chosen is None or self.losses is None:  # set together
+            return {"encoders": len(self.latents), "choice": "mean"}
+        return {"encoders": len(self.latents), "choice": "best-fit", "chosen": self.chosen,
+                "pooling": self.poolings[self.chosen], "losses": [float(loss) for loss in self.losses]}
+
+
 class Model:
     """A trained FreNBRDF (or baseline) model: encode samples, decode latents, reconstruct, edit.
 
@@ -187,7 +210,6 @@ class Model:
         model.card = card
         return model
 
-    @torch.no_grad()
     def encode(self, values, directions) -> np.ndarray:
         """Latent of one material from its samples.
 
@@ -201,22 +223,30 @@ class Model:
         Returns
         -------
         numpy.ndarray
-            ``(latent,)``.
+            ``(latent,)``: :meth:`encoding`'s ``z``.
         """
+        return self.encoding(values, directions).z
+
+    @torch.no_grad()
+    def encoding(self, values, directions) -> Encoding:
+        """:meth:`encode` with what it chose from: every encoder's latent and, with ``encoder_choice="best-fit"``,
+        each decoding's loss on the samples and which encoder gave z (:class:`Encoding`)."""
         mapped, coords, cos_in = mapped_samples(self.mapping, values, directions)
         samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
         encoder = self.network.encoder
         members = encoder.encoders() if isinstance(encoder, EncoderMean) else [encoder]
-        latents = [member(samples[None])[0].numpy().astype(np.float64) if len(samples) <= ENCODE_CHUNK
-                   else encode_in_chunks(member, samples) for member in members]
+        latents = np.stack([member(samples[None])[0].numpy().astype(np.float64) if len(samples) <= ENCODE_CHUNK
+                            else encode_in_chunks(member, samples) for member in members])
+        poolings = [member.pooling for member in members]
         if self.config.encoder_choice == "mean" or len(latents) == 1:
-            return np.mean(latents, axis=0)
+            return Encoding(latents.mean(axis=0), latents, poolings)
         # best-fit: each latent's decoding scored on the samples, as refinement scores it
         at, truth, cos = (torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in))
         kind = self.loss.get("kind", LossConfig.kind)
-        losses = [samples_loss(self.network.decoder(torch.from_numpy(z.astype(np.float32))[None]), at, truth, cos, kind)
-                  for z in latents]
-        return latents[int(np.argmin(losses))]
+        losses = np.array([samples_loss(self.network.decoder(torch.from_numpy(z.astype(np.float32))[None]), at, truth,
+                                        cos, kind) for z in latents])
+        chosen = int(np.argmin(losses))
+        return Encoding(latents[chosen], latents, poolings, losses, chosen)
 
     @torch.no_grad()
     def decode(self, z) -> NBRDF:

@@ -160,11 +160,14 @@ class Reconstruction:
     on all given samples after it: comparable between stages."""
     steps: dict[str, int] = field(default_factory=dict)
     """Steps each refinement stage took (fewer than asked when its ``seconds`` ran out)."""
+    encoder: dict = field(default_factory=dict)
+    """How stage 0 chose z among the model's encoders (:meth:`frenbrdf.models.autoencoder.Encoding.summary`): which
+    one and each one's loss, where the model chooses the best fit."""
 
     def summary(self) -> dict:
-        """JSON-ready: the latent, timings, losses and steps."""
+        """JSON-ready: the latent, timings, losses, steps and the encoder choice."""
         return {"z": [float(v) for v in self.z], "timings_s": self.timings, "losses": self.losses,
-                "steps": self.steps}
+                "steps": self.steps, "encoder": self.encoder}
 
 
 @dataclass
@@ -216,7 +219,8 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     record = _Record()
 
     start = time.perf_counter()
-    z = torch.from_numpy(model.encode(values, directions).astype(np.float32))[None]
+    encoding = model.encoding(values, directions)
+    z = torch.from_numpy(encoding.z.astype(np.float32))[None]
     record.timings["encode"] = time.perf_counter() - start
     with torch.no_grad():
         params = model.network.decoder(z)
@@ -256,7 +260,8 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
 
     nbrdf = NBRDF([p.detach() for p in params], model.mapping, ordered)  # checked: finite weights
     nbrdf(wi, wo)  # raises where its reflectance overflows
-    return Reconstruction(z[0].detach().numpy().astype(np.float64), nbrdf, record.timings, record.losses, record.steps)
+    return Reconstruction(z[0].detach().numpy().astype(np.float64), nbrdf, record.timings, record.losses, record.steps,
+                          encoding.summary())
 
 
 def _loss_config(model) -> LossConfig:
