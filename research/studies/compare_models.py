@@ -97,6 +97,16 @@ def variant(label: str) -> str:
     return label.split("/")[0]
 
 
+def per_material_psnr(rows: list[dict], name: str, patterns, *, group: str = "tables", budget: str = "none",
+                      count: int | None = None) -> dict[str, float]:
+    """Material → variant ``name``'s PSNR averaged over ``patterns`` (at ``count`` samples; None: any) and its runs,
+    for the rules of the studies that read these rows."""
+    mine = [r for r in rows if variant(r["model"]) == name and r["group"] == group and r["budget"] == budget
+            and r["pattern"] in patterns and (count is None or r["count"] == count)]
+    return {m: float(np.mean([r["psnr"] for r in mine if r["material"] == m]))
+            for m in sorted({r["material"] for r in mine})}
+
+
 def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], budgets=BUDGETS) -> dict:
     """Per group of materials, budget and variant: the mean and the spread over its runs, and the per-material
     difference from the baseline with its interval."""

@@ -287,11 +287,11 @@ def check_source(cfg: TrainConfig, source: Model):
     if cfg.init_from:  # the mean and density pooling have no weights: a model may be fine-tuned with another
         poolings = []
         for config in (ours, theirs):
-            kept = [pooling_fields_with_weights(encoder) for encoder in (config["encoder"], *config["extra_encoders"])]
-            for encoder in (config["encoder"], *config["extra_encoders"]):
+            encoders = (config["encoder"], *config["extra_encoders"])
+            poolings.append([pooling_fields_with_weights(encoder) for encoder in encoders])
+            for encoder in encoders:
                 for name in POOLING_FIELDS:
                     encoder.pop(name, None)
-            poolings.append(kept)
         differ = [name for name in ours if ours[name] != theirs[name]]
         if poolings[0] != poolings[1]:
             differ.append("the encoders' attention pooling (its score network has weights; mean and density have none)")

@@ -14,23 +14,18 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+from compare_models import per_material_psnr  # noqa: E402
+
 DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 
 
-def per_material(rows: list[dict], variant: str, patterns) -> dict[str, float]:
-    """Material → the variant's encoder PSNR averaged over ``patterns`` and its runs (the ``tables`` group)."""
-    mine = [r for r in rows if r["model"].split("/")[0] == variant and r["group"] == "tables"
-            and r["budget"] == "none" and r["pattern"] in patterns]
-    return {m: float(np.mean([r["psnr"] for r in mine if r["material"] == m])) for m in {r["material"] for r in mine}}
-
-
 def difference(rows: list[dict], candidate: str, baseline: str, patterns) -> dict:
-    new, old = per_material(rows, candidate, patterns), per_material(rows, baseline, patterns)
+    new, old = per_material_psnr(rows, candidate, patterns), per_material_psnr(rows, baseline, patterns)
     if not new or not old:
         raise SystemExit(f"no rows of {candidate!r} or {baseline!r} on the tables")
     return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])

@@ -22,10 +22,11 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # research/studies
+from compare_models import per_material_psnr  # noqa: E402
 
 INSTRUMENT_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 COUNT = 1500
@@ -34,10 +35,7 @@ MIXTURES = ("instruments", "mixed")
 
 def per_material(rows: list[dict], variant: str, patterns) -> dict[str, float]:
     """Material → the variant's encoder PSNR averaged over ``patterns`` (at ``COUNT``) and its runs."""
-    mine = [r for r in rows if r["model"].split("/")[0] == variant and r["group"] == "tables"
-            and r["budget"] == "none" and r["count"] == COUNT and r["pattern"] in patterns]
-    materials = sorted({r["material"] for r in mine})
-    return {m: float(np.mean([r["psnr"] for r in mine if r["material"] == m])) for m in materials}
+    return per_material_psnr(rows, variant, patterns, count=COUNT)
 
 
 def test(rows: list[dict], candidate: str, incumbent: str) -> dict:
