@@ -12,7 +12,8 @@ imported only inside the functions that need them.
 
 Timing
     :func:`time_calls` (warm-up, samples of back-to-back calls, :class:`Timing`),
-    :func:`median_seconds`; :class:`CpuMeter` (how much of the machine other processes
+    :func:`median_seconds`; :func:`time_interleaved` (two contenders in alternating rounds,
+    for a ratio that the machine's drift does not bias); :class:`CpuMeter` (how much of the machine other processes
     used meanwhile), :func:`busy_cpu_seconds`, :func:`own_cpu_seconds`.
 Inputs
     :func:`unit_vectors`, :func:`gaussian_weighting` (the numpy weighting that kNN peers
@@ -115,6 +116,59 @@ def time_calls(function: Callable[[], object], repeats: int, *, warmup: bool = T
 def median_seconds(function: Callable[[], object], repeats: int) -> float:
     """Median of ``repeats`` one-call samples after a warm-up call (see :func:`time_calls`)."""
     return time_calls(function, repeats).median_s
+
+
+@dataclass
+class Interleaved:
+    """What :func:`time_interleaved` measured: seconds per call of two contenders, round by round."""
+
+    first_s: list[float]
+    second_s: list[float]
+
+    @property
+    def ratios(self) -> list[float]:
+        """second / first per round: how many times faster the first was in that round."""
+        return [b / a for a, b in zip(self.first_s, self.second_s)]
+
+    def ratio_summary(self) -> dict:
+        """The median ratio, its quartiles and range, and each contender's median seconds."""
+        quartiles = statistics.quantiles(self.ratios, n=4) if len(self.ratios) > 1 else self.ratios * 3
+        return {"median": statistics.median(self.ratios), "quartiles": [quartiles[0], quartiles[2]],
+                "range": [min(self.ratios), max(self.ratios)], "rounds": len(self.ratios),
+                "first_median_s": statistics.median(self.first_s), "second_median_s": statistics.median(self.second_s)}
+
+
+def time_interleaved(first: Callable[[], object], second: Callable[[], object], rounds: int,
+                     calls: int = 3, pause_s: float = 0.05) -> Interleaved:
+    """Times two contenders in alternating rounds, each round the best of ``calls`` calls of each.
+
+    On a shared or virtual machine the speed drifts by tens of percent within a minute; timing one
+    contender after the other puts that drift into their ratio. Alternating them (and which goes
+    first) gives both the same conditions round by round, so the per-round ratios are comparable
+    even where the absolute times are not. Both are called once first as a warm-up. Each turn
+    starts after ``pause_s`` of sleep, so that the other's worker threads, which spin a while
+    after their work, have gone to sleep and take no core from it.
+    """
+    first(), second()
+
+    def best(function: Callable[[], object]) -> float:
+        time.sleep(pause_s)
+        times = []
+        for _ in range(calls):
+            start = time.perf_counter()
+            function()
+            times.append(time.perf_counter() - start)
+        return min(times)
+
+    first_s, second_s = [], []
+    for round_ in range(rounds):
+        if round_ % 2:
+            second_s.append(best(second))
+            first_s.append(best(first))
+        else:
+            first_s.append(best(first))
+            second_s.append(best(second))
+    return Interleaved(first_s, second_s)
 
 
 def busy_cpu_seconds() -> float | None:

@@ -1,13 +1,15 @@
 """Evaluations per second of the native RGL ``.bsdf`` evaluator against Mitsuba 3's
 ``measured`` plugin, measured side by side in one run.
 
-    python benches/peers/bsdf_eval.py [--file PATH.bsdf] [--n 20000] [--repeats 5] [--json results.json]
+    python benches/peers/bsdf_eval.py [--file PATH.bsdf] [--n 20000] [--repeats 5] [--rounds 15] [--json results.json]
 
 1. The same ``--n`` random direction pairs (float32-rounded, so both see identical inputs)
    evaluated by ``frenbrdf._native.BsdfMeasurement.eval`` (one batched call, rayon), in its
    default float32 path (vectorised across pairs) and in float64 (``double=True``), and by
    Mitsuba's ``measured`` BSDF twice: in ``llvm_ad_rgb``, one vectorised ``eval`` over all
-   pairs (its kernel compiled in the warm-up), and in ``scalar_rgb``, one ``eval`` call per
+   pairs (its kernel compiled in the warm-up), timed in ``--rounds`` rounds that alternate with
+   ours (each round the best of three calls of each; the ratio is taken round by round, as the
+   machine's speed drifts between rounds), and in ``scalar_rgb``, one ``eval`` call per
    pair from a Python loop. (Mitsuba 3.9.1 evaluates these files in its JIT variants;
    mitsuba3#664 reported them crashing in 3.2.) Mitsuba's values (f·cos θ_o) are divided by
    cos θ_o and checked against ours before anything is timed. The scalar ratio includes
@@ -28,6 +30,7 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +39,7 @@ from frenbrdf import _native
 from frenbrdf.render.mitsuba.variants import _import_mitsuba
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
-from common import cpu_model, median_seconds  # noqa: E402
+from common import cpu_model, median_seconds, time_interleaved  # noqa: E402
 
 SHARED_DATA = Path(os.environ.get("FRENBRDF_SHARED_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
 DEFAULT_FILE = SHARED_DATA / "rgl-measured" / "vch_golden_yellow_rgb.bsdf"
@@ -83,8 +86,8 @@ def mitsuba_eval(path: Path, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray
     return np.maximum(out / wo[:, 2:], 0.0), time.perf_counter() - start
 
 
-def mitsuba_llvm_eval(path: Path, wi: np.ndarray, wo: np.ndarray, repeats: int) -> tuple[np.ndarray, float] | None:
-    """Mitsuba's f at the pairs in ``llvm_ad_rgb`` (one vectorised call), and its median time; None where the
+def mitsuba_llvm_eval(path: Path, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, Callable[[], object]] | None:
+    """Mitsuba's f at the pairs in ``llvm_ad_rgb`` (one vectorised call), and that call to time; None where the
     LLVM backend does not work here."""
     from frenbrdf.render.mitsuba import llvm_available
 
@@ -105,7 +108,7 @@ def mitsuba_llvm_eval(path: Path, wi: np.ndarray, wo: np.ndarray, repeats: int) 
         return value
 
     out = np.array(evaluate()).T
-    return np.maximum(out / wo[:, 2:], 0.0), median_seconds(evaluate, repeats)
+    return np.maximum(out / wo[:, 2:], 0.0), evaluate
 
 
 def main() -> None:
@@ -113,6 +116,8 @@ def main() -> None:
     parser.add_argument("--file", type=Path, default=DEFAULT_FILE, help="an RGB .bsdf file of the RGL database")
     parser.add_argument("--n", type=int, default=20_000, help="direction pairs of the peer comparison")
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--rounds", type=int, default=15,
+                        help="alternating rounds of ours and Mitsuba llvm_ad_rgb for their ratio")
     parser.add_argument("--json", type=Path, help="also write the results here")
     args = parser.parse_args()
     if not args.file.is_file():
@@ -126,9 +131,11 @@ def main() -> None:
     for values in (ours, ours_double):
         np.testing.assert_allclose(values, reference, rtol=2e-4, atol=2e-6 * scale)
     error = np.abs(ours - reference)
-    llvm = mitsuba_llvm_eval(args.file, wi, wo, args.repeats)
+    llvm = mitsuba_llvm_eval(args.file, wi, wo)
     if llvm is not None:
         np.testing.assert_allclose(ours, llvm[0], rtol=2e-4, atol=2e-6 * scale)
+        # Ours and Mitsuba's in alternating rounds: the ratio, round by round, under the same conditions.
+        llvm_rounds = time_interleaved(lambda: measurement.eval(wi, wo), llvm[1], args.rounds).ratio_summary()
 
     ours_s = median_seconds(lambda: measurement.eval(wi, wo), args.repeats)
     ours_double_s = median_seconds(lambda: measurement.eval(wi, wo, double=True), args.repeats)
@@ -152,9 +159,9 @@ def main() -> None:
         "ours_evals_per_s_1M_batch": 1e6 / ours_big_s,
         "mitsuba_scalar_rgb_evals_per_s": args.n / mitsuba_s,
         "ratio_ours_over_mitsuba": mitsuba_s / ours_s,
-        "mitsuba_llvm_ad_rgb_evals_per_s": None if llvm is None else args.n / llvm[1],
-        "ratio_ours_over_mitsuba_llvm": None if llvm is None else llvm[1] / ours_s,
-        "ratio_ours_double_over_mitsuba_llvm": None if llvm is None else llvm[1] / ours_double_s,
+        "mitsuba_llvm_ad_rgb_evals_per_s": None if llvm is None else args.n / llvm_rounds["second_median_s"],
+        "ratio_ours_over_mitsuba_llvm": None if llvm is None else llvm_rounds,
+        "ratio_ours_double_over_mitsuba_llvm": None if llvm is None else llvm_rounds["second_median_s"] / ours_double_s,
         "merl_table_bins": len(merl_wi),
         "merl_table_fraction_above_horizon": above,
         "merl_table_s": merl_s,
@@ -171,8 +178,11 @@ def main() -> None:
         print("Mitsuba llvm_ad_rgb: not usable here (no libLLVM that works)")
     else:
         print(f"Mitsuba: {results['mitsuba_llvm_ad_rgb_evals_per_s']:,.0f} evaluations/s (llvm_ad_rgb, one "
-              f"vectorised call); ratio ours / Mitsuba llvm_ad_rgb: {results['ratio_ours_over_mitsuba_llvm']:.2f}× "
-              f"(float32), {results['ratio_ours_double_over_mitsuba_llvm']:.2f}× (float64)")
+              f"vectorised call), ours {args.n / llvm_rounds['first_median_s']:,.0f}/s in the same rounds")
+        print(f"ratio ours float32 / Mitsuba llvm_ad_rgb over {llvm_rounds['rounds']} alternating rounds: median "
+              f"{llvm_rounds['median']:.2f}× (quartiles {llvm_rounds['quartiles'][0]:.2f}–{llvm_rounds['quartiles'][1]:.2f}×, "
+              f"range {llvm_rounds['range'][0]:.2f}–{llvm_rounds['range'][1]:.2f}×); float64 "
+              f"{results['ratio_ours_double_over_mitsuba_llvm']:.2f}×")
     print(f"one MERL table ({len(merl_wi):,} bins, {above:.0%} with both directions above the horizon): "
           f"{merl_s:.3f} s (float32), {merl_double_s:.3f} s (float64)")
     if args.json:

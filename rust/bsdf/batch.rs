@@ -5,8 +5,10 @@
 //! turns into SIMD. [`Tables::eval_chunk`] has that code compiled three times, for
 //! AVX-512, for AVX2 with FMA and for the baseline, and picks one at run time. Table
 //! lookups are loads per lane from copies of the tables laid out so that one lookup's
-//! values sit together: a VNDF node's density beside its CDF, a node's three colours.
-//! (AVX-512's gather instructions, tried in their place, were no faster on an AMD Zen 4.)
+//! values sit together: a VNDF node's density beside its CDF, a node's three colours; each
+//! lane sums its lookups four values at a time in an SSE register ([`Quad`]). (AVX-512's
+//! gather instructions, tried in their place, were no faster on an AMD Zen 4.) The input
+//! rows of the blocks ahead are prefetched ([`PREFETCH_BLOCKS`]).
 //!
 //! Directions are scaled in float64 and normalised in float32; the horizon test is the
 //! float64 path's, so both return 0 for the same pairs. Angles come from a polynomial
@@ -17,17 +19,71 @@
 
 use std::f32::consts::{FRAC_2_PI, PI, TAU};
 
-use super::simd::{atan2, bilinear, elevation, four, lanes, lerp, two, Lanes, LANES};
+use super::simd::{atan2, bilinear, elevation, lanes, lerp, two, Lanes, Quad, LANES};
 use super::warp::Marginal2D;
 use super::HORIZON;
 use crate::coords::{normalize, Vec3};
 
-/// The interval of `pos` (clamped to [0, 1]) on an axis of `n` nodes, and the position in it.
+/// A power of two that scales `x` (finite and non-zero) into [1, 2), or near it where `x`
+/// is subnormal or above 2^1023: an exact scaling without a division.
 #[inline(always)]
-fn locate(pos: f32, n: u32) -> (u32, f32) {
-    let x = pos.clamp(0.0, 1.0) * (n - 1) as f32;
-    let i = (x as i32).min(n as i32 - 2);
-    (i as u32, x - i as f32)
+fn inverse_power_of_two(x: f64) -> f64 {
+    let exponent = ((x.to_bits() >> 52) & 0x7ff).clamp(1, 2045);
+    f64::from_bits((2046 - exponent) << 52)
+}
+
+/// The rows as unit vectors in float64, one array per coordinate; false where a row is not
+/// finite and non-zero.
+#[inline(always)]
+fn unit_rows(rows: &Lanes<Vec3>) -> ([Lanes<f64>; 3], bool) {
+    let (mut unit, mut valid) = ([[0f64; LANES]; 3], true);
+    for k in 0..LANES {
+        let [x, y, z] = rows[k];
+        let largest = x.abs().max(y.abs()).max(z.abs());
+        valid &= x.is_finite() & y.is_finite() & z.is_finite() & (largest > 0.0);
+        let scale = inverse_power_of_two(largest);
+        let (x, y, z) = (x * scale, y * scale, z * scale);
+        let norm = 1.0 / (x * x + y * y + z * z).sqrt();
+        (unit[0][k], unit[1][k], unit[2][k]) = (x * norm, y * norm, z * norm);
+    }
+    (unit, valid)
+}
+
+/// Per lane: a patch's lower-left node's index in a slice, its row, and the position in it.
+type Patches = (Lanes<u32>, Lanes<u32>, Lanes<f32>, Lanes<f32>);
+
+/// Blocks ahead whose input rows [`Tables::chunk`] asks for. The hardware's prefetcher did
+/// not keep up with the two input streams: with 2 threads, a sixth of the time went on
+/// waiting for rows (perf, 2-core AMD EPYC Zen 4).
+const PREFETCH_BLOCKS: usize = 2;
+
+/// Asks for the cache lines of `rows[start..start + LANES]` ahead of their loads (nothing
+/// off x86_64 or past the end).
+#[inline(always)]
+fn prefetch_rows(rows: &[Vec3], start: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(block) = rows.get(start..start + LANES) {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        const LINE: usize = 64;
+        let bytes = std::mem::size_of_val(block);
+        for offset in (0..bytes).step_by(LINE) {
+            // SAFETY: the address lies inside `block`, and a prefetch reads nothing.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(block.as_ptr().cast::<i8>().add(offset)) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (rows, start);
+}
+
+/// The first three values of each lane's quad, one array per value. (Loops, not
+/// `array::map`: a closure left out of line is compiled without the SIMD features.)
+#[inline(always)]
+fn first_three(quads: &Lanes<[f32; 4]>) -> [Lanes<f32>; 3] {
+    let mut values = [[0f32; LANES]; 3];
+    for (c, values) in values.iter_mut().enumerate() {
+        *values = lanes!(|k| quads[k][c]);
+    }
+    values
 }
 
 /// A node grid of `nx` × `ny`.
@@ -42,25 +98,24 @@ impl Grid {
         self.nx * self.ny
     }
 
-    /// The patch holding (x, y): its lower-left node (column, row) and the position in it.
-    #[inline(always)]
-    fn patch(self, x: f32, y: f32) -> ([u32; 2], f32, f32) {
-        let (i, s) = locate(x, self.nx);
-        let (j, t) = locate(y, self.ny);
-        ([i, j], s, t)
-    }
-
     /// The patches holding each lane's `pos`: their lower-left nodes' indices in a slice
-    /// and rows, and the positions in them.
+    /// and rows, and the positions in them. Lane by lane, field by field, so that each
+    /// step is one vector operation.
     #[inline(always)]
-    fn patches(self, pos: &[Lanes<f32>; 2]) -> (Lanes<u32>, Lanes<u32>, Lanes<f32>, Lanes<f32>) {
-        let patches: Lanes<([u32; 2], f32, f32)> = lanes!(|k| self.patch(pos[0][k], pos[1][k]));
-        let node = lanes!(|k| patches[k].0[1] * self.nx + patches[k].0[0]);
+    #[allow(clippy::manual_clamp)] // clamp keeps a NaN, which the conversion below must not see
+    fn patches(self, pos: &[Lanes<f32>; 2]) -> Patches {
+        // max before min: a NaN position becomes 0, so every x and y is in [0, n − 1].
+        let x = lanes!(|k| pos[0][k].max(0.0).min(1.0) * (self.nx - 1) as f32);
+        let y = lanes!(|k| pos[1][k].max(0.0).min(1.0) * (self.ny - 1) as f32);
+        // SAFETY: x and y are in [0, n − 1], which i32 holds. (`as` would check each lane
+        // for NaN and overflow one at a time.)
+        let column = lanes!(|k| unsafe { x[k].to_int_unchecked::<i32>() }.min(self.nx as i32 - 2));
+        let row = lanes!(|k| unsafe { y[k].to_int_unchecked::<i32>() }.min(self.ny as i32 - 2));
         (
-            node,
-            lanes!(|k| patches[k].0[1]),
-            lanes!(|k| patches[k].1),
-            lanes!(|k| patches[k].2),
+            lanes!(|k| (row[k] * self.nx as i32 + column[k]) as u32),
+            lanes!(|k| row[k] as u32),
+            lanes!(|k| x[k] - column[k] as f32),
+            lanes!(|k| y[k] - row[k] as f32),
         )
     }
 
@@ -251,7 +306,10 @@ impl Tables {
     #[inline(always)]
     fn chunk<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
         let blocks = wi.chunks_exact(LANES).zip(wo.chunks_exact(LANES));
-        for ((wi, wo), out) in blocks.zip(out.chunks_exact_mut(LANES)) {
+        for (b, ((wi_block, wo_block), out)) in blocks.zip(out.chunks_exact_mut(LANES)).enumerate() {
+            prefetch_rows(wi, (b + PREFETCH_BLOCKS) * LANES);
+            prefetch_rows(wo, (b + PREFETCH_BLOCKS) * LANES);
+            let (wi, wo) = (wi_block, wo_block);
             let Some(values) = self.block::<CORNERS>(wi.try_into().unwrap(), wo.try_into().unwrap()) else {
                 return false;
             };
@@ -276,20 +334,15 @@ impl Tables {
         // huge) and their sum, the half vector's direction, before rounding to float32: at
         // grazing angles ω_i + ω_o cancels, and float32 inputs would lose its direction.
         // Checking the rows here saves a pass over them.
+        let (unit_i, valid_i) = unit_rows(wi);
+        let (unit_o, valid_o) = unit_rows(wo);
         let (mut i, mut o, mut m) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [[0f32; LANES]; 3]);
-        let mut valid = true;
-        for k in 0..LANES {
-            let [a, b] = [wi[k], wo[k]].map(|v| {
-                let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
-                valid &= v.iter().all(|x| x.is_finite()) & (largest > 0.0);
-                let u = v.map(|x| x * (1.0 / largest));
-                let scale = 1.0 / (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
-                u.map(|x| x * scale)
-            });
-            for c in 0..3 {
-                (i[c][k], o[c][k], m[c][k]) = (a[c] as f32, b[c] as f32, (a[c] + b[c]) as f32);
-            }
+        for c in 0..3 {
+            i[c] = lanes!(|k| unit_i[c][k] as f32);
+            o[c] = lanes!(|k| unit_o[c][k] as f32);
+            m[c] = lanes!(|k| (unit_i[c][k] + unit_o[c][k]) as f32);
         }
+        let valid = valid_i && valid_o;
         if !valid {
             return None;
         }
@@ -297,13 +350,16 @@ impl Tables {
         // could decide otherwise. A pair at or below it is evaluated at the pole instead and
         // zeroed at the end.
         let mut above = lanes!(|k| i[2][k] > 1e-8 && o[2][k] > 1e-8);
-        for k in 0..LANES {
-            if !above[k] && i[2][k] > -1e-8 && o[2][k] > -1e-8 {
-                above[k] = normalize(wi[k])[2] > HORIZON && normalize(wo[k])[2] > HORIZON;
-            }
-            if !above[k] {
-                for c in 0..3 {
-                    (i[c][k], o[c][k], m[c][k]) = ([0.0, 0.0, 1.0][c], [0.0, 0.0, 1.0][c], [0.0, 0.0, 2.0][c]);
+        // Most blocks lie above it: one vector test passes them.
+        if above.contains(&false) {
+            for k in 0..LANES {
+                if !above[k] && i[2][k] > -1e-8 && o[2][k] > -1e-8 {
+                    above[k] = normalize(wi[k])[2] > HORIZON && normalize(wo[k])[2] > HORIZON;
+                }
+                if !above[k] {
+                    for c in 0..3 {
+                        (i[c][k], o[c][k], m[c][k]) = ([0.0, 0.0, 1.0][c], [0.0, 0.0, 1.0][c], [0.0, 0.0, 2.0][c]);
+                    }
                 }
             }
         }
@@ -359,8 +415,6 @@ impl Tables {
             );
         }
 
-        let sample = self.invert_vndf(&corners, &u_m);
-        let rgb = self.interpolate_rgb(&corners, &sample);
         let jacobian = if self.jacobian {
             let ndf = self.ndf.interpolate(&self.ndf_values, &u_m);
             let sigma = self.sigma.interpolate(&self.sigma_values, &u_wi);
@@ -368,51 +422,52 @@ impl Tables {
         } else {
             [1.0; LANES]
         };
+        let sample = self.invert_vndf(&corners, &self.vndf.patches(&u_m));
+        let rgb = self.interpolate_rgb(&corners, &sample);
         Some(lanes!(|k| {
             let scale = if above[k] { jacobian[k] / o[2][k] } else { 0.0 };
-            [rgb[0][k], rgb[1][k], rgb[2][k]].map(|value| (value.max(0.0) * scale) as f64)
+            let value = |c: usize| (rgb[c][k].max(0.0) * scale) as f64;
+            [value(0), value(1), value(2)]
         }))
     }
 
-    /// [`Marginal2D::invert_blended`] at `pos`: the sample-space point of each lane.
+    /// [`Marginal2D::invert_blended`] in the VNDF's `patches` (from [`Grid::patches`]):
+    /// the sample-space point of each lane.
     #[inline(always)]
     fn invert_vndf<const CORNERS: usize>(
         &self,
         corners: &[(Lanes<u32>, Lanes<f32>); CORNERS],
-        pos: &[Lanes<f32>; 2],
+        patches: &Patches,
     ) -> [Lanes<f32>; 2] {
         let grid = self.vndf;
-        let (node, node_row, s, t) = grid.patches(pos);
+        let (node, node_row, s, t) = patches;
         // The blended density d and CDF c at the patch's corners, and the rows' integrals r
         // and marginal CDF: per lane and slice, a load of four values for each row of the
         // patch (d and c at a node and at its right neighbour) and one for the rows (r and
         // the marginal CDF at row j, then at j + 1).
-        let mut node_values = [[0f32; LANES]; 6];
-        let mut row_values = [[0f32; LANES]; 3];
         let (nx, plane) = (grid.nx as usize, grid.plane() as usize);
+        let mut low = [[0f32; 4]; LANES];
+        let mut high = [[0f32; 4]; LANES];
+        let mut rows = [[0f32; 4]; LANES];
         for k in 0..LANES {
-            let (mut low, mut high, mut rows) = ([0f32; 4], [0f32; 4], [0f32; 4]);
+            let (mut l, mut h, mut r) = (Quad::zero(), Quad::zero(), Quad::zero());
             for (slice, weight) in corners {
                 let (slice, w) = (slice[k] as usize, weight[k]);
                 let node = 2 * (slice * plane + node[k] as usize);
-                let row = 2 * (slice * grid.ny as usize + (node_row[k] as usize));
-                let (a, b, r) = (
-                    four(&self.vndf_nodes, node),
-                    four(&self.vndf_nodes, node + 2 * nx),
-                    four(&self.vndf_rows, row),
+                l = l.add_weighted(w, &self.vndf_nodes, node);
+                h = h.add_weighted(w, &self.vndf_nodes, node + 2 * nx);
+                r = r.add_weighted(
+                    w,
+                    &self.vndf_rows,
+                    2 * (slice * grid.ny as usize + node_row[k] as usize),
                 );
-                for c in 0..4 {
-                    low[c] += w * a[c];
-                    high[c] += w * b[c];
-                    rows[c] += w * r[c];
-                }
             }
-            [node_values[0][k], node_values[1][k], node_values[2][k]] = [low[0], low[1], low[2]];
-            [node_values[3][k], node_values[4][k], node_values[5][k]] = [high[0], high[1], high[2]];
-            [row_values[0][k], row_values[1][k], row_values[2][k]] = [rows[0], rows[1], rows[2]];
+            (low[k], high[k], rows[k]) = (l.to_array(), h.to_array(), r.to_array());
         }
-        let [d00, c00, d10, d01, c01, d11] = node_values;
-        let [r0, marginal, r1] = row_values;
+        // Back to one array per value, lanes innermost.
+        let [d00, c00, d10] = first_three(&low);
+        let [d01, c01, d11] = first_three(&high);
+        let [r0, marginal, r1] = first_three(&rows);
         let x = lanes!(|k| {
             let (c0, c1) = (lerp(d00[k], d01[k], t[k]), lerp(d10[k], d11[k], t[k]));
             let row_total = lerp(r0[k], r1[k], t[k]);
@@ -436,23 +491,21 @@ impl Tables {
     ) -> [Lanes<f32>; 3] {
         let grid = self.rgb;
         let (node, _, s, t) = grid.patches(pos);
-        let mut rgb = [[0f32; LANES]; 3];
-        let (nx, plane) = (grid.nx as usize, grid.plane() as usize);
+        let nx = grid.nx as usize;
+        let plane = grid.plane() as usize;
+        let mut sums = [[0f32; 4]; LANES];
         for k in 0..LANES {
             let (s, t) = (s[k], t[k]);
             let bilinear_weights = [(1.0 - s) * (1.0 - t), s * (1.0 - t), (1.0 - s) * t, s * t];
-            let mut sum = [0f32; 4];
+            let mut sum = Quad::zero();
             for (slice, weight) in corners {
                 let base = slice[k] as usize * plane + node[k] as usize;
                 for (offset, b) in [0, 1, nx, nx + 1].into_iter().zip(bilinear_weights) {
-                    let (value, w) = (four(&self.rgb_nodes, 4 * (base + offset)), weight[k] * b);
-                    for c in 0..4 {
-                        sum[c] += w * value[c];
-                    }
+                    sum = sum.add_weighted(weight[k] * b, &self.rgb_nodes, 4 * (base + offset));
                 }
             }
-            [rgb[0][k], rgb[1][k], rgb[2][k]] = [sum[0], sum[1], sum[2]];
+            sums[k] = sum.to_array();
         }
-        rgb
+        first_three(&sums)
     }
 }

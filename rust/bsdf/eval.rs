@@ -92,8 +92,20 @@ impl MeasuredBsdf {
     /// The BRDF at rows of direction pairs, in parallel, in either precision; see
     /// [`MeasuredBsdf::eval_pair`]. Rows must be finite and non-zero.
     pub fn eval(&self, wi: &[Vec3], wo: &[Vec3], precision: Precision) -> Result<Vec<[f64; 3]>> {
+        let mut out = vec![[0.0; 3]; wi.len()];
+        self.eval_into(wi, wo, &mut out, precision)?;
+        Ok(out)
+    }
+
+    /// [`MeasuredBsdf::eval`] into `out`, one row per pair: the Python binding passes a
+    /// NumPy array, which NumPy backs with huge pages (a `Vec` of 24 MB is faulted in or
+    /// zeroed 4 KiB at a time).
+    pub fn eval_into(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]], precision: Precision) -> Result<()> {
         if wi.len() != wo.len() {
             return invalid_argument!("wi has {} rows but wo has {}", wi.len(), wo.len());
+        }
+        if out.len() != wi.len() {
+            return invalid_argument!("out has {} rows for {} pairs", out.len(), wi.len());
         }
         let validate = || -> Result<()> {
             coords::validate_directions("wi", wi)?;
@@ -102,7 +114,6 @@ impl MeasuredBsdf {
         if precision == Precision::Double {
             validate()?;
         }
-        let mut out = vec![[0.0; 3]; wi.len()];
         let valid = parallel::in_pool(|| {
             (wi.par_chunks(CHUNK).zip(wo.par_chunks(CHUNK)))
                 .zip(out.par_chunks_mut(CHUNK))
@@ -112,7 +123,7 @@ impl MeasuredBsdf {
         if !valid {
             validate()?;
         }
-        Ok(out)
+        Ok(())
     }
 
     /// [`MeasuredBsdf::eval`] on one task's rows; false where the float32 path finds a row
@@ -301,6 +312,12 @@ pub(super) mod tests {
             .unwrap_err()
             .to_string()
             .contains("wo has 9999"));
+        let mut short = vec![[0.0; 3]; wi.len() - 1];
+        let message = bsdf
+            .eval_into(&wi, &wo, &mut short, Precision::Single)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("out has 9999 rows for 10000 pairs"), "{message}");
         let mut bad = wo.clone();
         bad[17] = [0.0, f64::NAN, 1.0];
         assert!(bsdf

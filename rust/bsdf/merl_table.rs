@@ -41,8 +41,16 @@ impl MeasuredBsdf {
     /// as a MERL file's values in 1/sr: channel, θ_h, θ_d, φ_d (`3 × 90 × 90 × 180`), with
     /// [`MISSING`] where a bin's directions do not both lie strictly above the surface.
     pub fn merl_table(&self, precision: Precision) -> Vec<f64> {
-        let (wi, wo) = bin_directions();
         let mut table = vec![0.0; 3 * N_BINS];
+        self.merl_table_into(&mut table, precision);
+        table
+    }
+
+    /// [`MeasuredBsdf::merl_table`] into `table` (`3 × N_BINS` values), see
+    /// [`MeasuredBsdf::eval_into`].
+    pub fn merl_table_into(&self, table: &mut [f64], precision: Precision) {
+        assert_eq!(table.len(), 3 * N_BINS, "a MERL table holds 3 × {N_BINS} values");
+        let (wi, wo) = bin_directions();
         let (red, rest) = table.split_at_mut(N_BINS);
         let (green, blue) = rest.split_at_mut(N_BINS);
         parallel::in_pool(|| {
@@ -62,6 +70,5 @@ impl MeasuredBsdf {
                 }
             })
         });
-        table
     }
 }

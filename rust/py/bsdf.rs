@@ -1,6 +1,6 @@
 use std::path::PathBuf;
 
-use numpy::{PyArray1, PyArray2, PyArray4, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArray4, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -53,17 +53,24 @@ impl BsdfMeasurement {
         double: bool,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let (wi, wo) = (as_vec3s("wi", &wi)?, as_vec3s("wo", &wo)?);
-        let rgb = py.detach(|| self.inner.eval(wi, wo, precision(double)))?;
-        Ok(to_numpy(py, (rgb.len(), 3), rgb.into_flattened()))
+        // NumPy's array, filled in place: NumPy backs it with huge pages.
+        let rgb = PyArray2::<f64>::zeros(py, [wi.len(), 3], false);
+        let mut values = rgb.readwrite();
+        let rows = values.as_slice_mut()?.as_chunks_mut::<3>().0;
+        py.detach(|| self.inner.eval_into(wi, wo, rows, precision(double)))?;
+        Ok(rgb)
     }
 
     /// The BRDF at every MERL bin, as `eval` gives it: `(3, 90, 90, 180)` in 1/sr, with
     /// MERL's missing marker -1 where a bin's directions do not both lie strictly above
     /// the surface.
     #[pyo3(signature = (double = false))]
-    fn merl_table<'py>(&self, py: Python<'py>, double: bool) -> Bound<'py, PyArray4<f64>> {
-        let table = py.detach(|| self.inner.merl_table(precision(double)));
-        to_numpy(py, (3, N_THETA_H, N_THETA_D, N_PHI_D), table)
+    fn merl_table<'py>(&self, py: Python<'py>, double: bool) -> PyResult<Bound<'py, PyArray4<f64>>> {
+        let table = PyArray4::<f64>::zeros(py, [3, N_THETA_H, N_THETA_D, N_PHI_D], false);
+        let mut values = table.readwrite();
+        let values = values.as_slice_mut()?;
+        py.detach(|| self.inner.merl_table_into(values, precision(double)));
+        Ok(table)
     }
 
     /// The file the measurement was read from.
