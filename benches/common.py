@@ -128,7 +128,7 @@ class Interleaved:
     @property
     def ratios(self) -> list[float]:
         """second / first per round: how many times faster the first was in that round."""
-        return [b / a for a, b in zip(self.first_s, self.second_s)]
+        return [b / a for a, b in zip(self.first_s, self.second_s, strict=True)]
 
     def ratio_summary(self) -> dict:
         """The median ratio, its quartiles and range, and each contender's median seconds."""
