@@ -54,8 +54,9 @@ type Patches = (Lanes<u32>, Lanes<u32>, Lanes<f32>, Lanes<f32>);
 
 /// Blocks ahead whose input rows [`Tables::chunk`] asks for. The hardware's prefetcher did
 /// not keep up with the two input streams: with 2 threads, a sixth of the time went on
-/// waiting for rows (perf, 2-core AMD EPYC Zen 4).
-const PREFETCH_BLOCKS: usize = 2;
+/// waiting for rows (perf, 2-core AMD EPYC Zen 4). 2, 4 and 8 blocks ahead were within a
+/// few percent of each other (research/performance.md).
+const PREFETCH_BLOCKS: usize = 4;
 
 /// Asks for the cache lines of `rows[start..start + LANES]` ahead of their loads (nothing
 /// off x86_64 or past the end).
