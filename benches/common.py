@@ -132,7 +132,8 @@ class Interleaved:
 
     def ratio_summary(self) -> dict:
         """The median ratio, its quartiles and range, and each contender's median seconds."""
-        quartiles = statistics.quantiles(self.ratios, n=4) if len(self.ratios) > 1 else self.ratios * 3
+        # Inclusive: with few rounds the default method extrapolates beyond the range.
+        quartiles = statistics.quantiles(self.ratios, n=4, method="inclusive") if len(self.ratios) > 1 else self.ratios * 3
         return {"median": statistics.median(self.ratios), "quartiles": [quartiles[0], quartiles[2]],
                 "range": [min(self.ratios), max(self.ratios)], "rounds": len(self.ratios),
                 "first_median_s": statistics.median(self.first_s), "second_median_s": statistics.median(self.second_s)}
@@ -149,6 +150,8 @@ def time_interleaved(first: Callable[[], object], second: Callable[[], object], 
     starts after ``pause_s`` of sleep, so that the other's worker threads, which spin a while
     after their work, have gone to sleep and take no core from it.
     """
+    if rounds < 1 or calls < 1:
+        raise ValueError(f"rounds and calls must be at least 1, got {rounds} and {calls}")
     first(), second()
 
     def best(function: Callable[[], object]) -> float:

@@ -48,7 +48,7 @@ def test_interleaved_rounds_alternate_and_give_per_round_ratios(fake_clock):
 
 
 def test_interleaved_ratio_follows_the_rounds_not_the_drift(fake_clock):
-    """A machine that slows down by half its speed again every round: each round's ratio stays 2."""
+    """A machine whose calls take half as long again, then twice, ... as long each round: each round's ratio stays 2."""
     common, clock = fake_clock
     calls = {"count": 0}
 
@@ -64,3 +64,13 @@ def test_interleaved_ratio_follows_the_rounds_not_the_drift(fake_clock):
     assert timing.first_s == pytest.approx([1.0, 1.5, 2.0, 2.5, 3.0])  # the absolute times drifted threefold
     assert timing.ratios == pytest.approx([2.0] * 5)
     assert timing.ratio_summary()["median"] == pytest.approx(2.0)
+
+
+def test_interleaved_summary_of_one_and_two_rounds_stays_within_their_range():
+    common = script_module("common")
+    one = common.Interleaved([1.0], [2.0]).ratio_summary()
+    assert one["median"] == one["quartiles"][0] == one["quartiles"][1] == 2.0
+    two = common.Interleaved([1.0, 1.0], [1.0, 2.0]).ratio_summary()
+    assert two["range"] == [1.0, 2.0] and 1.0 <= two["quartiles"][0] <= two["quartiles"][1] <= 2.0
+    with pytest.raises(ValueError, match="rounds and calls must be at least 1"):
+        common.time_interleaved(lambda: None, lambda: None, rounds=0)

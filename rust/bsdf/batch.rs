@@ -10,8 +10,9 @@
 //! gather instructions, tried in their place, were no faster on an AMD Zen 4.) The input
 //! rows of the blocks ahead are prefetched ([`PREFETCH_BLOCKS`]).
 //!
-//! Directions are scaled in float64 and normalised in float32; the horizon test is the
-//! float64 path's, so both return 0 for the same pairs. Angles come from a polynomial
+//! Directions are normalised in float64 (after an exact scaling by a power of two) and
+//! rounded to float32, their sum too; the horizon test is the float64 path's, so both
+//! return 0 for the same pairs. Angles come from a polynomial
 //! atan2. The result stays within 1e-4 (relative; median a few 1e-6) of the float64 path
 //! where the value is not tiny (`batch_tests.rs`, on the RGL files).
 //!
@@ -32,8 +33,9 @@ fn inverse_power_of_two(x: f64) -> f64 {
     f64::from_bits((2046 - exponent) << 52)
 }
 
-/// The rows as unit vectors in float64, one array per coordinate; false where a row is not
-/// finite and non-zero.
+/// The rows as unit vectors in float64, one array per coordinate, each row first scaled by
+/// a power of two near its largest component (rows may be tiny or huge); false if any row
+/// is not finite or is zero.
 #[inline(always)]
 fn unit_rows(rows: &Lanes<Vec3>) -> ([Lanes<f64>; 3], bool) {
     let (mut unit, mut valid) = ([[0f64; LANES]; 3], true);
@@ -108,8 +110,9 @@ impl Grid {
         // max before min: a NaN position becomes 0, so every x and y is in [0, n − 1].
         let x = lanes!(|k| pos[0][k].max(0.0).min(1.0) * (self.nx - 1) as f32);
         let y = lanes!(|k| pos[1][k].max(0.0).min(1.0) * (self.ny - 1) as f32);
-        // SAFETY: x and y are in [0, n − 1], which i32 holds. (`as` would check each lane
-        // for NaN and overflow one at a time.)
+        // SAFETY: x and y are in [0, n − 1], and i32 holds n: a table is checked against its
+        // grid when read, and a file has at most tensor_file::MAX_BYTES (2^28) bytes, so
+        // nx · ny < 2^26. (`as` would check each lane for NaN and overflow one at a time.)
         let column = lanes!(|k| unsafe { x[k].to_int_unchecked::<i32>() }.min(self.nx as i32 - 2));
         let row = lanes!(|k| unsafe { y[k].to_int_unchecked::<i32>() }.min(self.ny as i32 - 2));
         (
@@ -307,11 +310,10 @@ impl Tables {
     #[inline(always)]
     fn chunk<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
         let blocks = wi.chunks_exact(LANES).zip(wo.chunks_exact(LANES));
-        for (b, ((wi_block, wo_block), out)) in blocks.zip(out.chunks_exact_mut(LANES)).enumerate() {
-            prefetch_rows(wi, (b + PREFETCH_BLOCKS) * LANES);
-            prefetch_rows(wo, (b + PREFETCH_BLOCKS) * LANES);
-            let (wi, wo) = (wi_block, wo_block);
-            let Some(values) = self.block::<CORNERS>(wi.try_into().unwrap(), wo.try_into().unwrap()) else {
+        for (index, ((wi_block, wo_block), out)) in blocks.zip(out.chunks_exact_mut(LANES)).enumerate() {
+            prefetch_rows(wi, (index + PREFETCH_BLOCKS) * LANES);
+            prefetch_rows(wo, (index + PREFETCH_BLOCKS) * LANES);
+            let Some(values) = self.block::<CORNERS>(wi_block.try_into().unwrap(), wo_block.try_into().unwrap()) else {
                 return false;
             };
             out.copy_from_slice(&values);
@@ -331,7 +333,7 @@ impl Tables {
     /// The values of a block of pairs; None where a row is not finite and non-zero.
     #[inline(always)]
     fn block<const CORNERS: usize>(&self, wi: &Lanes<Vec3>, wo: &Lanes<Vec3>) -> Option<Lanes<[f64; 3]>> {
-        // Unit directions in float64 (over the largest component first: a row may be tiny or
+        // Unit directions in float64 (scaled near the largest component first: a row may be tiny or
         // huge) and their sum, the half vector's direction, before rounding to float32: at
         // grazing angles ω_i + ω_o cancels, and float32 inputs would lose its direction.
         // Checking the rows here saves a pass over them.

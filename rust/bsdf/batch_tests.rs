@@ -73,6 +73,22 @@ fn single_precision_follows_double_on_synthetic_materials() {
 }
 
 #[test]
+fn tiny_and_huge_rows_give_the_values_of_unit_rows() {
+    // Rows are scaled by a power of two before they are normalised: a row of subnormal or
+    // near-overflowing components gives its direction's value (1 / 1e-310 would overflow).
+    let bsdf = build(&MaterialArrays::example(0.2, 1));
+    let (wi, wo) = pairs(8, 3001);
+    let unit = bsdf.eval(&wi, &wo, Precision::Single).unwrap();
+    for scale in [1e-310, 1e-300, 1e300, 1.7e308 / 2.5] {
+        let scaled = |rows: &[Vec3]| -> Vec<Vec3> { rows.iter().map(|v| v.map(|x| x * scale)).collect() };
+        let values = bsdf.eval(&scaled(&wi), &scaled(&wo), Precision::Single).unwrap();
+        for (a, b) in values.iter().flatten().zip(unit.iter().flatten()) {
+            assert!((a - b).abs() <= 1e-5 * b.abs() + 1e-9, "scale {scale:e}: {a} vs {b}");
+        }
+    }
+}
+
+#[test]
 fn every_instruction_set_gives_the_same_values() {
     let bsdf = build(&MaterialArrays::example(0.2, 1));
     let (wi, wo) = pairs(4, 5000);

@@ -99,7 +99,7 @@ impl MeasuredBsdf {
 
     /// [`MeasuredBsdf::eval`] into `out`, one row per pair: the Python binding passes a
     /// NumPy array, which NumPy backs with huge pages (a `Vec` of 24 MB is faulted in or
-    /// zeroed 4 KiB at a time).
+    /// zeroed 4 KiB at a time). On an error, `out` may be partly written.
     pub fn eval_into(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]], precision: Precision) -> Result<()> {
         if wi.len() != wo.len() {
             return invalid_argument!("wi has {} rows but wo has {}", wi.len(), wo.len());

@@ -46,8 +46,10 @@ impl MeasuredBsdf {
         table
     }
 
-    /// [`MeasuredBsdf::merl_table`] into `table` (`3 × N_BINS` values), see
-    /// [`MeasuredBsdf::eval_into`].
+    /// [`MeasuredBsdf::merl_table`] into `table`, see [`MeasuredBsdf::eval_into`].
+    ///
+    /// # Panics
+    /// If `table` does not hold `3 × N_BINS` values.
     pub fn merl_table_into(&self, table: &mut [f64], precision: Precision) {
         assert_eq!(table.len(), 3 * N_BINS, "a MERL table holds 3 × {N_BINS} values");
         let (wi, wo) = bin_directions();
