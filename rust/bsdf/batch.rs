@@ -51,9 +51,6 @@ fn unit_rows(rows: &Lanes<Vec3>) -> ([Lanes<f64>; 3], bool) {
     (unit, valid)
 }
 
-/// Per lane: a patch's lower-left node's index in a slice, its row, and the position in it.
-type Patches = (Lanes<u32>, Lanes<u32>, Lanes<f32>, Lanes<f32>);
-
 /// Blocks ahead whose input rows [`Tables::chunk`] asks for. The hardware's prefetcher did
 /// not keep up with the two input streams: with 2 threads, a sixth of the time went on
 /// waiting for rows (perf, 2-core AMD EPYC Zen 4). 2, 4 and 8 blocks ahead were within a
@@ -106,7 +103,7 @@ impl Grid {
     /// step is one vector operation.
     #[inline(always)]
     #[allow(clippy::manual_clamp)] // clamp keeps a NaN, which the conversion below must not see
-    fn patches(self, pos: &[Lanes<f32>; 2]) -> Patches {
+    fn patches(self, pos: &[Lanes<f32>; 2]) -> (Lanes<u32>, Lanes<u32>, Lanes<f32>, Lanes<f32>) {
         // max before min: a NaN position becomes 0, so every x and y is in [0, n − 1].
         let x = lanes!(|k| pos[0][k].max(0.0).min(1.0) * (self.nx - 1) as f32);
         let y = lanes!(|k| pos[1][k].max(0.0).min(1.0) * (self.ny - 1) as f32);
@@ -345,8 +342,7 @@ impl Tables {
             o[c] = lanes!(|k| unit_o[c][k] as f32);
             m[c] = lanes!(|k| (unit_i[c][k] + unit_o[c][k]) as f32);
         }
-        let valid = valid_i && valid_o;
-        if !valid {
+        if !(valid_i && valid_o) {
             return None;
         }
         // The horizon test as eval_pair makes it, in float64 near the horizon, where float32
@@ -418,6 +414,8 @@ impl Tables {
             );
         }
 
+        let sample = self.invert_vndf(&corners, &u_m);
+        let rgb = self.interpolate_rgb(&corners, &sample);
         let jacobian = if self.jacobian {
             let ndf = self.ndf.interpolate(&self.ndf_values, &u_m);
             let sigma = self.sigma.interpolate(&self.sigma_values, &u_wi);
@@ -425,8 +423,6 @@ impl Tables {
         } else {
             [1.0; LANES]
         };
-        let sample = self.invert_vndf(&corners, &self.vndf.patches(&u_m));
-        let rgb = self.interpolate_rgb(&corners, &sample);
         Some(lanes!(|k| {
             let scale = if above[k] { jacobian[k] / o[2][k] } else { 0.0 };
             let value = |c: usize| (rgb[c][k].max(0.0) * scale) as f64;
@@ -434,16 +430,15 @@ impl Tables {
         }))
     }
 
-    /// [`Marginal2D::invert_blended`] in the VNDF's `patches` (from [`Grid::patches`]):
-    /// the sample-space point of each lane.
+    /// [`Marginal2D::invert_blended`] at `pos`: the sample-space point of each lane.
     #[inline(always)]
     fn invert_vndf<const CORNERS: usize>(
         &self,
         corners: &[(Lanes<u32>, Lanes<f32>); CORNERS],
-        patches: &Patches,
+        pos: &[Lanes<f32>; 2],
     ) -> [Lanes<f32>; 2] {
         let grid = self.vndf;
-        let (node, node_row, s, t) = patches;
+        let (node, node_row, s, t) = grid.patches(pos);
         // The blended density d and CDF c at the patch's corners, and the rows' integrals r
         // and marginal CDF: per lane and slice, a load of four values for each row of the
         // patch (d and c at a node and at its right neighbour) and one for the rows (r and
