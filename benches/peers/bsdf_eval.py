@@ -26,7 +26,6 @@ Prints the CPU's model (``lscpu``) and the thread count. Times are medians after
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -36,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from frenbrdf import _native
+from frenbrdf.io.atomic import save_json
 from frenbrdf.render.mitsuba.variants import _import_mitsuba
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]  # its folder, benches/
@@ -189,7 +189,7 @@ def main() -> None:
     print(f"one MERL table ({len(merl_wi):,} bins, {above:.0%} with both directions above the horizon): "
           f"{merl_s:.3f} s (float32), {merl_double_s:.3f} s (float64)")
     if args.json:
-        args.json.write_text(json.dumps(results, indent=2) + "\n")
+        save_json(args.json, results)  # atomically
 
 
 if __name__ == "__main__":

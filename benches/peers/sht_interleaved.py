@@ -15,7 +15,6 @@ median, quartiles and range. The thread counts are set before the libraries are 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from pathlib import Path
@@ -35,6 +34,7 @@ def main() -> None:
     from sht_setup import Frenbrdf, Shtns
 
     from common import cpu_model, time_interleaved
+    from frenbrdf.io.atomic import save_json
 
     nlat, nlon, lmax, batch = 90, 180, 89, 192
     maps = np.random.default_rng(0).standard_normal((batch, nlat, nlon))
@@ -60,7 +60,7 @@ def main() -> None:
               f"{rounds['quartiles'][1]:.2f}x, range {rounds['range'][0]:.2f}-{rounds['range'][1]:.2f}x); "
               f"agreement {error:.1e}")
     if args.json:
-        args.json.write_text(json.dumps(results, indent=2) + "\n")
+        save_json(args.json, results)  # atomically
 
 
 if __name__ == "__main__":
