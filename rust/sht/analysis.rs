@@ -193,6 +193,7 @@ impl<T: Real> Sht<T> {
                 let degrees = self.degrees(m);
                 for parity in 0..2 {
                     let rows = (degrees + 1 - parity) / 2;
+                    let quiet = panels.quiet[parity];
                     matmul_packed(
                         MatMut {
                             data: &mut *block,
@@ -204,8 +205,8 @@ impl<T: Real> Sht<T> {
                         &panels.analysis[parity],
                         MatRef {
                             data: if parity == 0 { sym } else { anti },
-                            offset: m * layout.order_stride,
-                            rows: half,
+                            offset: m * layout.order_stride + quiet * layout.ring_stride,
+                            rows: half - quiet,
                             cols: width,
                             row_stride: layout.ring_stride,
                             col_stride: 1,

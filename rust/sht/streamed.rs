@@ -28,7 +28,7 @@ pub(super) use lanes::LANES;
 
 /// Partial sums whose λ are all below this are not added: next to values of order one
 /// they change no coefficient (2^−70 × a few thousand rings is below 10^−17).
-const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
+pub(super) const QUIET: f64 = 1.0 / (1u128 << 70) as f64;
 
 /// Pairs of degrees whose sums the plain loop of long orders runs through for every block
 /// before the next ones (one map's sums: 16 KB).

@@ -101,11 +101,14 @@ impl<T: Real> Sht<T> {
                 let degrees = self.degrees(m);
                 for (parity, destination) in [(0, sym_m), (1, anti_m)] {
                     let rows = (degrees + 1 - parity) / 2;
+                    // The quiet rings nearest the pole get nothing from this order.
+                    let quiet = panels.quiet[parity];
+                    destination[..quiet * width].fill(T::zero());
                     matmul_packed(
                         MatMut {
                             data: destination,
-                            offset: 0,
-                            rows: half,
+                            offset: quiet * width,
+                            rows: half - quiet,
                             cols: width,
                             row_stride: width,
                         },

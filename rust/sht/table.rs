@@ -30,11 +30,16 @@ pub(super) struct LegendreTable<T> {
 }
 
 /// One order's λ_lm, split by the parity of l − m and packed for the kernel both ways:
-/// degrees × half rings (analysis) and half rings × degrees (synthesis).
+/// degrees × half rings (analysis) and half rings × degrees (synthesis), each without
+/// the `quiet` rings nearest the pole.
 #[derive(Default)]
 pub(super) struct OrderPanels<T> {
     pub(super) analysis: [Packed<T>; 2],
     pub(super) synthesis: [Packed<T>; 2],
+    /// Per parity, how many half rings from the pole have every λ_lm of that parity
+    /// negligible (below [`streamed::QUIET`]): the panels start after them, so the products
+    /// skip them (for large m, a third of the rings at 90 × 180).
+    pub(super) quiet: [usize; 2],
 }
 
 impl<T: Real> LegendreTable<T> {
@@ -106,15 +111,23 @@ impl<T: Real> LegendreTable<T> {
             .collect();
         let mut values = vec![0f64; degrees * half];
         self.recurrence.rows(m, &self.cos_theta[..half], &start, &mut values);
+        let quiet = [0, 1].map(|parity| {
+            let rows = values[parity * half..].chunks(half).step_by(2);
+            (0..half)
+                .find(|&p| rows.clone().any(|row| row[p].abs() >= streamed::QUIET))
+                .unwrap_or(half)
+        });
         let lambda: Vec<T> = values.into_iter().map(T::of).collect();
         for parity in 0..2 {
             let rows = (degrees + 1 - parity) / 2;
+            let quiet = quiet[parity];
+            panels.quiet[parity] = quiet;
             if orientation != Orientation::Synthesis {
                 panels.analysis[parity].pack(MatRef {
                     data: &lambda,
-                    offset: parity * half,
+                    offset: parity * half + quiet,
                     rows,
-                    cols: half,
+                    cols: half - quiet,
                     row_stride: 2 * half,
                     col_stride: 1,
                 });
@@ -122,8 +135,8 @@ impl<T: Real> LegendreTable<T> {
             if orientation != Orientation::Analysis {
                 panels.synthesis[parity].pack(MatRef {
                     data: &lambda,
-                    offset: parity * half,
-                    rows: half,
+                    offset: parity * half + quiet,
+                    rows: half - quiet,
                     cols: rows,
                     row_stride: 1,
                     col_stride: 2 * half,

@@ -225,3 +225,16 @@ fn transforms_into_given_outputs_overwrite_them_and_check_their_size() {
             .is_err());
     }
 }
+
+#[test]
+fn products_skip_the_rings_near_the_pole_where_an_orders_values_are_negligible() {
+    // λ_lm near the poles falls like sin^m θ: for large m the polar rings contribute
+    // nothing, and the kept panels start after them (the results are checked against the
+    // on-the-fly path and the round trips above).
+    let sht = Sht::<f64>::new(90, 180, 89, Grid::GaussLegendre).unwrap();
+    let panels = sht.at_grid.cached.as_ref().expect("a 90 × 180 table is kept");
+    let quiet: Vec<[usize; 2]> = panels.iter().map(|order| order.quiet).collect();
+    assert_eq!(quiet[0], [0, 0]);
+    assert!(quiet[89][0] >= 10, "{:?}", quiet[89]);
+    assert!(quiet.windows(2).all(|w| w[1][0] >= w[0][0]), "{quiet:?}");
+}
