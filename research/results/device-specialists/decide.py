@@ -1,0 +1,54 @@
+"""The device-specialists study's rule (README.md), from the rows of the attention-pooling study's ``compare.sh``.
+
+    python research/results/device-specialists/decide.py OUT CANDIDATE BASELINE
+
+On the ``tables`` group (the families, with FAMILIES set), each per-material PSNR difference CANDIDATE − BASELINE
+with its 95 % interval: (a) the encoder averaged over the five device patterns at 1,500 samples (OUT/patterns),
+above 0; (b) the encoder from 4,000 random bins (OUT/random), not wholly below 0; (c) ``latent`` from the same
+4,000 random bins, not wholly below 0. Prints the three and whether the candidate passes; writes
+OUT/decision-CANDIDATE.json.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io.atomic import save_json
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+from compare_models import per_material_psnr  # noqa: E402
+
+DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+
+
+def difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none") -> dict:
+    new = per_material_psnr(rows, candidate, patterns, budget=budget)
+    old = per_material_psnr(rows, baseline, patterns, budget=budget)
+    if not new or not old:
+        raise SystemExit(f"no {budget!r} rows of {candidate!r} or {baseline!r} on the tables")
+    return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
+
+
+def main(argv=None) -> int:
+    out, candidate, baseline = (argv or sys.argv[1:])[:3]
+    rows = {name: json.loads((Path(out) / name / "compare.json").read_text())["rows"] for name in ("patterns", "random")}
+    tests = {
+        "a_devices_1500": difference(rows["patterns"], candidate, baseline, DEVICE_PATTERNS),
+        "b_encoder_random_4000": difference(rows["random"], candidate, baseline, ("merl-bins",)),
+        "c_latent_random_4000": difference(rows["random"], candidate, baseline, ("merl-bins",), "latent"),
+    }
+    passes = (tests["a_devices_1500"]["low"] > 0 and tests["b_encoder_random_4000"]["high"] > 0
+              and tests["c_latent_random_4000"]["high"] > 0)
+    save_json(Path(out) / f"decision-{candidate}.json",
+              {"candidate": candidate, "baseline": baseline, **tests, "passes": bool(passes)})
+    for name, value in tests.items():
+        print(f"{name}: {value['mean']:+.2f} [{value['low']:+.2f}, {value['high']:+.2f}]")
+    print(f"{candidate} against {baseline}: {'passes' if passes else 'does not pass'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
