@@ -122,6 +122,8 @@ def test_an_encoder_mean_averages_its_members_and_packs_and_loads(toy_materials,
     pretrained.pack_checkpoint(checkpoint, mapping, tmp_path / "mean", half=False)
     reloaded = frenbrdf.models.autoencoder.load_model(tmp_path / "mean")  # a packed folder loads like a run
     np.testing.assert_allclose(reloaded.encode(values, (wi, wo)), expected, rtol=1e-5, atol=1e-6)
+    with pytest.raises(ValueError, match="several encoders"):  # it would keep only the first
+        script_module("pack_encoder_mean").assemble(str(tmp_path / "mean"), [str(member.path)])
     other = train(tiny("nbrdf", toy_materials, tmp_path / "other", epochs=1, seed=3))  # another decoder
     with pytest.raises(ValueError, match="not the base's"):
         script_module("pack_encoder_mean").assemble(str(packed), [str(other.path)])
