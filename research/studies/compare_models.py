@@ -107,6 +107,16 @@ def per_material_psnr(rows: list[dict], name: str, patterns, *, group: str = "ta
             for m in sorted({r["material"] for r in mine})}
 
 
+def paired_difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none") -> dict:
+    """The per-material PSNR difference ``candidate − baseline`` on the tables (each the mean over its runs and
+    ``patterns``), its mean and 95 % interval: the test of the studies' rules."""
+    new = per_material_psnr(rows, candidate, patterns, budget=budget)
+    old = per_material_psnr(rows, baseline, patterns, budget=budget)
+    if not new or not old:
+        raise SystemExit(f"no {budget!r} rows of {candidate!r} or {baseline!r} on the tables")
+    return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
+
+
 def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], budgets=BUDGETS) -> dict:
     """Per group of materials, budget and variant: the mean and the spread over its runs, and the per-material
     difference from the baseline with its interval."""

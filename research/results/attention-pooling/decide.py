@@ -15,27 +15,19 @@ import sys
 from pathlib import Path
 
 
-from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import per_material_psnr  # noqa: E402
+from compare_models import paired_difference  # noqa: E402
 
 DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
-
-
-def difference(rows: list[dict], candidate: str, baseline: str, patterns) -> dict:
-    new, old = per_material_psnr(rows, candidate, patterns), per_material_psnr(rows, baseline, patterns)
-    if not new or not old:
-        raise SystemExit(f"no rows of {candidate!r} or {baseline!r} on the tables")
-    return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
 
 
 def main(argv=None) -> int:
     out, candidate, baseline = (argv or sys.argv[1:])[:3]
     rows = {name: json.loads((Path(out) / name / "compare.json").read_text())["rows"] for name in ("patterns", "random")}
-    devices = difference(rows["patterns"], candidate, baseline, DEVICE_PATTERNS)
-    random_bins = difference(rows["random"], candidate, baseline, ("merl-bins",))
+    devices = paired_difference(rows["patterns"], candidate, baseline, DEVICE_PATTERNS)
+    random_bins = paired_difference(rows["random"], candidate, baseline, ("merl-bins",))
     decision = {"candidate": candidate, "baseline": baseline, "devices_1500": devices, "random_bins_4000": random_bins,
                 "passes": bool(devices["low"] > 0 and random_bins["high"] > 0)}
     save_json(Path(out) / f"decision-{candidate}.json", decision)

@@ -15,30 +15,21 @@ import json
 import sys
 from pathlib import Path
 
-from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import per_material_psnr  # noqa: E402
+from compare_models import paired_difference  # noqa: E402
 
 DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
-
-
-def difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none") -> dict:
-    new = per_material_psnr(rows, candidate, patterns, budget=budget)
-    old = per_material_psnr(rows, baseline, patterns, budget=budget)
-    if not new or not old:
-        raise SystemExit(f"no {budget!r} rows of {candidate!r} or {baseline!r} on the tables")
-    return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
 
 
 def main(argv=None) -> int:
     out, candidate, baseline = (argv or sys.argv[1:])[:3]
     rows = {name: json.loads((Path(out) / name / "compare.json").read_text())["rows"] for name in ("patterns", "random")}
     tests = {
-        "a_devices_1500": difference(rows["patterns"], candidate, baseline, DEVICE_PATTERNS),
-        "b_encoder_random_4000": difference(rows["random"], candidate, baseline, ("merl-bins",)),
-        "c_latent_random_4000": difference(rows["random"], candidate, baseline, ("merl-bins",), "latent"),
+        "a_devices_1500": paired_difference(rows["patterns"], candidate, baseline, DEVICE_PATTERNS),
+        "b_encoder_random_4000": paired_difference(rows["random"], candidate, baseline, ("merl-bins",)),
+        "c_latent_random_4000": paired_difference(rows["random"], candidate, baseline, ("merl-bins",), "latent"),
     }
     passes = (tests["a_devices_1500"]["low"] > 0 and tests["b_encoder_random_4000"]["high"] > 0
               and tests["c_latent_random_4000"]["high"] > 0)
