@@ -44,7 +44,7 @@ def assemble(base: str | None, members: list[str], *, base_encoder: bool = True,
     packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
     base_decoder = {name: value.float() for name, value in packed["model"].items() if name.startswith("decoder.")}
     config = json.loads(packed["config"])
-    if config["model"].get("extra_encoders"):
+    if base_encoder and config["model"].get("extra_encoders"):
         raise ValueError(f"{base}: the base has several encoders; give its single-encoder base and its members instead")
     encoders = []  # (state dict, encoder config) of each encoder, in order
     if base_encoder:

@@ -107,6 +107,10 @@ def per_material_psnr(rows: list[dict], name: str, patterns, *, group: str = "ta
             for m in sorted({r["material"] for r in mine})}
 
 
+# The five device patterns the studies' rules average over (every pattern but random MERL bins).
+DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+
+
 def paired_difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none") -> dict:
     """The per-material PSNR difference ``candidate − baseline`` on the tables (each the mean over its runs and
     ``patterns``), its mean and 95 % interval: the test of the studies' rules."""

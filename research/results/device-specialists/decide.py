@@ -18,9 +18,7 @@ from pathlib import Path
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import paired_difference  # noqa: E402
-
-DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+from compare_models import DEVICE_PATTERNS, paired_difference  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -7,10 +7,9 @@
 #   (STUDY: the sampling-patterns study's runs, e.g. local/v5/study; WORK: the fold study's, e.g. local/v5/folds)
 set -euo pipefail
 STUDY=${1:?}; WORK=${2:?}; OUT=${3:?}
-FOLDS=research/studies/measured_folds/folds.json
 models=("$STUDY"/mixed-mean-s0 "$STUDY"/mixed-mean-s1 "$WORK"/fits-s2); labels=(fits/s0 fits/s1 fits/s2); trained_on=()
 for fold in 0 1 2; do
-    others=$(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$FOLDS")
+    others=$(python research/studies/measured_folds/folds.py others "$fold")
     for seed in 0 1 2; do
         models+=("$WORK/measured-f$fold-s$seed"); labels+=("measured/f$fold-s$seed")
         for name in $others; do trained_on+=("measured/f$fold-s$seed=$name"); done
@@ -18,7 +17,7 @@ for fold in 0 1 2; do
 done
 models+=(pretrained); labels+=(v6)
 while read -r name; do [[ -n "$name" ]] && trained_on+=("v6=$name"); done < research/studies/sampling_patterns/v4-trained-on.txt
-groups=$(python -c "import json,sys; k=json.load(open(sys.argv[1]))['kinds']; print(' '.join(n.replace(' ', '-') + '=' + ','.join(m) for n, m in k.items()))" "$FOLDS")
+groups=$(python research/studies/measured_folds/folds.py groups)
 COMPARE=(python research/studies/compare_models.py --models "${models[@]}" --labels "${labels[@]}"
          --trained-on "${trained_on[@]}" --measurements ../shared/data/rgl-measured/*.bsdf --group $groups
          --patterns merl-bins uniform in-plane gonioreflectometer image-based specular --resolution 128)

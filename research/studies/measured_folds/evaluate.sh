@@ -17,7 +17,7 @@ models=(); labels=(); trained_on=()
 shopt -s nullglob
 for run in "$BASE"-s[0-9] "$WORK"/fits-s[0-9]; do models+=("$run"); labels+=("fits/${run##*-}"); done
 for fold in 0 1 2; do
-    others=$(python -c "import json,sys; f=json.load(open(sys.argv[1]))['folds']; print(' '.join(n for k, fold in enumerate(f) if k != $fold for n in fold))" "$HERE/folds.json")
+    others=$(python "$HERE/folds.py" others "$fold")
     for arm in measured families; do for seed in 0 1 2 3 4 5; do  # the finished runs (a log's last line names its folder)
         grep -qs "run folder" "$WORK/$arm-f$fold-s$seed.log" || continue
         models+=("$WORK/$arm-f$fold-s$seed"); labels+=("$arm/f$fold-s$seed")
@@ -27,7 +27,7 @@ done
 # Version 4, on what it did not train on (its split's train and validation materials: v4-trained-on.txt).
 models+=(pretrained); labels+=(v4)
 while read -r name; do [[ -n "$name" ]] && trained_on+=("v4=$name"); done < "$HERE/../sampling_patterns/v4-trained-on.txt"
-groups=$(python -c "import json,sys; k=json.load(open(sys.argv[1]))['kinds']; print(' '.join(n.replace(' ', '-') + '=' + ','.join(m) for n, m in k.items()))" "$HERE/folds.json")
+groups=$(python "$HERE/folds.py" groups)
 mkdir -p "$OUT"
 OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
     --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full --samples 4000 --resolution 128 \
