@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The real-encoders study's two runs (README.md): encoders for version 6's frozen decoder, with the `mixed`
+# encoders' own config, on version 4's data plus the .bsdf measurements of the 13 materials version 4 trained on
+# (as fits) and the procedural families. Two at a time, one thread each.
+#
+#   bash research/results/real-encoders/train.sh V4DATA FAMILIES BASE WORK
+#   (V4DATA: version 4's tables, e.g. local/v5/release/work/data; FAMILIES: e.g. local/v5/families;
+#    BASE: the `mixed` run whose config is reused, e.g. local/v5/frozen/mixed-s0)
+set -euo pipefail
+V4DATA=${1:?}; FAMILIES=${2:?}; BASE=${3:?}; WORK=${4:?}
+MEASURED=${MEASURED:-../shared/data/rgl-measured}
+mkdir -p "$WORK/data"
+for path in "$V4DATA"/* "$FAMILIES"/*.binary; do ln -sfn "$(realpath "$path")" "$WORK/data/"; done
+while read -r name; do
+    if [[ -f "$MEASURED/$name.bsdf" ]]; then ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$WORK/data/"; fi
+done < research/studies/sampling_patterns/v4-trained-on.txt
+echo "$(ls "$WORK"/data/*.bsdf | wc -l) measurements, $(ls "$WORK"/data/*.binary | wc -l) tables in $WORK/data"
+# The base run's config, its data and output fields aside (the command line gives them).
+python - "$BASE/config.json" "$WORK/config.json" <<'PY'
+import json, sys
+config = json.load(open(sys.argv[1]))
+for field in ("data", "out", "seed"):
+    config.pop(field, None)
+json.dump(config, open(sys.argv[2], "w"), indent=1)
+PY
+for seed in 0 1; do echo "$seed"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
+    'frenbrdf train --data "$1/data" --config "$1/config.json" --seed "$0" --out "$1/real-s$0" --quiet \
+        > "$1/real-s$0.log" 2>&1' "$WORK"
