@@ -12,7 +12,8 @@ MEASURED=${MEASURED:-../shared/data/rgl-measured}
 mkdir -p "$WORK/data"
 for path in "$V4DATA"/* "$FAMILIES"/*.binary; do ln -sfn "$(realpath "$path")" "$WORK/data/"; done
 while read -r name; do
-    if [[ -f "$MEASURED/$name.bsdf" ]]; then ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$WORK/data/"; fi
+    # Beside the material's fit, under a name of its own (a folder holds one file per material).
+    if [[ -f "$MEASURED/$name.bsdf" ]]; then ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$WORK/data/$name-measured.bsdf"; fi
 done < research/studies/sampling_patterns/v4-trained-on.txt
 echo "$(ls "$WORK"/data/*.bsdf | wc -l) measurements, $(ls "$WORK"/data/*.binary | wc -l) tables in $WORK/data"
 # The base run's config, its data and output fields aside (the command line gives them).
@@ -24,5 +25,5 @@ for field in ("data", "out", "seed"):
 json.dump(config, open(sys.argv[2], "w"), indent=1)
 PY
 for seed in 0 1; do echo "$seed"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
-    'frenbrdf train --data "$1/data" --config "$1/config.json" --seed "$0" --out "$1/real-s$0" --quiet \
-        > "$1/real-s$0.log" 2>&1' "$WORK"
+    'frenbrdf train --data "$0/data" --config "$0/config.json" --seed "$1" --out "$0/real-s$1" --quiet \
+        > "$0/real-s$1.log" 2>&1' "$WORK"
