@@ -1,0 +1,69 @@
+"""Two builds of the native module, one SHT workload, timed in one process in alternating rounds.
+
+    python benches/sht_builds.py BASE.so NEW.so [--dtype float32] [--rounds 21] [--threads 1]
+
+For changes to the SHT's kernels that move its speed by a few percent: on a virtual machine two
+processes run minutes apart differ by more than that. Both builds (``lib_native.so`` from
+``cargo build --release --features python --lib``, copied aside) are loaded under different module
+names, checked against each other on the same maps, then timed with ``common.time_interleaved`` on
+the project's workload (192 maps, Gauss–Legendre 90 × 180, lmax 89). Reported: NEW's time over
+BASE's, per-round median and quartiles (below 1: NEW is faster).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.machinery
+import importlib.util
+import os
+import sys
+from pathlib import Path
+
+
+def load(path: Path, name: str):
+    """The extension module at ``path``, imported as ``name``."""
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    if spec is None:
+        sys.exit(f"{path} is not a loadable extension module")
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("base", type=Path)
+    parser.add_argument("new", type=Path)
+    parser.add_argument("--dtype", choices=("float32", "float64"), default="float32")
+    parser.add_argument("--rounds", type=int, default=21)
+    parser.add_argument("--threads", type=int, default=1)
+    args = parser.parse_args()
+    os.environ["RAYON_NUM_THREADS"] = str(args.threads)  # before either build starts its pool
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import numpy as np
+
+    from common import cpu_model, time_interleaved
+
+    # Each build under the name its PyInit symbol expects, in a package of its own.
+    base, new = (load(path, f"{tag}._native") for tag, path in (("base", args.base), ("new", args.new)))
+    nlat, nlon, lmax, batch = 90, 180, 89, 192
+    maps = np.random.default_rng(0).standard_normal((batch, nlat * nlon)).astype(args.dtype)
+    plans = [module.ShtPlan(nlat, nlon, lmax, "gauss", args.dtype) for module in (base, new)]
+    expected, got = (np.asarray(plan.analysis(maps)) for plan in plans)
+    error = np.abs(got - expected).max() / np.abs(expected).max()
+    if error > (1e-5 if args.dtype == "float32" else 1e-12):
+        sys.exit(f"the builds disagree by {error:.1e} (relative): not timed")
+    rounds = time_interleaved(lambda: plans[0].analysis(maps), lambda: plans[1].analysis(maps),
+                              args.rounds).ratio_summary()
+    # ratio_summary's ratios are second / first in seconds: NEW's time over BASE's.
+    low, high = rounds["quartiles"]
+    print(f"CPU: {cpu_model()}; {args.threads} thread(s); {args.dtype}; {batch} maps {nlat} x {nlon}, lmax {lmax}")
+    print(f"BASE {batch / rounds['first_median_s']:,.0f} maps/s, NEW {batch / rounds['second_median_s']:,.0f}; "
+          f"NEW's time / BASE's over {rounds['rounds']} rounds: median {rounds['median']:.3f} "
+          f"(quartiles {low:.3f}-{high:.3f}); agreement {error:.1e}")
+
+
+if __name__ == "__main__":
+    main()
