@@ -111,13 +111,14 @@ def per_material_psnr(rows: list[dict], name: str, patterns, *, group: str = "ta
 DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 
 
-def paired_difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none") -> dict:
-    """The per-material PSNR difference ``candidate − baseline`` on the tables (each the mean over its runs and
+def paired_difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none",
+                      group: str = "tables") -> dict:
+    """The per-material PSNR difference ``candidate − baseline`` on ``group`` (each the mean over its runs and
     ``patterns``), its mean and 95 % interval: the test of the studies' rules."""
-    new = per_material_psnr(rows, candidate, patterns, budget=budget)
-    old = per_material_psnr(rows, baseline, patterns, budget=budget)
+    new = per_material_psnr(rows, candidate, patterns, group=group, budget=budget)
+    old = per_material_psnr(rows, baseline, patterns, group=group, budget=budget)
     if not new or not old:
-        raise SystemExit(f"no {budget!r} rows of {candidate!r} or {baseline!r} on the tables")
+        raise SystemExit(f"no {budget!r} rows of {candidate!r} or {baseline!r} on the {group}")
     return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
 
 
