@@ -98,12 +98,12 @@ def variant(label: str) -> str:
 
 
 def per_material_psnr(rows: list[dict], name: str, patterns, *, group: str = "tables", budget: str = "none",
-                      count: int | None = None) -> dict[str, float]:
-    """Material → variant ``name``'s PSNR averaged over ``patterns`` (at ``count`` samples; None: any) and its runs,
-    for the rules of the studies that read these rows."""
+                      count: int | None = None, metric: str = "psnr") -> dict[str, float]:
+    """Material → variant ``name``'s PSNR (or another ``metric`` of the rows) averaged over ``patterns`` (at ``count``
+    samples; None: any) and its runs, for the rules of the studies that read these rows."""
     mine = [r for r in rows if variant(r["model"]) == name and r["group"] == group and r["budget"] == budget
             and r["pattern"] in patterns and (count is None or r["count"] == count)]
-    return {m: float(np.mean([r["psnr"] for r in mine if r["material"] == m]))
+    return {m: float(np.mean([r[metric] for r in mine if r["material"] == m]))
             for m in sorted({r["material"] for r in mine})}
 
 
@@ -112,11 +112,11 @@ DEVICE_PATTERNS = ("uniform", "in-plane", "gonioreflectometer", "image-based", "
 
 
 def paired_difference(rows: list[dict], candidate: str, baseline: str, patterns, budget: str = "none",
-                      group: str = "tables") -> dict:
-    """The per-material PSNR difference ``candidate − baseline`` on ``group`` (each the mean over its runs and
-    ``patterns``), its mean and 95 % interval: the test of the studies' rules."""
-    new = per_material_psnr(rows, candidate, patterns, group=group, budget=budget)
-    old = per_material_psnr(rows, baseline, patterns, group=group, budget=budget)
+                      group: str = "tables", metric: str = "psnr") -> dict:
+    """The per-material difference ``candidate − baseline`` in PSNR (or ``metric``) on ``group`` (each the mean over
+    its runs and ``patterns``), its mean and 95 % interval: the test of the studies' rules."""
+    new = per_material_psnr(rows, candidate, patterns, group=group, budget=budget, metric=metric)
+    old = per_material_psnr(rows, baseline, patterns, group=group, budget=budget, metric=metric)
     if not new or not old:
         raise SystemExit(f"no {budget!r} rows of {candidate!r} or {baseline!r} on the {group}")
     return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
