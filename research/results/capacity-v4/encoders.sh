@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Encoders for a larger decoder (README.md, "What follows"): version 6's two kinds of device encoder, the plain
+# mean and attention pooling, each with the `mixed` sampling and the config of version 5's encoders (BASE, e.g.
+# local/v5/frozen/mixed-s0), the sizes set to the decoder's, trained for DECODER kept frozen. Seed 0 each, two at
+# a time on one thread each.
+#
+#   bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
+set -euo pipefail
+BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}
+mkdir -p "$WORK"
+for pooling in mean attention; do
+    python - "$BASE/config.json" research/results/capacity/config-big.json "$pooling" "$WORK/$pooling.json" <<'PY'
+import json, sys
+config, big = (json.load(open(path)) for path in sys.argv[1:3])
+for field in ("data", "out", "seed", "decoder_from"):
+    config.pop(field, None)
+config["model"]["nbrdf"]["hidden"] = big["model"]["nbrdf"]["hidden"]
+config["model"]["encoder"]["latent"] = big["model"]["encoder"]["latent"]
+config["model"]["decoder"]["hidden"] = big["model"]["decoder"]["hidden"]
+config["model"]["encoder"]["pooling"] = sys.argv[3]
+if sys.argv[3] == "attention":
+    config["model"]["encoder"]["attention_heads"] = 4
+json.dump(config, open(sys.argv[4], "w"), indent=1)
+PY
+done
+printf '%s\n' mean attention | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
+    'frenbrdf train --data "$1" --config "$0/$3.json" --decoder-from "$2" --seed 0 --out "$0/$3-s0" --quiet \
+        > "$0/$3-s0.log" 2>&1' "$WORK" "$DATA" "$DECODER"
