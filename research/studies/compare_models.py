@@ -122,6 +122,12 @@ def paired_difference(rows: list[dict], candidate: str, baseline: str, patterns,
     return paired_interval([new[m] - old[m] for m in sorted(new.keys() & old.keys())])
 
 
+def print_intervals(tests: dict[str, dict]) -> None:
+    """One line per rule test: its name, mean difference and 95 % interval, and over how many materials."""
+    for name, test in tests.items():
+        print(f"{name}: {test['mean']:+.2f} [{test['low']:+.2f}, {test['high']:+.2f}] over {test['n']} materials")
+
+
 def summarise(rows: list[dict], baseline: str, groups: dict[str, list[str]], budgets=BUDGETS) -> dict:
     """Per group of materials, budget and variant: the mean and the spread over its runs, and the per-material
     difference from the baseline with its interval."""

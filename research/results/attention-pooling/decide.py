@@ -18,7 +18,7 @@ from pathlib import Path
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import DEVICE_PATTERNS, paired_difference  # noqa: E402
+from compare_models import DEVICE_PATTERNS, paired_difference, print_intervals  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -29,9 +29,7 @@ def main(argv=None) -> int:
     decision = {"candidate": candidate, "baseline": baseline, "devices_1500": devices, "random_bins_4000": random_bins,
                 "passes": bool(devices["low"] > 0 and random_bins["high"] > 0)}
     save_json(Path(out) / f"decision-{candidate}.json", decision)
-    for name in ("devices_1500", "random_bins_4000"):
-        value = decision[name]
-        print(f"{name}: {value['mean']:+.2f} [{value['low']:+.2f}, {value['high']:+.2f}]")
+    print_intervals({name: decision[name] for name in ("devices_1500", "random_bins_4000")})
     print(f"{candidate} against {baseline}: {'passes' if decision['passes'] else 'does not pass'}")
     return 0
 

@@ -18,7 +18,7 @@ from pathlib import Path
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import paired_difference  # noqa: E402
+from compare_models import paired_difference, print_intervals  # noqa: E402
 
 RANDOM_BINS = ("merl-bins",)
 
@@ -44,9 +44,7 @@ def main(argv=None) -> int:
         verdict = "within noise"
     save_json(out / "decision.json", {"candidate": candidate, "baseline": baseline, "tables": tables,
                                       "measured": measured, "verdict": verdict})
-    for name, value in [*(("tables " + k, v) for k, v in tables.items()),
-                        *(("measured " + k, v) for k, v in measured.items())]:
-        print(f"{name}: {value['mean']:+.2f} [{value['low']:+.2f}, {value['high']:+.2f}] over {value['n']}")
+    print_intervals({**{f"tables {k}": v for k, v in tables.items()}, **{f"measured {k}": v for k, v in measured.items()}})
     print(f"{candidate} against {baseline}: {verdict}")
     return 0
 

@@ -18,7 +18,7 @@ from pathlib import Path
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import DEVICE_PATTERNS, paired_difference  # noqa: E402
+from compare_models import DEVICE_PATTERNS, paired_difference, print_intervals  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -33,8 +33,7 @@ def main(argv=None) -> int:
               and tests["c_latent_random_4000"]["high"] > 0)
     save_json(Path(out) / f"decision-{candidate}.json",
               {"candidate": candidate, "baseline": baseline, **tests, "passes": bool(passes)})
-    for name, value in tests.items():
-        print(f"{name}: {value['mean']:+.2f} [{value['low']:+.2f}, {value['high']:+.2f}]")
+    print_intervals(tests)
     print(f"{candidate} against {baseline}: {'passes' if passes else 'does not pass'}")
     return 0
 

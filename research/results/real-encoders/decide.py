@@ -17,7 +17,7 @@ from pathlib import Path
 from frenbrdf.io.atomic import save_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import DEVICE_PATTERNS, paired_difference  # noqa: E402
+from compare_models import DEVICE_PATTERNS, paired_difference, print_intervals  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -37,8 +37,7 @@ def main(argv=None) -> int:
     else:
         verdict = "within noise"
     save_json(out / "decision.json", {"candidate": candidate, "baseline": baseline, **tests, "verdict": verdict})
-    for name, value in tests.items():
-        print(f"{name}: {value['mean']:+.2f} [{value['low']:+.2f}, {value['high']:+.2f}] over {value.get('n', '?')}")
+    print_intervals(tests)
     print(f"{candidate} against {baseline}: {verdict}")
     return 0
 
