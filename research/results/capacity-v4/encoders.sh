@@ -2,7 +2,8 @@
 # Encoders for a larger decoder (README.md, "What follows"): version 6's two kinds of device encoder, the plain
 # mean and attention pooling, each with the `mixed` sampling and the config of version 5's encoders (BASE, e.g.
 # local/v5/frozen/mixed-s0), the sizes set to the decoder's, trained for DECODER kept frozen. Seed 0 each, two at
-# a time on one thread each.
+# a time on one thread each. DECODER: a packed folder, so that the encoders can be packed beside it
+# (release/pack_encoder_mean.py checks that their decoder is the base's, float16 weights and all).
 #
 #   bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
 set -euo pipefail
