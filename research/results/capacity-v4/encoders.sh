@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Encoders for a larger decoder (README.md, "What follows"): version 6's two kinds of device encoder, the plain
 # mean and attention pooling, each with the `mixed` sampling and the config of version 5's encoders (BASE, e.g.
-# local/v5/frozen/mixed-s0), the sizes set to the decoder's, trained for DECODER kept frozen. Seed 0 each, two at
-# a time on one thread each. DECODER: a packed folder, so that the encoders can be packed beside it
+# local/v5/frozen/mixed-s0), the sizes set to the decoder's, trained for DECODER kept frozen. Seed SEED (default 0)
+# each, two at a time on one thread each. DECODER: a packed folder, so that the encoders can be packed beside it
 # (release/pack_encoder_mean.py checks that their decoder is the base's, float16 weights and all).
 #
-#   bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
+#   [SEED=1] bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
 set -euo pipefail
-BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}
+BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}; SEED=${SEED:-0}
 mkdir -p "$WORK"
 for pooling in mean attention; do
     python - "$BASE/config.json" research/results/capacity/config-big.json "$pooling" "$WORK/$pooling.json" <<'PY'
@@ -25,5 +25,5 @@ json.dump(config, open(sys.argv[4], "w"), indent=1)
 PY
 done
 printf '%s\n' mean attention | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
-    'frenbrdf train --data "$1" --config "$0/$3.json" --decoder-from "$2" --seed 0 --out "$0/$3-s0" --quiet \
-        > "$0/$3-s0.log" 2>&1' "$WORK" "$DATA" "$DECODER"
+    'frenbrdf train --data "$1" --config "$0/$4.json" --decoder-from "$2" --seed "$3" --out "$0/$4-s$3" --quiet \
+        > "$0/$4-s$3.log" 2>&1' "$WORK" "$DATA" "$DECODER" "$SEED"
