@@ -5,12 +5,13 @@
 # each, two at a time on one thread each. DECODER: a packed folder, so that the encoders can be packed beside it
 # (release/pack_encoder_mean.py checks that their decoder is the base's, float16 weights and all).
 #
-#   [SEED=1] bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
+#   [SEED=1] [PATIENCE=150] bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
+#   (PATIENCE: epochs without a better validation loss before a run stops; default the BASE config's)
 set -euo pipefail
 BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}; SEED=${SEED:-0}
 mkdir -p "$WORK"
 for pooling in mean attention; do
-    python - "$BASE/config.json" research/results/capacity/config-big.json "$pooling" "$WORK/$pooling.json" <<'PY'
+    python - "$BASE/config.json" research/results/capacity/config-big.json "$pooling" "$WORK/$pooling.json" "${PATIENCE:-}" <<'PY'
 import json, sys
 config, big = (json.load(open(path)) for path in sys.argv[1:3])
 for field in ("data", "out", "seed", "decoder_from"):
@@ -21,6 +22,8 @@ config["model"]["decoder"]["hidden"] = big["model"]["decoder"]["hidden"]
 config["model"]["encoder"]["pooling"] = sys.argv[3]
 if sys.argv[3] == "attention":
     config["model"]["encoder"]["attention_heads"] = 4
+if sys.argv[5]:
+    config["patience"] = int(sys.argv[5])
 json.dump(config, open(sys.argv[4], "w"), indent=1)
 PY
 done
