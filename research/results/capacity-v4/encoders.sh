@@ -11,21 +11,8 @@ set -euo pipefail
 BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}; SEED=${SEED:-0}
 mkdir -p "$WORK"
 for pooling in mean attention; do
-    python - "$BASE/config.json" research/results/capacity/config-big.json "$pooling" "$WORK/$pooling.json" "${PATIENCE:-}" <<'PY'
-import json, sys
-config, big = (json.load(open(path)) for path in sys.argv[1:3])
-for field in ("data", "out", "seed", "decoder_from"):
-    config.pop(field, None)
-config["model"]["nbrdf"]["hidden"] = big["model"]["nbrdf"]["hidden"]
-config["model"]["encoder"]["latent"] = big["model"]["encoder"]["latent"]
-config["model"]["decoder"]["hidden"] = big["model"]["decoder"]["hidden"]
-config["model"]["encoder"]["pooling"] = sys.argv[3]
-if sys.argv[3] == "attention":
-    config["model"]["encoder"]["attention_heads"] = 4
-if sys.argv[5]:
-    config["patience"] = int(sys.argv[5])
-json.dump(config, open(sys.argv[4], "w"), indent=1)
-PY
+    python research/results/capacity-v4/sized_config.py "$BASE/config.json" "$WORK/$pooling.json" --pooling "$pooling" \
+        ${PATIENCE:+--patience "$PATIENCE"}
 done
 printf '%s\n' mean attention | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
     'frenbrdf train --data "$1" --config "$0/$4.json" --decoder-from "$2" --seed "$3" --out "$0/$4-s$3" --quiet \

@@ -8,17 +8,7 @@
 set -euo pipefail
 BASE=${1:?}; DATA=${2:?}; WORK=${3:?}
 mkdir -p "$WORK"
-python - "$BASE/config.json" research/results/capacity/config-big.json "$WORK/config.json" <<'PY'
-import json, sys
-config, big = (json.load(open(path)) for path in sys.argv[1:3])
-for field in ("data", "out", "seed"):
-    config.pop(field, None)
-# Only the sizes change: the decoded NBRDF's widths, the latent and the decoder's heads.
-config["model"]["nbrdf"]["hidden"] = big["model"]["nbrdf"]["hidden"]
-config["model"]["encoder"]["latent"] = big["model"]["encoder"]["latent"]
-config["model"]["decoder"]["hidden"] = big["model"]["decoder"]["hidden"]
-json.dump(config, open(sys.argv[3], "w"), indent=1)
-PY
+python research/results/capacity-v4/sized_config.py "$BASE/config.json" "$WORK/config.json"
 for seed in 0 1; do echo "$seed"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
     'frenbrdf train --data "$1" --config "$0/config.json" --seed "$2" --out "$0/big-s$2" --quiet \
         > "$0/big-s$2.log" 2>&1' "$WORK" "$DATA"
