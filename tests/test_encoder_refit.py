@@ -89,14 +89,31 @@ def test_a_fine_tune_starts_where_its_source_ended_and_trains_everything(toy_mat
     assert any(changed)
 
 
-def test_init_from_needs_the_same_model_and_excludes_decoder_from(toy_materials, tmp_path):
+def test_init_from_needs_the_same_model(toy_materials, tmp_path):
     source = train(tiny("nbrdf", toy_materials, tmp_path / "source", epochs=1))
     cfg = tiny("nbrdf", toy_materials, tmp_path / "tuned", init_from=str(source.path))
     cfg.model.encoder.pooled = (8,)
     with pytest.raises(ValueError, match="init_from .* differs from this run's in encoder"):
         train(cfg)
-    with pytest.raises(ValueError, match="not both"):
-        tiny("nbrdf", toy_materials, tmp_path / "both", init_from="pretrained", decoder_from="pretrained")
+
+
+def test_init_from_with_decoder_from_starts_the_encoder_from_one_and_freezes_the_others_decoder(toy_materials,
+                                                                                                tmp_path):
+    decoder_source = train(tiny("nbrdf", toy_materials, tmp_path / "decoder", epochs=1))
+    encoder_source = train(tiny("nbrdf", toy_materials, tmp_path / "encoder", epochs=1, seed=3,
+                                decoder_from=str(decoder_source.path)))
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "both", epochs=1, lr=1e-12, seed=5,
+               decoder_from=str(decoder_source.path), init_from=str(encoder_source.path))
+    both = frenbrdf.Model.load(train(cfg).path)  # lr 1e-12: every weight stays where it started
+    for part, source in (("encoder", encoder_source), ("decoder", decoder_source)):
+        expected = getattr(frenbrdf.Model.load(source.path).network, part).state_dict()
+        for name, tensor in getattr(both.network, part).state_dict().items():
+            torch.testing.assert_close(tensor, expected[name], msg=f"{part}.{name}")
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "other", decoder_from=str(decoder_source.path),
+               init_from=str(encoder_source.path))
+    cfg.model.encoder.pooling, cfg.model.encoder.attention_heads = "attention", 2
+    with pytest.raises(ValueError, match="init_from .* differs from this run's in .*attention"):
+        train(cfg)
 
 
 def test_an_encoder_mean_averages_its_members_and_packs_and_loads(toy_materials, tmp_path):

@@ -90,7 +90,8 @@ def _train(subparsers) -> None:
     train.add_argument("--decoder-from", metavar="MODEL", help="train only an encoder, for the decoder and mapping "
                        "of this model (a run folder, a checkpoint, a packed model's folder or 'pretrained'), kept frozen")
     train.add_argument("--init-from", metavar="MODEL", help="fine-tune: start from every weight and the mapping of "
-                       "this model (a run folder, a checkpoint, a packed folder or 'pretrained'; the same model config)")
+                       "this model (a run folder, a checkpoint, a packed folder or 'pretrained'; the same model config); with "
+                       "--decoder-from, only the encoder starts from this model's")
     train.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     train.add_argument("--overwrite", action="store_true", help="train into --out although it holds an earlier "
                        "run (its files are replaced) or other files (they are kept)")

@@ -227,11 +227,13 @@ class TrainConfig:
     """A trained model whose decoder and mapping this run takes over, frozen, so that only the encoder trains:
     a run folder, a checkpoint, a packed model's folder or ``"pretrained"`` (docs/usage.md, "Starting from a
     trained model").
-    Its latent size, decoder and NBRDF must be this config's. Empty: the whole autoencoder trains."""
+    Its latent size, decoder and NBRDF must be this config's. With ``init_from`` too, the encoder starts from
+    that model's instead of a fresh initialisation. Empty: the whole autoencoder trains."""
     init_from: str = ""
     """A trained model of this run's model config whose weights and mapping this run starts from (fine-tuning,
     e.g. on data with new materials): a run folder, a checkpoint, a packed model's folder or ``"pretrained"``.
-    Everything trains.
+    Everything trains, unless ``decoder_from`` is given too: then the decoder and mapping are that model's,
+    frozen, and only the encoder, started from this one's, trains (an encoder fine-tuned for new sampling).
     Empty: a fresh initialisation from ``seed``."""
     device: str = "cpu"
     """``"cpu"``, ``"cuda"`` or ``"auto"``."""
@@ -279,8 +281,6 @@ class TrainConfig:
             problems.append("select 'psnr' needs render_every > 0 (the validation renders it selects by)")
         elif self.select == "psnr" and 0 < self.patience < self.render_every:
             problems.append(f"patience ({self.patience}) must be ≥ render_every ({self.render_every}) with select 'psnr'")
-        if self.decoder_from and self.init_from:
-            problems.append("give decoder_from (a frozen decoder) or init_from (start from a whole model), not both")
         if self.device not in ("cpu", "cuda", "auto"):
             problems.append(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
         if not problems:  # the sizes are valid: what a step of them holds

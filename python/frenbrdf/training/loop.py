@@ -92,10 +92,14 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     split = (_resumed_split(checkpoint, cfg, files, folder.target) if checkpoint
              else split_materials(files, cfg.seed, cfg.split, cfg.holdout))
     batch_size = _batch_size(cfg, split, ranks)
-    source_spec = cfg.decoder_from or cfg.init_from  # at most one of them (TrainConfig checks)
-    source = load_model(source_spec) if source_spec else None
+    # The model whose mapping and decoder the run keeps (decoder_from) or starts from (init_from), and, with both
+    # given, the one its encoder starts from.
+    source = load_model(cfg.decoder_from or cfg.init_from) if (cfg.decoder_from or cfg.init_from) else None
+    encoder_source = load_model(cfg.init_from) if cfg.decoder_from and cfg.init_from else None
     if source is not None:
-        check_source(cfg, source)
+        check_source(cfg, source, "decoder_from" if cfg.decoder_from else "init_from")
+    if encoder_source is not None:
+        check_source(cfg, encoder_source, "init_from")
     data = prepare(cfg, split, files, ranks, data_cache,
                    mapping=source.mapping if source is not None else None)  # bad data fails here
     if ranks.main:
@@ -105,7 +109,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
         save_json(folder.target / "split.json", split.to_json())
         checkpoints.save_mapping(folder.target, data.mapping.state())
 
-    trainer = Trainer(cfg, folder.target, ranks, device, split, data, batch_size, source, checkpoint)
+    trainer = Trainer(cfg, folder.target, ranks, device, split, data, batch_size, source, checkpoint,
+                      encoder_source=encoder_source)
     validation_renders = (ScoringSet([files[name] for name in split.val], resolution=cfg.render_resolution,
                                      seed=cfg.seed) if cfg.render_every else None)
     trainer.run(validation_renders)
@@ -125,14 +130,17 @@ class Trainer:
     """
 
     def __init__(self, cfg: TrainConfig, run_dir: Path, ranks: Distributed, device: torch.device, split: Split,
-                 data: PreparedData, batch_size: int, source: Model | None, checkpoint: dict | None):
+                 data: PreparedData, batch_size: int, source: Model | None, checkpoint: dict | None, *,
+                 encoder_source: Model | None = None):
         self.cfg, self.run_dir, self.ranks, self.device, self.split, self.data = cfg, run_dir, ranks, device, split, data
         self.batch_size, self.steps_per_epoch = batch_size, data.n_train // batch_size
         torch.manual_seed(cfg.seed)
         network = AutoEncoder(cfg.model)
-        if source is not None and cfg.init_from:  # fine-tuning: every weight starts where the source's ended
+        if source is not None and not cfg.decoder_from:  # fine-tuning: every weight starts where the source's ended
             network.load_state_dict(source.network.state_dict())
         elif source is not None:  # cfg.decoder_from: the trained decoder, frozen; only the encoder learns
+            if encoder_source is not None:  # ... starting from another model's encoder (cfg.init_from)
+                network.encoder.load_state_dict(encoder_source.network.encoder.state_dict())
             network.decoder.load_state_dict(source.network.decoder.state_dict())
             network.decoder.requires_grad_(False)
         self.network = network.to(device)
@@ -280,11 +288,12 @@ def make_optimizer(network: torch.nn.Module, cfg: TrainConfig) -> torch.optim.Op
     return torch.optim.Adam(trained, lr=cfg.lr)
 
 
-def check_source(cfg: TrainConfig, source: Model):
-    """That the model ``cfg.decoder_from`` or ``cfg.init_from`` names fits this run: for ``decoder_from`` the same
-    decoder, NBRDF, latent size and mapping (the encoder may differ), for ``init_from`` the same model config."""
+def check_source(cfg: TrainConfig, source: Model, field: str):
+    """That the model ``cfg.decoder_from`` or ``cfg.init_from`` (``field``) names fits this run: for
+    ``decoder_from`` the same decoder, NBRDF, latent size and mapping (the encoder may differ), for ``init_from``
+    the same model config."""
     ours, theirs = to_dict(cfg.model), to_dict(source.config)
-    if cfg.init_from:  # the mean and density pooling have no weights: a model may be fine-tuned with another
+    if field == "init_from":  # the mean and density pooling have no weights: a model may be fine-tuned with another
         poolings = []
         for config in (ours, theirs):
             encoders = (config["encoder"], *config["extra_encoders"])
@@ -300,8 +309,7 @@ def check_source(cfg: TrainConfig, source: Model):
         if ours["encoder"]["latent"] != theirs["encoder"]["latent"]:
             differ.append("encoder.latent")
     if differ:
-        field, rule = (("init_from", "the same model config") if cfg.init_from else
-                       ("decoder_from", "its model config; only the encoder may differ"))
+        rule = "the same model config" if field == "init_from" else "its model config; only the encoder may differ"
         raise ValueError(f"{field} {getattr(cfg, field)!r}: its model config differs from this run's in "
                          f"{', '.join(differ)}; give this run {rule}")
 

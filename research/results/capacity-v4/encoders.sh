@@ -5,15 +5,18 @@
 # each, two at a time on one thread each. DECODER: a packed folder, so that the encoders can be packed beside it
 # (release/pack_encoder_mean.py checks that their decoder is the base's, float16 weights and all).
 #
-#   [SEED=1] [PATIENCE=150] bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
-#   (PATIENCE: epochs without a better validation loss before a run stops; default the BASE config's)
+#   [SEED=1 | SEEDS="0 1"] [POOLINGS=mean] [PATIENCE=150] [INIT_FROM=MODEL] bash research/results/capacity-v4/encoders.sh BASE DATA DECODER WORK
+#   (PATIENCE: epochs without a better validation loss before a run stops; default the BASE config's. POOLINGS:
+#   which kinds, default both. INIT_FROM: the encoders start from this model's encoder instead of a fresh one.)
 set -euo pipefail
-BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}; SEED=${SEED:-0}
+BASE=${1:?}; DATA=${2:?}; DECODER=${3:?}; WORK=${4:?}
+SEEDS=${SEEDS:-${SEED:-0}}; POOLINGS=${POOLINGS:-mean attention}
 mkdir -p "$WORK"
-for pooling in mean attention; do
+for pooling in $POOLINGS; do
     python research/results/capacity-v4/sized_config.py "$BASE/config.json" "$WORK/$pooling.json" --pooling "$pooling" \
         ${PATIENCE:+--patience "$PATIENCE"}
 done
-printf '%s\n' mean attention | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
-    'frenbrdf train --data "$1" --config "$0/$4.json" --decoder-from "$2" --seed "$3" --out "$0/$4-s$3" --quiet \
-        > "$0/$4-s$3.log" 2>&1' "$WORK" "$DATA" "$DECODER" "$SEED"
+for seed in $SEEDS; do for pooling in $POOLINGS; do echo "$pooling $seed"; done; done |
+    OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
+    'frenbrdf train --data "$1" --config "$0/$4.json" --decoder-from "$2" ${3:+--init-from "$3"} --seed "$5" \
+        --out "$0/$4-s$5" --quiet > "$0/$4-s$5.log" 2>&1' "$WORK" "$DATA" "$DECODER" "${INIT_FROM:-}"
