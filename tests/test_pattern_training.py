@@ -421,3 +421,26 @@ def test_a_tiny_run_with_instruments_and_density_pooling_trains_and_reconstructs
     tuned = tiny("frenbrdf", toy_materials, tmp_path / "tuned", epochs=1, init_from=str(run.path))
     assert tuned.model.encoder.pooling == "mean"
     assert train(tuned).history[-1]["epoch"] == 0
+
+
+def test_validation_reads_its_tables_through_the_sampling_when_asked(prepared):
+    from frenbrdf.models.autoencoder import AutoEncoder
+    from frenbrdf.training import evaluate_split
+
+    cfg, data = prepared
+    network = AutoEncoder(cfg.model)
+    specular = SamplingConfig(patterns={"specular": 1.0}, counts=(50, 60))
+    losses = {}
+    for through in ("merl-bins", "sampling"):
+        drawer, _ = _drawer(prepared, sampling=specular, validate_through=through)
+        runs = [evaluate_split(network, None, drawer.cfg, data, data.validation, "cpu", drawer=drawer)["rec"]
+                for _ in range(2)]
+        assert runs[0] == runs[1]  # the same samples every epoch
+        losses[through] = runs[0]
+    assert losses["sampling"] != losses["merl-bins"]
+    # Without a pattern mixture, or without the drawer, the validation stays on random bins.
+    drawer, _ = _drawer(prepared, validate_through="sampling")
+    assert evaluate_split(network, None, drawer.cfg, data, data.validation, "cpu", drawer=drawer)["rec"] == \
+        losses["merl-bins"]
+    with pytest.raises(ValueError, match="validate_through must be one of"):
+        dataclasses.replace(cfg, validate_through="uniform").validate()

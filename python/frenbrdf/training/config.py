@@ -28,6 +28,9 @@ from ..presets import (
 )
 
 #: The largest training config file read (one is about 2 kB).
+#: What a run's validation context samples may be read through (``TrainConfig.validate_through``).
+VALIDATION_CONTEXTS = ("merl-bins", "sampling")
+
 MAX_CONFIG_BYTES = 1 << 20
 #: The most memory a training step may hold (:meth:`TrainConfig.step_bytes`): what every accepted config runs in on
 #: a machine of a few GB. The presets take 120–190 MB.
@@ -219,6 +222,11 @@ class TrainConfig:
     costs about 0.03 s per material at 64²."""
     render_resolution: int = 64
     """Render size of those validation renders."""
+    validate_through: str = "merl-bins"
+    """The validation loss's context samples: ``"merl-bins"``, random valid bins (the paper's, and every run's
+    before this field), or ``"sampling"``, each validation table read through a pattern drawn from ``sampling``
+    (from a fixed seed, the same every epoch), so that ``best.pt`` and early stopping judge the reading the run
+    trains for (an encoder for device patterns, say). The query samples stay random bins."""
     select: str = "loss"
     """What picks ``best.pt`` (and stops early): ``"loss"``, the lowest validation reconstruction loss
     (every epoch), or ``"psnr"``, the highest validation render PSNR (needs ``render_every``). With
@@ -275,6 +283,8 @@ class TrainConfig:
         if int(self.render_every) < 0 or not 8 <= int(self.render_resolution) <= 1024:
             problems.append(f"render_every must be ≥ 0 and render_resolution in 8 … 1024, got {self.render_every} and "
                             f"{self.render_resolution}")
+        if self.validate_through not in VALIDATION_CONTEXTS:
+            problems.append(f"validate_through must be one of {VALIDATION_CONTEXTS}, got {self.validate_through!r}")
         if self.select not in SELECTION_RULES:
             problems.append(f"select must be one of {SELECTION_RULES}, got {self.select!r}")
         elif self.select == "psnr" and not self.render_every:

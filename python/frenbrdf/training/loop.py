@@ -222,7 +222,8 @@ class Trainer:
 
     def validate(self) -> dict:
         """The validation split's mean loss terms (:func:`evaluate_split`)."""
-        return evaluate_split(self.network, self.frequency, self.cfg, self.data, self.data.validation, self.device)
+        return evaluate_split(self.network, self.frequency, self.cfg, self.data, self.data.validation, self.device,
+                              drawer=self.drawer)
 
     def record(self, epoch: int, entry: dict) -> None:
         """Adds the epoch's entry to the history; writes the best checkpoint of each rule it improves,
@@ -356,15 +357,22 @@ def _resumed_split(checkpoint: dict, cfg: TrainConfig, files: dict, run_dir: Pat
 
 @torch.no_grad()
 def evaluate_split(network, frequency: FrequencyLoss | None, cfg: TrainConfig, data: PreparedData, materials,
-                   device) -> dict:
-    """Mean loss terms over materials, on samples drawn from a fixed seed (the same every epoch)."""
+                   device, *, drawer: BatchDrawer | None = None) -> dict:
+    """Mean loss terms over materials, on samples drawn from a fixed seed (the same every epoch). With
+    ``cfg.validate_through == "sampling"`` and a ``drawer`` of a pattern mixture, each material's context is read
+    through a pattern the drawer's mixture picks."""
     network.eval()
     generator = torch.Generator().manual_seed(cfg.seed + 1)
+    through_patterns = cfg.validate_through == "sampling" and drawer is not None and drawer.patterns is not None
     materials = list(materials)
     sums: dict[str, float] = {}
     for start in range(0, len(materials), cfg.batch_materials):
         batch = materials[start:start + cfg.batch_materials]
-        context = data.bank.sample(batch, cfg.context_samples, generator).to(device)
+        if through_patterns:
+            patterns = list(drawer.patterns.choose(len(batch), generator))
+            context = drawer.pattern_context(batch, patterns, cfg.context_samples, generator).to(device)
+        else:
+            context = data.bank.sample(batch, cfg.context_samples, generator).to(device)
         query = data.bank.sample(batch, cfg.query_samples, generator).to(device)
         true = data.truth[batch].to(device) if data.truth is not None else None
         terms = loss_terms(network, frequency, cfg.loss, context, query, true)
