@@ -6,8 +6,10 @@
 #
 #   bash release/train_shipped_model.sh [SHARED_DATA] [WORK]        # then: git diff python/frenbrdf/models/pretrained
 #
-# The shipped version 4 was trained by this config (the hue turn added: research/results/hue-turn) on the
-# 2-core CPU, 475 epochs, 498 s, on these folders as built earlier (local/v2), then packed with --reuse.
+# Version 7's decoder was trained by this config (version 4's, research/results/hue-turn, with the larger sizes of
+# research/results/capacity-v4) with version 4's 42 test tables held out, on a 2-core AMD EPYC Zen 4, one
+# thread, best epoch 547 of 623, 1,620 s (capacity-v4's train.sh, seed 0), then packed with --reuse and given its
+# device encoders by release/pack_encoder_mean.py (research/results/capacity-v4/README.md says how).
 set -euo pipefail
 SHARED=${1:-../shared/data}
 WORK=${2:-pretrained-work}
