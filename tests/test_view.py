@@ -112,7 +112,7 @@ def _swapped(nbrdf: NBRDF) -> NBRDF:
 # ---- the page, without a browser ------------------------------------------------------------------------------
 
 
-def test_page_is_self_contained_and_carries_the_material(material):
+def test_page_is_self_contained_and_carries_the_material(material, model):
     page = view(material)
     html = page.html
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", html), "the page must fetch nothing"
@@ -120,7 +120,7 @@ def test_page_is_self_contained_and_carries_the_material(material):
     data = json.loads(re.search(r'id="frenbrdf-data">(.*?)</script>', html, re.S).group(1))
     assert data["format"] == "frenbrdf-view" and data["edit"] is None
     (network,) = data["networks"]
-    assert network["widths"] == [6, 32, 32, 3] and not network["ordered"]
+    assert network["widths"] == [6, *model.config.nbrdf.hidden, 3] and not network["ordered"]
     assert "<iframe srcdoc=" in page._repr_html_()  # shown inline in Jupyter
     assert len(html) < 100_000
 
