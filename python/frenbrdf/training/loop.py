@@ -363,13 +363,13 @@ def evaluate_split(network, frequency: FrequencyLoss | None, cfg: TrainConfig, d
     through a pattern the drawer's mixture picks."""
     network.eval()
     generator = torch.Generator().manual_seed(cfg.seed + 1)
-    through_patterns = cfg.validate_through == "sampling" and drawer is not None and drawer.patterns is not None
+    sampler = drawer.patterns if cfg.validate_through == "sampling" and drawer is not None else None
     materials = list(materials)
     sums: dict[str, float] = {}
     for start in range(0, len(materials), cfg.batch_materials):
         batch = materials[start:start + cfg.batch_materials]
-        if through_patterns:
-            patterns = list(drawer.patterns.choose(len(batch), generator))
+        if sampler is not None and drawer is not None:
+            patterns = list(sampler.choose(len(batch), generator))
             context = drawer.pattern_context(batch, patterns, cfg.context_samples, generator).to(device)
         else:
             context = data.bank.sample(batch, cfg.context_samples, generator).to(device)
