@@ -442,5 +442,7 @@ def test_validation_reads_its_tables_through_the_sampling_when_asked(prepared):
     drawer, _ = _drawer(prepared, validate_through="sampling")
     assert evaluate_split(network, None, drawer.cfg, data, data.validation, "cpu", drawer=drawer)["rec"] == \
         losses["merl-bins"]
+    drawer, _ = _drawer(prepared, sampling=specular, validate_through="sampling")
+    assert evaluate_split(network, None, drawer.cfg, data, data.validation, "cpu")["rec"] == losses["merl-bins"]
     with pytest.raises(ValueError, match="validate_through must be one of"):
         dataclasses.replace(cfg, validate_through="uniform").validate()

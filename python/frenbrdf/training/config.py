@@ -27,10 +27,9 @@ from ..presets import (
     training_overrides,
 )
 
-#: The largest training config file read (one is about 2 kB).
 #: What a run's validation context samples may be read through (``TrainConfig.validate_through``).
 VALIDATION_CONTEXTS = ("merl-bins", "sampling")
-
+#: The largest training config file read (one is about 2 kB).
 MAX_CONFIG_BYTES = 1 << 20
 #: The most memory a training step may hold (:meth:`TrainConfig.step_bytes`): what every accepted config runs in on
 #: a machine of a few GB. The presets take 120–190 MB.

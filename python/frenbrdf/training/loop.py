@@ -95,7 +95,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     # The model whose mapping and decoder the run keeps (decoder_from) or starts from (init_from), and, with both
     # given, the one its encoder starts from.
     source = load_model(cfg.decoder_from or cfg.init_from) if (cfg.decoder_from or cfg.init_from) else None
-    encoder_source = load_model(cfg.init_from) if cfg.decoder_from and cfg.init_from else None
+    encoder_source = (None if not (cfg.decoder_from and cfg.init_from) else
+                      source if cfg.init_from == cfg.decoder_from else load_model(cfg.init_from))
     if source is not None:
         check_source(cfg, source, "decoder_from" if cfg.decoder_from else "init_from")
     if encoder_source is not None:
