@@ -62,6 +62,8 @@ from .nbrdf import (
 STAGES = ("encode", "latent", "weights")
 #: Learning-rate schedules of a refinement stage (:attr:`RefineConfig.schedule`).
 SCHEDULES = ("constant", "cosine")
+#: The most latents stage 1 may start from (:attr:`RefineConfig.starts`): more than any model's encoders.
+MAX_STARTS = 64
 #: Weight steps per call of the native loop: how often stage 2 updates its progress bar and checks its seconds.
 NATIVE_STEPS = 50
 
@@ -97,6 +99,11 @@ class RefineConfig:
     sampled by :func:`frenbrdf.io.sampling.truth_samples` does), refine an ordered NBRDF
     (:attr:`frenbrdf.NBRDF.ordered`): one that may tell them apart, as a real measurement does near grazing.
     False, or samples in one order only (a MERL table's): the NBRDF stays reciprocal."""
+    starts: int = 1
+    """Stage 1 refines z from this many of the encoders' latents, the best-fitting first (a model with several
+    encoders and ``encoder_choice="best-fit"``; one latent otherwise), and keeps the z that fits the samples best
+    after its steps: another encoder's start can lead to a better minimum than the chosen one's. Stage 1 costs
+    about ``starts`` times as much."""
     seed: int = 0
     """Seeds the mini-batches (and a widened NBRDF's new weights)."""
     progress: bool = False
@@ -114,6 +121,8 @@ class RefineConfig:
             problems.append(f"schedule must be one of {SCHEDULES}, got {self.schedule!r}")
         if int(self.batch) < 1:
             problems.append(f"batch must be ≥ 1, got {self.batch}")
+        if not (isinstance(self.starts, numbers.Integral) and 1 <= self.starts <= MAX_STARTS):
+            problems.append(f"starts must be an integer from 1 to {MAX_STARTS}, got {self.starts!r}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
         if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
@@ -230,17 +239,9 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
                          "is damaged, or the samples lie far outside what it was trained on")
 
     if config.latent_steps:
-        z = z.clone().requires_grad_(True)
-
-        def latent_objective(batch: _Samples) -> torch.Tensor:
-            predicted = nbrdf_forward(model.network.decoder(z), batch.coords)
-            return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind)
-
-        with _frozen(model.network):
-            latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
-            _optimise("latent", [z], [latent_decay], latent_objective, config.latent_steps, config.latent_lr, samples,
-                      config, record)
-        z = z.detach()
+        refined = [_refine_latent(model, start, samples, loss, config, record)
+                   for start in _starts(encoding, config.starts)]
+        z = min(refined, key=lambda pair: pair[1])[0]
         with torch.no_grad():
             params = model.network.decoder(z)
         record.losses["latent"] = _sample_loss(params, samples, loss.kind)
@@ -262,6 +263,33 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     nbrdf(wi, wo)  # raises where its reflectance overflows
     return Reconstruction(z[0].detach().numpy().astype(np.float64), nbrdf, record.timings, record.losses, record.steps,
                           encoding.summary())
+
+
+def _starts(encoding, count: int) -> list[torch.Tensor]:
+    """Stage 1's starting latents ``(1, latent)``: z, then the other encoders' latents by their fit (best-fit)."""
+    latents = [encoding.z]
+    if encoding.losses is not None and count > 1:
+        others = [index for index in np.argsort(encoding.losses, kind="stable") if index != encoding.chosen]
+        latents += [encoding.latents[index] for index in others[:count - 1]]
+    return [torch.from_numpy(np.asarray(latent, dtype=np.float32))[None] for latent in latents]
+
+
+def _refine_latent(model, z: torch.Tensor, samples: _Samples, loss: LossConfig, config: RefineConfig,
+                   record: _Record) -> tuple[torch.Tensor, float]:
+    """Stage 1 from one start: z after its steps, and the loss of its decoding on all samples."""
+    z = z.clone().requires_grad_(True)
+
+    def latent_objective(batch: _Samples) -> torch.Tensor:
+        predicted = nbrdf_forward(model.network.decoder(z), batch.coords)
+        return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind)
+
+    with _frozen(model.network):
+        latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
+        _optimise("latent", [z], [latent_decay], latent_objective, config.latent_steps, config.latent_lr, samples,
+                  config, record)
+    z = z.detach()
+    with torch.no_grad():
+        return z, _sample_loss(model.network.decoder(z), samples, loss.kind)
 
 
 def _loss_config(model) -> LossConfig:
@@ -303,8 +331,8 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
         value.backward()
         optimizer.step()
         taken += 1
-    record.timings[stage] = time.perf_counter() - start
-    record.steps[stage] = taken
+    record.timings[stage] = record.timings.get(stage, 0.0) + time.perf_counter() - start  # summed over starts
+    record.steps[stage] = record.steps.get(stage, 0) + taken
 
 
 def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossConfig, config: RefineConfig,
