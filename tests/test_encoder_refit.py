@@ -173,7 +173,7 @@ def test_an_encoder_mean_without_the_base_encoder_is_the_members_alone(toy_mater
 def test_a_best_fit_choice_takes_the_latent_whose_decoding_fits_the_samples_best(toy_materials, tmp_path):
     from frenbrdf.io.sampling import draw_samples
     from frenbrdf.models import pretrained
-    from frenbrdf.models.reconstruct import reconstruct
+    from frenbrdf.models.reconstruct import RefineConfig, _starts, reconstruct
 
     from .conftest import script_module
 
@@ -198,6 +198,16 @@ def test_a_best_fit_choice_takes_the_latent_whose_decoding_fits_the_samples_best
     np.testing.assert_allclose(mean.encode(values, directions), np.mean(latents, axis=0), rtol=1e-5, atol=1e-6)
     refined = best_fit.reconstruct(values, directions, refine="none")  # refinement starts from the chosen latent
     assert refined.losses["encode"] == pytest.approx(min(losses), rel=1e-4)
+
+    # stage 1 from several encoders' latents: the chosen one first, then by fit; the best fit after the steps kept
+    order = [int(i) for i in np.argsort(losses, kind="stable")]
+    starts = [z[0].numpy() for z in _starts(best_fit.encoding(values, directions), 3)]
+    for start, index in zip(starts, order, strict=True):
+        np.testing.assert_allclose(start, latents[index], rtol=1e-5, atol=1e-6)
+    single = [best_fit.reconstruct(values, directions, refine=RefineConfig(latent_steps=4, latent_lr=0.05, starts=n))
+              for n in (1, 3)]
+    assert single[1].steps["latent"] == 3 * single[0].steps["latent"] == 12
+    assert single[1].losses["latent"] <= single[0].losses["latent"]
     # What chose z is kept (reconstruction.json's "encoder"): which encoder and every one's loss.
     chosen = int(np.argmin(losses))
     assert refined.encoder["chosen"] == chosen and refined.encoder["pooling"] == "mean"

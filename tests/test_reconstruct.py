@@ -131,6 +131,20 @@ def test_a_wider_full_refinement_fits_further(model, material):
     assert np.isfinite(wide.nbrdf(*directions)).all()
 
 
+@pytest.mark.parametrize("starts", [0, -1, 1.5, 65, True])
+def test_starts_must_be_a_count_of_latents(starts):
+    with pytest.raises(ValueError, match="starts must be an integer from 1 to 64"):
+        RefineConfig(latent_steps=10, starts=starts)
+
+
+def test_several_starts_with_one_encoder_refine_once(model, material):
+    config = RefineConfig(latent_steps=5, latent_lr=0.05)
+    once, asked = (reconstruct(model, material.values, (material.wi, material.wo), refine=dataclasses.replace(config,
+                   starts=n)) for n in (1, 4))
+    assert asked.steps == once.steps == {"latent": 5}
+    np.testing.assert_array_equal(asked.z, once.z)
+
+
 def test_a_width_needs_the_weight_stage_and_a_sane_size(model, material):
     with pytest.raises(ValueError, match="width must be None or 1 to 1024 with weight_steps > 0"):
         RefineConfig(latent_steps=10, width=64)
@@ -533,6 +547,16 @@ def test_model_comparison_pairs_models_and_skips_what_a_model_trained_on(run_dir
     with pytest.raises(SystemExit):  # a group's material that is not scored
         study.main(["--models", str(run_dir), "--labels", "base", "--tables", str(tables[0]), "--group", "g=nothing",
                     "--out", str(tmp_path)])
+
+
+def test_model_comparison_takes_a_budget_with_fields_changed():
+    study = script_module("compare_models")
+    config = study.budget_config("latent@latent_steps=600,starts=3,keep_order=false,seconds=none")
+    assert config == dataclasses.replace(BUDGETS["latent"], latent_steps=600, starts=3, keep_order=False)
+    for wrong, message in (("latent@steps=600", "not FIELD=VALUE"), ("latent@latent_steps=", "not FIELD=VALUE"),
+                           ("latent@starts=0", "starts must be"), ("most", "refine must be one of")):
+        with pytest.raises(ValueError, match=message):
+            study.budget_config(wrong)
 
 
 def test_model_comparison_takes_a_baseline_of_several_runs(run_dir, toy_materials, tmp_path):

@@ -19,7 +19,8 @@ first run that was scored on it, under the first of ``--budgets``).
 :mod:`frenbrdf.io.patterns` at each count (a condition ``PATTERN × COUNT``): every condition is summarised apart
 (its groups named ``GROUP @ PATTERN × COUNT``) and ``compare.md`` adds one table per group and budget with a row
 per condition. ``--refine-counts`` runs the budgets other than ``none`` only at those counts (refining costs
-about a second a material).
+about a second a material). A budget ``NAME@FIELD=VALUE,...`` is the named budget with those
+:class:`~frenbrdf.models.reconstruct.RefineConfig` fields changed (e.g. ``latent@latent_steps=600``).
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from frenbrdf.io.patterns import DEFAULT as DEFAULT_PATTERN
 from frenbrdf.io.patterns import PATTERNS, pattern_samples
 from frenbrdf.io.sampling import as_table
 from frenbrdf.models.autoencoder import Model, load_model
-from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.models.reconstruct import RefineConfig, refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
@@ -53,6 +54,32 @@ from common import render_sheet, run_metadata  # noqa: E402
 BUDGETS = ("none", "latent")
 """The refinement budgets measured unless ``--budgets`` says others."""
 METRICS = ("psnr", "delta_e")
+
+
+def budget_config(budget: str) -> RefineConfig:
+    """A budget of ``--budgets``: a name of ``frenbrdf.models.reconstruct.BUDGETS``, or ``NAME@FIELD=VALUE,...``."""
+    name, _, changes = budget.partition("@")
+    config = refine_config(name)
+    fields = {}
+    for change in filter(None, changes.split(",")):
+        key, _, value = change.partition("=")
+        if key not in {f.name for f in dataclasses.fields(RefineConfig)} or not value:
+            raise ValueError(f"budget {budget!r}: {change!r} is not FIELD=VALUE of a RefineConfig field")
+        fields[key] = _value(value)
+    return dataclasses.replace(config, **fields)  # RefineConfig checks each value
+
+
+def _value(text: str):
+    """A budget field's value: true/false, none, an integer, a number, or the text itself."""
+    named = {"true": True, "false": False, "none": None}
+    if text.lower() in named:
+        return named[text.lower()]
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    return text
 
 
 def condition_rng(draw: int, pattern: str) -> np.random.Generator:
@@ -81,7 +108,7 @@ def score(models: dict[str, Model], paths: list[Path], draws: list[int], conditi
                     for budget in budgets:
                         if budget != "none" and refine_counts is not None and count not in refine_counts:
                             continue
-                        config = dataclasses.replace(refine_config(budget), seed=draw, progress=False)
+                        config = dataclasses.replace(budget_config(budget), seed=draw, progress=False)
                         _, image, _ = refined_reconstruction(model, drawn, scene, config)
                         metrics = image_metrics(truth_image, image, mask)
                         rows.append({"model": label, "material": path.stem, "group": group, "draw": draw,
@@ -253,7 +280,8 @@ def main(argv=None) -> int:
     parser.add_argument("--held-out", nargs=2, metavar=("CONFIG", "DIR"),
                         help="also the tables a training config holds out (its `holdout`), as DIR/NAME.binary")
     parser.add_argument("--draws", type=int, nargs="+", default=[0])
-    parser.add_argument("--budgets", nargs="+", default=list(BUDGETS), choices=("none", "latent", "full"))
+    parser.add_argument("--budgets", nargs="+", default=list(BUDGETS), metavar="BUDGET",
+                        help="none, latent, full, or NAME@FIELD=VALUE,... (a RefineConfig field changed)")
     parser.add_argument("--samples", type=int, nargs="+", default=[4000], help="samples per material: one or more counts")
     parser.add_argument("--patterns", nargs="+", default=[DEFAULT_PATTERN], choices=tuple(PATTERNS), metavar="NAME",
                         help=f"sampling patterns the materials are read through (default {DEFAULT_PATTERN})")
@@ -277,6 +305,10 @@ def main(argv=None) -> int:
         parser.error("--group takes NAME=MATERIAL,MATERIAL,... with no empty name")
     if reserved := set(extra_groups) & {"measured", "tables"}:
         parser.error(f"--group: {sorted(reserved)} name the built-in groups; give the group another name")
+    try:
+        [budget_config(budget) for budget in args.budgets]
+    except ValueError as error:
+        parser.error(f"--budgets: {error}")
     models = {label: load_model(spec) for label, spec in zip(args.labels, args.models, strict=True)}
     measured, tables = [Path(p) for p in args.measurements], [Path(p) for p in args.tables]
     if args.held_out:

@@ -121,7 +121,8 @@ class RefineConfig:
             problems.append(f"schedule must be one of {SCHEDULES}, got {self.schedule!r}")
         if int(self.batch) < 1:
             problems.append(f"batch must be ≥ 1, got {self.batch}")
-        if not (isinstance(self.starts, numbers.Integral) and 1 <= self.starts <= MAX_STARTS):
+        counted = isinstance(self.starts, numbers.Integral) and not isinstance(self.starts, bool)
+        if not (counted and 1 <= self.starts <= MAX_STARTS):
             problems.append(f"starts must be an integer from 1 to {MAX_STARTS}, got {self.starts!r}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
