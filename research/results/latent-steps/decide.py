@@ -43,7 +43,7 @@ def main(argv=None) -> int:
                        for kind in ("random", "devices"))
     tests = {}
     for metric in ("psnr", "delta_e"):
-        for (group, pattern), by_material in differences(random, metric).items():
+        for (group, _pattern), by_material in differences(random, metric).items():
             tests[f"{group}, random bins, {metric}"] = paired_interval(list(by_material.values()))
         per_pattern = differences(devices, metric)
         for group in sorted({group for group, _ in per_pattern}):
