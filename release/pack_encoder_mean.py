@@ -76,6 +76,11 @@ def poolings(checkpoint: dict) -> list[str]:
     return [encoder.get("pooling", "mean") for encoder in (model["encoder"], *model.get("extra_encoders", []))]
 
 
+def member_sampling(run: str) -> dict | None:
+    """The sampling a member's run trained with (its ``config.json``), for the card."""
+    return json.loads((Path(run) / "config.json").read_text()).get("sampling")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
@@ -85,7 +90,6 @@ def main(argv=None) -> int:
                         help="z is the mean of the members' encoders only (the base gives the decoder and mapping)")
     parser.add_argument("--choice", choices=ENCODER_CHOICES, default="mean",
                         help="how the encoders' latents give z (ModelConfig.encoder_choice)")
-    parser.add_argument("--members-config", help="the training config the members were trained with, for the card")
     parser.add_argument("--why", help="a Markdown link to the study whose rule chose these encoders, for the card")
     parser.add_argument("--version", required=True, help="the packed model's version, for its card")
     parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR))
@@ -102,8 +106,7 @@ def main(argv=None) -> int:
     card.update({"version": args.version,  # "command" stays the one that trained and packed the base
                  "encoders": {"base": args.base, "members": args.members, "base_encoder": not args.without_base_encoder,
                               "choice": args.choice, "poolings": poolings(checkpoint),
-                              "training_config": json.loads(Path(args.members_config).read_text())
-                              if args.members_config else None, "why": args.why,
+                              "samplings": [member_sampling(member) for member in args.members], "why": args.why,
                               "command": run_metadata()["command"]},
                  "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
                  "held_out_refined_by_source": by_source(refined, folders),

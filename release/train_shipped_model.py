@@ -171,8 +171,11 @@ def encoders_text(card: dict) -> str:
     with_base = encoders.get("base_encoder", True)  # cards before version 5 always kept the base's encoder
     count = len(encoders["members"]) + with_base
     who = f"the training run's and {members}" if with_base else members
-    sampling = (encoders.get("training_config") or {}).get("sampling")  # what the members' training changed
-    config = f" with the sampling `{json.dumps(sampling)}`" if sampling else ""
+    # what the members' training changed: each member's sampling (cards before version 8 gave one config for all)
+    samplings = encoders.get("samplings") or [(encoders.get("training_config") or {}).get("sampling")]
+    counted = Counter(json.dumps(sampling) for sampling in samplings if sampling)
+    config = ("" if not counted else f" with the sampling `{next(iter(counted))}`" if len(counted) == 1 else
+              " with the samplings " + "; ".join(f"`{sampling}` ({n})" for sampling, n in counted.items()))
     why = encoders.get("why") or "[encoder-refit](../research/results/encoder-refit/README.md)"  # None: not given
     how = ("the latent, of one of them, whose decoding fits the given samples best" if encoders.get("choice") == "best-fit"
            else "the mean of their latents")

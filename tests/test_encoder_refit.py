@@ -1,6 +1,8 @@
 """An encoder with DeepSets' ρ (``EncoderConfig.pooled``) and a run that trains only an encoder for a trained,
 frozen decoder (``TrainConfig.decoder_from``)."""
 
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -248,3 +250,9 @@ def test_an_attention_member_packs_beside_a_mean_base_and_the_card_names_the_poo
     assert "pooled by mean (1), attention (1)" in text(card)
     del card["encoders"]["poolings"]  # a card from before version 6: every encoder took the mean
     assert "pooled by" not in text(card)
+    card["encoders"]["training_config"] = {"sampling": {"patterns": {"uniform": 1.0}}}  # before version 8: one config
+    assert 'with the sampling `{"patterns": {"uniform": 1.0}}`;' in text(card)
+    own = pack.member_sampling(str(member.path))  # what the member's run trained with
+    assert own and own == json.loads((member.path / "config.json").read_text())["sampling"]
+    card["encoders"]["samplings"] = [own, own, {"patterns": {"specular": 1.0}}]
+    assert f'with the samplings `{json.dumps(own)}` (2); `{{"patterns": {{"specular": 1.0}}}}` (1);' in text(card)

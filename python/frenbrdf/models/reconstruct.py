@@ -141,7 +141,7 @@ class RefineConfig:
 #: fixed before measuring; the measurements are in research/README.md ("Test-time refinement").
 BUDGETS = {
     "none": RefineConfig(),
-    "latent": RefineConfig(latent_steps=200, latent_lr=3e-2, schedule="cosine"),
+    "latent": RefineConfig(latent_steps=600, latent_lr=3e-2, schedule="cosine"),
     "full": RefineConfig(latent_steps=100, weight_steps=1500, weight_lr=3e-3, width=64),
 }
 
