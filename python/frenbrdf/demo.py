@@ -2,7 +2,7 @@
 
 ``frenbrdf demo`` runs it. Without ``--data`` it first writes the default bank of 100
 analytic materials. Training uses the ``demo`` training length of :mod:`frenbrdf.presets` so the
-whole job takes about 6.5 minutes on 2 CPU cores; the report says what was run. The report folder
+whole job takes about 8 minutes on 2 CPU cores; the report says what was run. The report folder
 follows the output rule of :mod:`frenbrdf.io.outputs`: an earlier demo's folder is reused (its bank too).
 """
 
