@@ -1,9 +1,9 @@
-"""The latent-steps study's exploration (README.md; decides nothing): `latent` variants of the shipped model on
-every third of the 45 families of seed 7, through random bins (4,000) and uniform, image-based and specular-only
-pairs (1,500); the mean render PSNR per pattern and variant, and each variant's mean seconds a material (the
-reconstruction and its render).
+"""The latent-steps study's exploration (README.md; decides nothing): `latent` variants of MODEL (version 7's
+packed files, from commit e3d07f8) on every third of the 45 families of seed 7, through random bins (4,000) and
+uniform, image-based and specular-only pairs (1,500); the mean render PSNR per pattern and variant, and each
+variant's mean seconds a material (the reconstruction and its render).
 
-    python research/results/latent-steps/explore.py local/c4/families7
+    python research/results/latent-steps/explore.py local/c4/families7 MODEL
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
-LATENT = refine_config("latent")
+LATENT = dataclasses.replace(refine_config("latent"), latent_steps=200)  # the budget before this study
 VARIANTS = {
     "encoder": refine_config("none"),
     "latent (200 steps)": LATENT,
@@ -40,8 +40,8 @@ VARIANTS = {
 CONDITIONS = (("merl-bins", 4000), ("uniform", 1500), ("image-based", 1500), ("specular", 1500))
 
 
-def main(folder: str) -> None:
-    model, scene = load_model("pretrained"), Scene(resolution=128)
+def main(folder: str, model_spec: str) -> None:
+    model, scene = load_model(model_spec), Scene(resolution=128)
     mask = material_mask(scene)
     psnr, seconds = defaultdict(list), defaultdict(list)
     for path in sorted(Path(folder).glob("*.binary"))[::3]:
@@ -63,4 +63,4 @@ def main(folder: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(*sys.argv[1:3])
