@@ -242,10 +242,9 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
     if config.latent_steps:
         refined = [_refine_latent(model, start, samples, loss, config, record)
                    for start in _starts(encoding, config.starts)]
-        z = min(refined, key=lambda pair: pair[1])[0]
+        z, record.losses["latent"] = min(refined, key=lambda pair: pair[1])  # the loss on all samples, computed once
         with torch.no_grad():
             params = model.network.decoder(z)
-        record.losses["latent"] = _sample_loss(params, samples, loss.kind)
 
     order = pair_order(wi, wo) if config.weight_steps and config.keep_order else None
     ordered = order is not None and bool(np.ptp(order) > 0)  # pairs of both orders among the samples
