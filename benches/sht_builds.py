@@ -1,12 +1,12 @@
 """Two builds of the native module, one SHT workload, timed in one process in alternating rounds.
 
-    python benches/sht_builds.py BASE.so NEW.so [--dtype float32] [--rounds 21] [--threads 1]
+    python benches/sht_builds.py BASE.so NEW.so [--dtype float32] [--rounds 21] [--threads 1] [--batch 192]
 
 For changes to the SHT's kernels that move its speed by a few percent: on a virtual machine two
 processes run minutes apart differ by more than that. Both builds (``lib_native.so`` from
 ``cargo build --release --features python --lib``, copied aside) are loaded under different module
 names, checked against each other on the same maps, then timed with ``common.time_interleaved`` on
-the project's workload (192 maps, Gauss–Legendre 90 × 180, lmax 89). Reported: NEW's time over
+the project's workload (192 maps, Gauss–Legendre 90 × 180, lmax 89; ``--batch`` another count of maps). Reported: NEW's time over
 BASE's, per-round median and quartiles (below 1: NEW is faster).
 """
 
@@ -38,6 +38,7 @@ def main() -> None:
     parser.add_argument("--dtype", choices=("float32", "float64"), default="float32")
     parser.add_argument("--rounds", type=int, default=21)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--batch", type=int, default=192, help="maps per call")
     args = parser.parse_args()
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)  # before either build starts its pool
 
@@ -48,7 +49,7 @@ def main() -> None:
 
     # Each build under the name its PyInit symbol expects, in a package of its own.
     base, new = (load(path, f"{tag}._native") for tag, path in (("base", args.base), ("new", args.new)))
-    nlat, nlon, lmax, batch = 90, 180, 89, 192
+    nlat, nlon, lmax, batch = 90, 180, 89, args.batch
     maps = np.random.default_rng(0).standard_normal((batch, nlat * nlon)).astype(args.dtype)
     plans = [module.ShtPlan(nlat, nlon, lmax, "gauss", args.dtype) for module in (base, new)]
     expected, got = (np.asarray(plan.analysis(maps)) for plan in plans)

@@ -190,7 +190,12 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
         }
         for c0 in (0..cols).step_by(TILE_COLS) {
             let tile_cols = TILE_COLS.min(cols - c0);
-            let acc = if tile_cols == TILE_COLS {
+            // A narrower tile (fewer maps than a tile's columns) runs as a full one where the
+            // right factor's slice holds a full tile's columns from it (the next values,
+            // whose products are computed and not stored): the narrow loop runs in scalars,
+            // and took five times as long a map for batches of two or three maps
+            // (research/performance.md).
+            let acc = if tile_cols == TILE_COLS || full_width_fits(&rhs, c0, TILE_COLS) {
                 full_tile::<T, TILE_COLS>(panel, rhs, c0)
             } else {
                 edge_tile::<T, TILE_COLS>(panel, rhs, c0, tile_cols)
@@ -203,6 +208,12 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
             }
         }
     }
+}
+
+/// Whether every row of `rhs` has `width` values from column `c0` inside its slice.
+#[inline(always)]
+fn full_width_fits<T>(rhs: &MatRef<'_, T>, c0: usize, width: usize) -> bool {
+    rhs.rows == 0 || rhs.offset + (rhs.rows - 1) * rhs.row_stride + c0 + width <= rhs.data.len()
 }
 
 #[inline(always)]
@@ -270,6 +281,60 @@ fn edge_tile<T: Real, const TILE_COLS: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Narrow products whose right factor's slice goes on past the columns (as a batch of a
+    /// few maps in the transform's buffers does) run as full tiles: the values past the
+    /// columns, NaN here, must reach no stored product, and nothing past the columns is written.
+    #[test]
+    fn narrow_products_ignore_the_values_past_their_columns() {
+        for (m, k, n) in [(5, 4, 3), (9, 45, 6), (4, 1, 1), (7, 9, 2), (3, 20, 31)] {
+            let a: Vec<f32> = (0..m * k).map(|i| (i % 11) as f32 * 0.25 - 1.0).collect();
+            let b: Vec<f32> = (0..k * n).map(|i| ((i * i) % 7) as f32).collect();
+            let a_t: Vec<f32> = (0..k * m).map(|i| a[(i % m) * k + i / m]).collect();
+            let mut rhs = b.clone();
+            rhs.extend([f32::NAN; 64]);
+            let mut dst = vec![-7.0; m * n + 64];
+            matmul(
+                MatMut {
+                    data: &mut dst,
+                    offset: 0,
+                    rows: m,
+                    cols: n,
+                    row_stride: n,
+                },
+                MatRef {
+                    data: &a_t,
+                    offset: 0,
+                    rows: m,
+                    cols: k,
+                    row_stride: 1,
+                    col_stride: m,
+                },
+                MatRef {
+                    data: &rhs,
+                    offset: 0,
+                    rows: k,
+                    cols: n,
+                    row_stride: n,
+                    col_stride: 1,
+                },
+            );
+            for r in 0..m {
+                for c in 0..n {
+                    let expected: f32 = (0..k).map(|i| a[r * k + i] * b[i * n + c]).sum();
+                    let got = dst[r * n + c];
+                    assert!(
+                        (got - expected).abs() <= 1e-4 * expected.abs().max(1.0),
+                        "({m}, {k}, {n}) [{r}, {c}]: {got}"
+                    );
+                }
+            }
+            assert!(
+                dst[m * n..].iter().all(|&v| v == -7.0),
+                "({m}, {k}, {n}): wrote past the columns"
+            );
+        }
+    }
 
     #[test]
     fn strided_product_matches_a_loop() {
