@@ -1,0 +1,155 @@
+"""The latent-gap exploration (README.md; decides nothing): remedies for the two parts of `latent`'s gap through
+device patterns, on every third of the 45 families of seed 10 (made for this, read by nothing before), through
+random bins, uniform, in-plane, image-based and specular-only pairs (1,500 each). The mean render PSNR per
+pattern and variant, and each variant's mean seconds a material.
+
+- against the samples' pull away from the best render (the information part): a stronger latent penalty
+  (the model's λ2 times 10 or 100, towards 0), or a penalty towards the start (the encoder's z, weight μ);
+- against the worse minimum (the search part): starts from the model's training materials' latents, the two
+  whose decodings fit the samples best before any step, beside the encoder's z; the result that fits the samples
+  best is kept.
+
+    python research/results/latent-gap/explore.py local/c4/families10 TRAINING_TABLES HOLDOUT_JSON [PART PARTS] > OUT
+    python research/results/latent-gap/explore.py --summarise OUT...     # the table of explore.md
+
+(PART of PARTS: every PARTS-th of the families from the PART-th, so that two processes share the work.)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import sys
+import time
+import zlib
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from frenbrdf.data.folders import list_materials
+from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io import read_material
+from frenbrdf.io.patterns import pattern_samples
+from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
+from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.losses import reconstruction_loss
+from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
+from frenbrdf.models.reconstruct import _frozen, _loss_config, _optimise, _Record, _sample_loss, _Samples, refine_config
+from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import image_metrics
+
+
+@dataclasses.dataclass(frozen=True)
+class Variant:
+    prior: float = 1.0  # times the model's λ2 (the penalty towards 0)
+    anchor: float = 0.0  # μ of μ·mean((z − z_start)²)
+    bank_starts: int = 0  # training materials' latents to start from besides the encoder's z
+
+
+VARIANTS = {
+    "latent": Variant(),
+    "prior x10": Variant(prior=10),
+    "prior x100": Variant(prior=100),
+    "anchor 0.01": Variant(anchor=0.01),
+    "anchor 0.1": Variant(anchor=0.1),
+    "bank starts 2": Variant(bank_starts=2),
+}
+CONDITIONS = ("merl-bins", "uniform", "in-plane", "image-based", "specular")
+COUNT = 1500
+
+
+def tensors(model, drawn) -> _Samples:
+    mapped, coords, cos_in = mapped_samples(model.mapping, *drawn)
+    return _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in)))
+
+
+def loss_at(model, z: torch.Tensor, samples: _Samples) -> float:
+    with torch.no_grad():
+        return _sample_loss(model.network.decoder(z), samples, _loss_config(model).kind)
+
+
+def refine(model, start: torch.Tensor, samples: _Samples, variant: Variant) -> torch.Tensor:
+    """Stage 1 of the shipped `latent` budget from ``start``, with the variant's penalties."""
+    config, loss = refine_config("latent"), _loss_config(model)
+    z, anchor = start.clone().requires_grad_(True), start.clone()
+
+    def objective(batch: _Samples) -> torch.Tensor:
+        predicted = nbrdf_forward(model.network.decoder(z), batch.coords)
+        value = reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind)
+        return value + variant.anchor * torch.mean((z - anchor) ** 2) if variant.anchor else value
+
+    with _frozen(model.network):
+        decay = variant.prior * 2 * loss.lambda_latent / z.numel()
+        _optimise("latent", [z], [decay], objective, config.latent_steps, config.latent_lr, samples, config, _Record())
+    return z.detach()
+
+
+def reconstruct(model, drawn, variant: Variant, bank: torch.Tensor) -> torch.Tensor:
+    samples = tensors(model, drawn)
+    starts = [torch.from_numpy(model.encode(*drawn).astype(np.float32))[None]]
+    if variant.bank_starts:
+        fits = [loss_at(model, latent[None], samples) for latent in bank]
+        starts += [bank[index][None] for index in np.argsort(fits)[:variant.bank_starts]]
+    results = [refine(model, start, samples, variant) for start in starts]
+    return min(results, key=lambda z: loss_at(model, z, samples))
+
+
+def training_latents(model, tables: Path, holdout: set[str]) -> torch.Tensor:
+    """Each training table's latent from 4,000 of its own random bins."""
+    rng, latents = np.random.default_rng(123), []
+    for path in list_materials(tables):
+        if path.stem not in holdout:
+            table = read_material(path)
+            latents.append(model.encode(*truth_samples(table, sample_bins(table, rng, 4000), rng)))
+    return torch.from_numpy(np.stack(latents).astype(np.float32))
+
+
+def main(folder: str, tables: str, holdout_json: str, part: int = 0, parts: int = 1) -> None:
+    model, scene = load_model("pretrained"), Scene(resolution=128)
+    mask = material_mask(scene)
+    bank = training_latents(model, Path(tables), set(json.loads(Path(holdout_json).read_text())["holdout"]))
+    psnr, seconds = defaultdict(list), defaultdict(list)
+    for path in sorted(Path(folder).glob("*.binary"))[::3][part::parts]:
+        truth = read_material(path)
+        table, truth_image = as_table(truth), tonemap(render_linear(truth, scene))
+        for pattern in CONDITIONS:
+            rng = np.random.default_rng([0, zlib.crc32(pattern.encode())])
+            drawn = pattern_samples(truth, pattern, COUNT, rng, table=table)
+            for name, variant in VARIANTS.items():
+                start = time.perf_counter()
+                z = reconstruct(model, drawn, variant, bank)
+                seconds[name].append(time.perf_counter() - start)
+                image = tonemap(render_linear(model.decode(z[0].numpy().astype(np.float64))[0], scene))
+                psnr[pattern, name].append(image_metrics(truth_image, image, mask)["psnr"])
+        print(path.stem, flush=True)
+    print(json.dumps({"psnr": {f"{p}|{n}": v for (p, n), v in psnr.items()}, "seconds": seconds}))
+
+
+def summarise(outputs: list[str]) -> None:
+    """Per pattern: `latent`'s mean PSNR and each variant's difference from it (95 % interval over the families)."""
+    psnr, seconds = defaultdict(list), defaultdict(list)
+    for output in outputs:
+        found = json.loads(Path(output).read_text().strip().splitlines()[-1])
+        for key, values in found["psnr"].items():
+            psnr[tuple(key.split("|"))] += values
+        for name, values in found["seconds"].items():
+            seconds[name] += values
+    print("| pattern | " + " | ".join(VARIANTS) + " |\n" + "|---" * (len(VARIANTS) + 1) + "|")
+    for pattern in CONDITIONS:
+        base = np.array(psnr[pattern, "latent"])
+        cells = [f"{base.mean():.2f}"]
+        for name in list(VARIANTS)[1:]:
+            change = paired_interval(np.array(psnr[pattern, name]) - base)
+            cells.append(f"{change['mean']:+.2f} [{change['low']:+.2f}, {change['high']:+.2f}]")
+        print(f"| {pattern} | " + " | ".join(cells) + " |")
+    print("| seconds a material | " + " | ".join(f"{np.mean(seconds[name]):.1f}" for name in VARIANTS) + " |")
+    print(f"\n{len(base)} families.")
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "--summarise":
+        summarise(sys.argv[2:])
+    else:
+        main(*sys.argv[1:4], *map(int, sys.argv[4:6]))
