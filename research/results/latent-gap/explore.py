@@ -7,9 +7,13 @@ pattern and variant, and each variant's mean seconds a material.
   (the model's λ2 times 10 or 100, towards 0), or a penalty towards the start (the encoder's z, weight μ);
 - against the worse minimum (the search part): starts from the model's training materials' latents, the two
   whose decodings fit the samples best before any step, beside the encoder's z; the result that fits the samples
-  best is kept.
+  best is kept;
+- against a pattern's uneven coverage (the samples' part again): each sample's loss weighted by the inverse of
+  the samples' density where random bins are uniform (a k-NN estimate), so that the samples' loss estimates the
+  loss over the whole table, as random bins' does.
 
-    python research/results/latent-gap/explore.py local/c4/families10 TRAINING_TABLES HOLDOUT_JSON [PART PARTS] > OUT
+    python research/results/latent-gap/explore.py local/c4/families10 TRAINING_TABLES HOLDOUT_JSON [PART PARTS
+        [VARIANT...]] > OUT
     python research/results/latent-gap/explore.py --summarise OUT...     # the table of explore.md
 
 (PART of PARTS: every PARTS-th of the families from the PART-th, so that two processes share the work.)
@@ -37,6 +41,7 @@ from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.losses import reconstruction_loss
 from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
 from frenbrdf.models.reconstruct import _frozen, _loss_config, _optimise, _Record, _sample_loss, _Samples, refine_config
+from frenbrdf.numerics.coords import directions_to_rusinkiewicz
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import image_metrics
 
@@ -46,6 +51,8 @@ class Variant:
     prior: float = 1.0  # times the model's λ2 (the penalty towards 0)
     anchor: float = 0.0  # μ of μ·mean((z − z_start)²)
     bank_starts: int = 0  # training materials' latents to start from besides the encoder's z
+    density: int = 0  # k of a k-NN density estimate: each sample's loss weighted by 1 / its density (0: off)
+    clip: float = 10.0  # no weight above this many times the mean
 
 
 VARIANTS = {
@@ -55,14 +62,35 @@ VARIANTS = {
     "anchor 0.01": Variant(anchor=0.01),
     "anchor 0.1": Variant(anchor=0.1),
     "bank starts 2": Variant(bank_starts=2),
+    "density k8": Variant(density=8),
+    "density k8 clip 3": Variant(density=8, clip=3),
+    "density k32": Variant(density=32),
 }
 CONDITIONS = ("merl-bins", "uniform", "in-plane", "image-based", "specular")
 COUNT = 1500
 
 
-def tensors(model, drawn) -> _Samples:
+def tensors(model, drawn, variant: Variant = Variant()) -> _Samples:
     mapped, coords, cos_in = mapped_samples(model.mapping, *drawn)
+    if variant.density:  # the weights enter as a factor of cos θ_i, which multiplies each sample's error
+        cos_in = cos_in * density_weights(*drawn[1], variant.density, variant.clip)
     return _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in)))
+
+
+def density_weights(wi: np.ndarray, wo: np.ndarray, k: int, clip: float) -> np.ndarray:
+    """1 / each pair's sample density in the MERL table's index space, where random bins are uniform: (√(θ_h /
+    (π/2)), θ_d / (π/2), φ_d folded into [0, π) / π), from the distance to its k-th nearest neighbour; mean 1,
+    none above ``clip`` times the mean."""
+    from scipy.spatial import cKDTree
+
+    theta_h, _, theta_d, phi_d = directions_to_rusinkiewicz(wi, wo).T
+    points = np.stack([np.sqrt(np.clip(theta_h / (np.pi / 2), 0, 1)), theta_d / (np.pi / 2),
+                       np.mod(phi_d, np.pi) / np.pi], axis=1)
+    distance = cKDTree(points).query(points, k=min(k + 1, len(points)))[0][:, -1]
+    weights = distance ** 3
+    weights /= weights.mean()
+    weights = np.minimum(weights, clip)
+    return weights / weights.mean()
 
 
 def loss_at(model, z: torch.Tensor, samples: _Samples) -> float:
@@ -86,8 +114,8 @@ def refine(model, start: torch.Tensor, samples: _Samples, variant: Variant) -> t
     return z.detach()
 
 
-def reconstruct(model, drawn, variant: Variant, bank: torch.Tensor) -> torch.Tensor:
-    samples = tensors(model, drawn)
+def reconstruct(model, drawn, variant: Variant, bank: torch.Tensor | None) -> torch.Tensor:
+    samples = tensors(model, drawn, variant)
     starts = [torch.from_numpy(model.encode(*drawn).astype(np.float32))[None]]
     if variant.bank_starts:
         fits = [loss_at(model, latent[None], samples) for latent in bank]
@@ -106,10 +134,12 @@ def training_latents(model, tables: Path, holdout: set[str]) -> torch.Tensor:
     return torch.from_numpy(np.stack(latents).astype(np.float32))
 
 
-def main(folder: str, tables: str, holdout_json: str, part: int = 0, parts: int = 1) -> None:
+def main(folder: str, tables: str, holdout_json: str, part: int = 0, parts: int = 1, *names: str) -> None:
     model, scene = load_model("pretrained"), Scene(resolution=128)
     mask = material_mask(scene)
-    bank = training_latents(model, Path(tables), set(json.loads(Path(holdout_json).read_text())["holdout"]))
+    variants = {name: VARIANTS[name] for name in ("latent", *names)} if names else VARIANTS
+    bank = (training_latents(model, Path(tables), set(json.loads(Path(holdout_json).read_text())["holdout"]))
+            if any(variant.bank_starts for variant in variants.values()) else None)
     psnr, seconds = defaultdict(list), defaultdict(list)
     for path in sorted(Path(folder).glob("*.binary"))[::3][part::parts]:
         truth = read_material(path)
@@ -117,7 +147,7 @@ def main(folder: str, tables: str, holdout_json: str, part: int = 0, parts: int 
         for pattern in CONDITIONS:
             rng = np.random.default_rng([0, zlib.crc32(pattern.encode())])
             drawn = pattern_samples(truth, pattern, COUNT, rng, table=table)
-            for name, variant in VARIANTS.items():
+            for name, variant in variants.items():
                 start = time.perf_counter()
                 z = reconstruct(model, drawn, variant, bank)
                 seconds[name].append(time.perf_counter() - start)
@@ -136,15 +166,16 @@ def summarise(outputs: list[str]) -> None:
             psnr[tuple(key.split("|"))] += values
         for name, values in found["seconds"].items():
             seconds[name] += values
-    print("| pattern | " + " | ".join(VARIANTS) + " |\n" + "|---" * (len(VARIANTS) + 1) + "|")
+    names = [name for name in VARIANTS if name in seconds]
+    print("| pattern | " + " | ".join(names) + " |\n" + "|---" * (len(names) + 1) + "|")
     for pattern in CONDITIONS:
         base = np.array(psnr[pattern, "latent"])
         cells = [f"{base.mean():.2f}"]
-        for name in list(VARIANTS)[1:]:
+        for name in names[1:]:
             change = paired_interval(np.array(psnr[pattern, name]) - base)
             cells.append(f"{change['mean']:+.2f} [{change['low']:+.2f}, {change['high']:+.2f}]")
         print(f"| {pattern} | " + " | ".join(cells) + " |")
-    print("| seconds a material | " + " | ".join(f"{np.mean(seconds[name]):.1f}" for name in VARIANTS) + " |")
+    print("| seconds a material | " + " | ".join(f"{np.mean(seconds[name]):.1f}" for name in names) + " |")
     print(f"\n{len(base)} families.")
 
 
@@ -152,4 +183,4 @@ if __name__ == "__main__":
     if sys.argv[1] == "--summarise":
         summarise(sys.argv[2:])
     else:
-        main(*sys.argv[1:4], *map(int, sys.argv[4:6]))
+        main(*sys.argv[1:4], *map(int, sys.argv[4:6]), *sys.argv[6:])
