@@ -39,13 +39,14 @@ from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.io.sampling import as_table
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.nbrdf import mapped_samples
-from frenbrdf.models.reconstruct import _loss_config, _Record, _refine_latent, _Samples, _sample_loss, refine_config
+from frenbrdf.models.reconstruct import _loss_config, _Record, _refine_latent, _sample_loss, _Samples, refine_config
 from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import image_metrics
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "benches")]
-from common import run_metadata  # noqa: E402
 from compare_models import condition_rng  # noqa: E402
+
+from common import run_metadata  # noqa: E402
 
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 LATENTS = ("user", "reference", "from reference")

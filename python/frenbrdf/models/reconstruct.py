@@ -47,6 +47,7 @@ import torch
 from tqdm.auto import tqdm
 
 from .. import _native
+from .coverage import coverage_weights
 from .losses import LossConfig, reconstruction_loss, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
@@ -104,6 +105,10 @@ class RefineConfig:
     encoders and ``encoder_choice="best-fit"``; one latent otherwise), and keeps the z that fits the samples best
     after its steps: another encoder's start can lead to a better minimum than the chosen one's. Stage 1 costs
     about ``starts`` times as much."""
+    coverage_k: int = 0
+    """Stage 1 weighs each sample's loss by how thinly the samples cover its region against random MERL bins
+    (:func:`frenbrdf.models.coverage.coverage_weights`, k-NN density estimates with this k), so that a device's dense
+    regions do not outweigh the rest; 0: every sample weighs alike. Stage 2 and the reported losses stay unweighted."""
     seed: int = 0
     """Seeds the mini-batches (and a widened NBRDF's new weights)."""
     progress: bool = False
@@ -124,6 +129,8 @@ class RefineConfig:
         counted = isinstance(self.starts, numbers.Integral) and not isinstance(self.starts, bool)
         if not (counted and 1 <= self.starts <= MAX_STARTS):
             problems.append(f"starts must be an integer from 1 to {MAX_STARTS}, got {self.starts!r}")
+        if isinstance(self.coverage_k, bool) or not isinstance(self.coverage_k, numbers.Integral) or self.coverage_k < 0:
+            problems.append(f"coverage_k must be an integer ≥ 0, got {self.coverage_k!r}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
         if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
@@ -240,11 +247,17 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
                          "is damaged, or the samples lie far outside what it was trained on")
 
     if config.latent_steps:
-        refined = [_refine_latent(model, start, samples, loss, config, record)
+        weighted = samples
+        if config.coverage_k:  # the weights enter as a factor of cos θ_i, which multiplies each sample's error
+            weights = torch.from_numpy(coverage_weights(wi, wo, config.coverage_k).astype(np.float32))[None]
+            weighted = _Samples(samples.coords, samples.values, samples.cos_in * weights)
+        refined = [_refine_latent(model, start, weighted, loss, config, record)
                    for start in _starts(encoding, config.starts)]
         z, record.losses["latent"] = min(refined, key=lambda pair: pair[1])  # the loss on all samples, computed once
         with torch.no_grad():
             params = model.network.decoder(z)
+        if config.coverage_k:
+            record.losses["latent"] = _sample_loss(params, samples, loss.kind)  # unweighted, as every stage's
 
     order = pair_order(wi, wo) if config.weight_steps and config.keep_order else None
     ordered = order is not None and bool(np.ptp(order) > 0)  # pairs of both orders among the samples

@@ -35,6 +35,7 @@ import torch
 from frenbrdf.data.folders import list_materials
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io import read_material
+from frenbrdf.io.merl import merl_above_horizon
 from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.io.sampling import as_table, sample_bins, truth_samples
 from frenbrdf.models.autoencoder import load_model
@@ -53,6 +54,7 @@ class Variant:
     bank_starts: int = 0  # training materials' latents to start from besides the encoder's z
     density: int = 0  # k of a k-NN density estimate: each sample's loss weighted by 1 / its density (0: off)
     clip: float = 10.0  # no weight above this many times the mean
+    relative: bool = False  # the density relative to random bins' own (edges of the domain cancel)
 
 
 VARIANTS = {
@@ -65,6 +67,8 @@ VARIANTS = {
     "density k8": Variant(density=8),
     "density k8 clip 3": Variant(density=8, clip=3),
     "density k32": Variant(density=32),
+    "relative k8": Variant(density=8, relative=True),
+    "relative k32": Variant(density=32, relative=True),
 }
 CONDITIONS = ("merl-bins", "uniform", "in-plane", "image-based", "specular")
 COUNT = 1500
@@ -73,24 +77,43 @@ COUNT = 1500
 def tensors(model, drawn, variant: Variant = Variant()) -> _Samples:
     mapped, coords, cos_in = mapped_samples(model.mapping, *drawn)
     if variant.density:  # the weights enter as a factor of cos θ_i, which multiplies each sample's error
-        cos_in = cos_in * density_weights(*drawn[1], variant.density, variant.clip)
+        cos_in = cos_in * density_weights(*drawn[1], variant.density, variant.clip, variant.relative)
     return _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in)))
 
 
-def density_weights(wi: np.ndarray, wo: np.ndarray, k: int, clip: float) -> np.ndarray:
+def density_weights(wi: np.ndarray, wo: np.ndarray, k: int, clip: float, relative: bool) -> np.ndarray:
     """1 / each pair's sample density in the MERL table's index space, where random bins are uniform: (√(θ_h /
-    (π/2)), θ_d / (π/2), φ_d folded into [0, π) / π), from the distance to its k-th nearest neighbour; mean 1,
-    none above ``clip`` times the mean."""
+    (π/2)), θ_d / (π/2), φ_d folded into [0, π) / π), from the distance to its k-th nearest neighbour; ``relative``:
+    times the density of random valid bins there (:func:`random_bins`), so that the domain's edges, where every
+    k-NN estimate runs low, cancel. Mean 1, none above ``clip`` times the mean."""
     from scipy.spatial import cKDTree
 
-    theta_h, _, theta_d, phi_d = directions_to_rusinkiewicz(wi, wo).T
-    points = np.stack([np.sqrt(np.clip(theta_h / (np.pi / 2), 0, 1)), theta_d / (np.pi / 2),
-                       np.mod(phi_d, np.pi) / np.pi], axis=1)
+    points = index_space(wi, wo)
     distance = cKDTree(points).query(points, k=min(k + 1, len(points)))[0][:, -1]
     weights = distance ** 3
+    if relative:
+        weights /= cKDTree(random_bins()).query(points, k=k)[0][:, -1] ** 3
     weights /= weights.mean()
     weights = np.minimum(weights, clip)
     return weights / weights.mean()
+
+
+def index_space(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+    theta_h, _, theta_d, phi_d = directions_to_rusinkiewicz(wi, wo).T
+    return np.stack([np.sqrt(np.clip(theta_h / (np.pi / 2), 0, 1)), theta_d / (np.pi / 2),
+                     np.mod(phi_d, np.pi) / np.pi], axis=1)
+
+
+_RANDOM_BINS: list[np.ndarray] = []
+
+
+def random_bins(count: int = 20000) -> np.ndarray:
+    """``count`` random valid MERL bins' centres in the index space of :func:`index_space` (drawn once)."""
+    if not _RANDOM_BINS:
+        valid = np.argwhere(merl_above_horizon())
+        chosen = valid[np.random.default_rng(7).choice(len(valid), count, replace=False)]
+        _RANDOM_BINS.append((chosen + 0.5) / np.array([90, 90, 180]))
+    return _RANDOM_BINS[0]
 
 
 def loss_at(model, z: torch.Tensor, samples: _Samples) -> float:

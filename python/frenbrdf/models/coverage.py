@@ -1,0 +1,59 @@
+"""Weights that undo a sampling pattern's uneven coverage, for test-time refinement.
+
+A device samples some regions of the BRDF's domain densely (around the mirror direction of each light) and others
+thinly or not at all; random MERL bins, what the model trained on, cover the MERL table's index space evenly. The
+loss over a device's samples then counts the dense regions many times over, and `latent` fits them at the expense of
+the rest. :func:`coverage_weights` weighs each sample by the density random valid bins have at its place over the
+density the samples themselves have there, both k-nearest-neighbour estimates in that index space
+(√(θ_h / (π/2)), θ_d / (π/2), φ_d mod π / π), so that the weighted loss estimates the loss over the whole table, as
+random bins' plain loss does. Taking the ratio of two estimates made the same way cancels the low estimates at the
+domain's edges (research/results/latent-gap/README.md).
+"""
+
+from __future__ import annotations
+
+import functools
+import numbers
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..io.merl import SHAPE, merl_above_horizon
+from ..numerics.coords import directions_to_rusinkiewicz
+
+#: No weight above this many times the mean: a lone sample far from the others stands for a region, not all of it.
+MAX_WEIGHT = 10.0
+#: Random valid bins whose density is the reference (drawn once, from a fixed seed).
+REFERENCE_BINS = 20_000
+
+
+def coverage_weights(wi, wo, k: int) -> np.ndarray:
+    """Per pair ``(N,)``: random valid MERL bins' density over the pairs' own at the pair (k-NN estimates), with mean
+    1 and none above :data:`MAX_WEIGHT` times the mean. ``wi``, ``wo``: ``(N, 3)`` directions above the surface."""
+    if isinstance(k, bool) or not isinstance(k, numbers.Integral) or k < 1:
+        raise ValueError(f"k must be a positive integer, got {k!r}")
+    points = index_space(wi, wo)
+    if len(points) <= k:
+        return np.ones(len(points))  # too few pairs to tell dense from thin
+    # The k-th neighbour other than the pair itself; a density is k / (count · distance³).
+    own = cKDTree(points).query(points, k=k + 1)[0][:, -1]
+    reference = cKDTree(_reference_bins()).query(points, k=k)[0][:, -1]
+    weights = np.maximum(own, 1e-12) ** 3 / np.maximum(reference, 1e-12) ** 3
+    weights /= weights.mean()
+    weights = np.minimum(weights, MAX_WEIGHT)
+    return weights / weights.mean()
+
+
+def index_space(wi, wo) -> np.ndarray:
+    """Pairs ``(N, 3)`` each → their place ``(N, 3)`` in the MERL table's index space scaled to [0, 1]³."""
+    theta_h, _, theta_d, phi_d = np.asarray(directions_to_rusinkiewicz(wi, wo)).reshape(-1, 4).T
+    return np.stack([np.sqrt(np.clip(theta_h / (np.pi / 2), 0.0, 1.0)), np.clip(theta_d / (np.pi / 2), 0.0, 1.0),
+                     np.mod(phi_d, np.pi) / np.pi], axis=1)
+
+
+@functools.cache
+def _reference_bins() -> np.ndarray:
+    """:data:`REFERENCE_BINS` random valid bins' centres in :func:`index_space`."""
+    valid = np.argwhere(merl_above_horizon())
+    chosen = valid[np.random.default_rng(0).choice(len(valid), REFERENCE_BINS, replace=False)]
+    return (chosen + 0.5) / np.array(SHAPE[1:])
