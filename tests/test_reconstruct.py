@@ -714,3 +714,19 @@ def test_an_ordered_nbrdf_saves_renders_and_writes_its_table_order(model, materi
     # The metric renderer evaluates each light's pair in its own order.
     scene = Scene(resolution=16)
     assert not np.allclose(render_linear(nbrdf, scene), render_linear(table_order, scene))
+
+
+def test_coverage_weights_change_the_latent_stage_and_the_reported_loss_stays_unweighted(model, material):
+    from frenbrdf.models.losses import samples_loss
+    from frenbrdf.models.nbrdf import mapped_samples
+
+    directions = (material.wi, material.wo)
+    base = RefineConfig(latent_steps=20, latent_lr=0.05)
+    plain = reconstruct(model, material.values, directions, refine=base)
+    weighted = reconstruct(model, material.values, directions, refine=dataclasses.replace(base, coverage_k=8))
+    assert not np.allclose(plain.z, weighted.z)
+    mapped, coords, cos_in = mapped_samples(model.mapping, material.values, directions)
+    with torch.no_grad():
+        params = model.network.decoder(torch.from_numpy(weighted.z.astype(np.float32))[None])
+    tensors = (torch.from_numpy(np.asarray(a, dtype=np.float32))[None] for a in (coords, mapped, cos_in))
+    assert weighted.losses["latent"] == pytest.approx(samples_loss(params, *tensors, model.loss["kind"]), rel=1e-5)

@@ -21,15 +21,17 @@ from scipy.spatial import cKDTree
 from ..io.merl import SHAPE, merl_above_horizon
 from ..numerics.coords import directions_to_rusinkiewicz
 
-#: No weight above this many times the mean: a lone sample far from the others stands for a region, not all of it.
+#: Weights are clipped at this many times their mean (then scaled back to mean 1): a lone sample far from the others
+#: stands for a region, not for all of it.
 MAX_WEIGHT = 10.0
 #: Random valid bins whose density is the reference (drawn once, from a fixed seed).
 REFERENCE_BINS = 20_000
 
 
 def coverage_weights(wi, wo, k: int) -> np.ndarray:
-    """Per pair ``(N,)``: random valid MERL bins' density over the pairs' own at the pair (k-NN estimates), with mean
-    1 and none above :data:`MAX_WEIGHT` times the mean. ``wi``, ``wo``: ``(N, 3)`` directions above the surface."""
+    """Per pair ``(N,)``: random valid MERL bins' density over the pairs' own at the pair (k-NN estimates), clipped at
+    :data:`MAX_WEIGHT` times their mean, then scaled to mean 1. ``wi``, ``wo``: ``(N, 3)`` directions above the
+    surface. Fewer than ``k + 1`` pairs all weigh 1."""
     if isinstance(k, bool) or not isinstance(k, numbers.Integral) or k < 1:
         raise ValueError(f"k must be a positive integer, got {k!r}")
     points = index_space(wi, wo)

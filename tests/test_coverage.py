@@ -1,0 +1,50 @@
+"""Coverage weights (frenbrdf.models.coverage) and `RefineConfig.coverage_k`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from frenbrdf.io.merl import merl_above_horizon
+from frenbrdf.io.sampling import bin_directions
+from frenbrdf.models.coverage import MAX_WEIGHT, coverage_weights, index_space
+from frenbrdf.models.reconstruct import RefineConfig
+
+
+def random_bins(count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    valid = np.flatnonzero(merl_above_horizon())
+    return bin_directions(np.random.default_rng(seed).choice(valid, count, replace=False))
+
+
+def test_random_bins_weigh_about_alike():
+    weights = coverage_weights(*random_bins(3000, 1), 32)
+    assert weights.mean() == pytest.approx(1.0)
+    assert 0.8 < np.median(weights) < 1.2
+    assert np.mean((weights > 0.5) & (weights < 2)) > 0.9
+
+
+def test_a_crowded_region_weighs_less_than_a_thin_one():
+    wi, wo = random_bins(4000, 2)
+    place = index_space(wi, wo)
+    near_mirror = place[:, 0] < 0.3  # θ_h small: the region a device's lights crowd
+    keep = near_mirror | (np.random.default_rng(3).random(len(wi)) < 0.1)  # the rest thinned to a tenth
+    weights = coverage_weights(wi[keep], wo[keep], 16)
+    crowded, thin = weights[near_mirror[keep]], weights[~near_mirror[keep]]
+    assert np.median(thin) > 5 * np.median(crowded)
+    # clipped at MAX_WEIGHT times the mean, then scaled back to mean 1 (which raises every weight a little)
+    assert weights.max() <= 1.2 * MAX_WEIGHT and weights.mean() == pytest.approx(1.0)
+
+
+def test_too_few_pairs_weigh_alike_and_k_is_checked():
+    wi, wo = random_bins(5, 4)
+    assert np.array_equal(coverage_weights(wi, wo, 8), np.ones(5))
+    for k in (0, -3, 2.5, True):
+        with pytest.raises(ValueError, match="k must be a positive integer"):
+            coverage_weights(wi, wo, k)
+
+
+def test_refine_config_checks_coverage_k():
+    assert RefineConfig(coverage_k=32).coverage_k == 32
+    for k in (-1, 1.5, True, "8"):
+        with pytest.raises(ValueError, match="coverage_k"):
+            RefineConfig(coverage_k=k)
