@@ -7,7 +7,7 @@ import pytest
 
 from frenbrdf.io.merl import merl_above_horizon
 from frenbrdf.io.sampling import bin_directions
-from frenbrdf.models.coverage import MAX_WEIGHT, coverage_weights, index_space
+from frenbrdf.models.coverage import MAX_K, MAX_WEIGHT, coverage_weights, index_space
 from frenbrdf.models.reconstruct import RefineConfig
 
 
@@ -38,13 +38,13 @@ def test_a_crowded_region_weighs_less_than_a_thin_one():
 def test_too_few_pairs_weigh_alike_and_k_is_checked():
     wi, wo = random_bins(5, 4)
     assert np.array_equal(coverage_weights(wi, wo, 8), np.ones(5))
-    for k in (0, -3, 2.5, True):
-        with pytest.raises(ValueError, match="k must be a positive integer"):
+    for k in (0, -3, 2.5, True, MAX_K + 1):
+        with pytest.raises(ValueError, match="k must be an integer from 1"):
             coverage_weights(wi, wo, k)
 
 
 def test_refine_config_checks_coverage_k():
     assert RefineConfig(coverage_k=32).coverage_k == 32
-    for k in (-1, 1.5, True, "8"):
+    for k in (-1, 1.5, True, "8", MAX_K + 1):
         with pytest.raises(ValueError, match="coverage_k"):
             RefineConfig(coverage_k=k)

@@ -355,6 +355,24 @@ def test_the_command_widens_on_request_and_names_a_width_without_full(run_dir, t
     assert "--reciprocal sets the NBRDF" in capsys.readouterr().err and not (tmp_path / "none").exists()
 
 
+def test_the_command_weighs_coverage_on_request_and_refuses_it_without_a_latent_stage(run_dir, toy_materials,
+                                                                                        tmp_path, capsys):
+    source = sorted(toy_materials.glob("*.binary"))[1]
+    common = ("--model", run_dir, "--refine", "latent", "--pattern", "uniform", "--samples", 300)
+    assert _reconstruct(source, "--out", tmp_path / "plain", *common) == 0
+    assert _reconstruct(source, "--out", tmp_path / "weighted", *common, "--coverage", 16) == 0
+    plain, weighted = (json.loads((tmp_path / name / "reconstruction.json").read_text())["z"]
+                       for name in ("plain", "weighted"))
+    assert not np.allclose(plain, weighted)
+    with pytest.raises(SystemExit) as exit_info:
+        _reconstruct(source, "--out", tmp_path / "none", "--model", run_dir, "--refine", "none", "--coverage", 8)
+    assert exit_info.value.code == 2 and "--coverage weighs the samples" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        _reconstruct(source, "--out", tmp_path / "bad", "--model", run_dir, "--coverage", -2)
+    assert "whole number in 0" in capsys.readouterr().err
+    assert not (tmp_path / "none").exists() and not (tmp_path / "bad").exists()
+
+
 def test_a_failure_while_writing_leaves_no_output(run_dir, toy_materials, tmp_path, monkeypatch):
     from frenbrdf.material import outputs as reconstruct_outputs
 

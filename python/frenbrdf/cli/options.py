@@ -48,6 +48,7 @@ evaluate_resolution = whole(8, limit(".evaluation.evaluate", "MAX_RESOLUTION"))
 edit_resolution = whole(8, limit(".material.edit", "MAX_RESOLUTION"))
 nbrdf_width = whole(1, limit(".models.nbrdf", "MAX_WIDTH"))
 lmax = whole(1, limit(".models.losses", "MAX_LMAX"))
+coverage_k = whole(0, limit(".models.coverage", "MAX_K"))
 
 
 def decibels(text: str) -> float:

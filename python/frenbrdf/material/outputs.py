@@ -49,7 +49,7 @@ FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.pn
 def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, model: str | os.PathLike = "pretrained",
                      samples: int | None = 4000, refine: str = "full", seed: int = 0, resolution: int = 256,
                      progress: bool = True, overwrite: bool = False, width: int | None = None,
-                     reciprocal: bool = False, pattern: str = DEFAULT_PATTERN) -> dict:
+                     reciprocal: bool = False, pattern: str = DEFAULT_PATTERN, coverage_k: int = 0) -> dict:
     """Reconstructs the material of a measurement file into ``out_dir`` (see the module docstring).
 
     Parameters
@@ -83,6 +83,9 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     pattern
         MERL or ``.bsdf`` input: the sampling pattern (:data:`frenbrdf.io.patterns.PATTERNS`: the device imitated),
         recorded in the report's ``input``; ``merl-bins``, the default, draws random valid bins.
+    coverage_k
+        The latent stage weighs samples by how thinly they cover their region
+        (:attr:`frenbrdf.models.reconstruct.RefineConfig.coverage_k`; 0, the default: alike).
 
     Returns
     -------
@@ -94,6 +97,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         config = dataclasses.replace(config, width=width)  # checked before anything is read or written
     if reciprocal:
         config = dataclasses.replace(config, keep_order=False)
+    if coverage_k:
+        config = dataclasses.replace(config, coverage_k=coverage_k)  # checked before anything is read or written
     find_pattern(pattern)  # an unknown name is refused before anything is read or written
     out = check_out(source, out_dir, model, overwrite=overwrite)
     measurements = read_samples(source, samples=samples, seed=seed, pattern=pattern)

@@ -24,6 +24,8 @@ from ..numerics.coords import directions_to_rusinkiewicz
 #: Weights are clipped at this many times their mean (then scaled back to mean 1): a lone sample far from the others
 #: stands for a region, not for all of it.
 MAX_WEIGHT = 10.0
+#: The largest k: neighbours beyond a thousand describe no local density.
+MAX_K = 1024
 #: Random valid bins whose density is the reference (drawn once, from a fixed seed).
 REFERENCE_BINS = 20_000
 
@@ -32,8 +34,8 @@ def coverage_weights(wi, wo, k: int) -> np.ndarray:
     """Per pair ``(N,)``: random valid MERL bins' density over the pairs' own at the pair (k-NN estimates), clipped at
     :data:`MAX_WEIGHT` times their mean, then scaled to mean 1. ``wi``, ``wo``: ``(N, 3)`` directions above the
     surface. Fewer than ``k + 1`` pairs all weigh 1."""
-    if isinstance(k, bool) or not isinstance(k, numbers.Integral) or k < 1:
-        raise ValueError(f"k must be a positive integer, got {k!r}")
+    if isinstance(k, bool) or not isinstance(k, numbers.Integral) or not 1 <= k <= MAX_K:
+        raise ValueError(f"k must be an integer from 1 to {MAX_K}, got {k!r}")
     points = index_space(wi, wo)
     if len(points) <= k:
         return np.ones(len(points))  # too few pairs to tell dense from thin

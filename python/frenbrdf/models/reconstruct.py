@@ -47,7 +47,7 @@ import torch
 from tqdm.auto import tqdm
 
 from .. import _native
-from .coverage import coverage_weights
+from .coverage import MAX_K, coverage_weights
 from .losses import LossConfig, reconstruction_loss, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
@@ -129,8 +129,9 @@ class RefineConfig:
         counted = isinstance(self.starts, numbers.Integral) and not isinstance(self.starts, bool)
         if not (counted and 1 <= self.starts <= MAX_STARTS):
             problems.append(f"starts must be an integer from 1 to {MAX_STARTS}, got {self.starts!r}")
-        if isinstance(self.coverage_k, bool) or not isinstance(self.coverage_k, numbers.Integral) or self.coverage_k < 0:
-            problems.append(f"coverage_k must be an integer ≥ 0, got {self.coverage_k!r}")
+        counted = isinstance(self.coverage_k, numbers.Integral) and not isinstance(self.coverage_k, bool)
+        if not (counted and 0 <= self.coverage_k <= MAX_K):
+            problems.append(f"coverage_k must be an integer from 0 to {MAX_K}, got {self.coverage_k!r}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
         if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
