@@ -48,3 +48,12 @@ def test_refine_config_checks_coverage_k():
     for k in (-1, 1.5, True, "8", MAX_K + 1):
         with pytest.raises(ValueError, match="coverage_k"):
             RefineConfig(coverage_k=k)
+
+
+def test_the_queries_in_chunks_give_the_same_weights(monkeypatch):
+    from frenbrdf.models import coverage
+
+    wi, wo = random_bins(500, 5)
+    whole = coverage_weights(wi, wo, 8)
+    monkeypatch.setattr(coverage, "QUERY_VALUES", 50)  # chunks of 5 or 6 pairs
+    assert np.array_equal(coverage_weights(wi, wo, 8), whole)

@@ -7,7 +7,9 @@ the rest. :func:`coverage_weights` weighs each sample by the density random vali
 density the samples themselves have there, both k-nearest-neighbour estimates in that index space
 (√(θ_h / (π/2)), θ_d / (π/2), φ_d mod π / π), so that the weighted loss estimates the loss over the whole table, as
 random bins' plain loss does. Taking the ratio of two estimates made the same way cancels the low estimates at the
-domain's edges (research/results/latent-gap/README.md).
+domain's edges (research/results/latent-gap/README.md, research/results/latent-coverage/README.md). The
+neighbours come from SciPy's k-d tree: the package's own k-NN core (kiddo) holds unit vectors, and these places are
+not.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ from ..numerics.coords import directions_to_rusinkiewicz
 MAX_WEIGHT = 10.0
 #: The largest k: neighbours beyond a thousand describe no local density.
 MAX_K = 1024
+#: Neighbour distances and indices a k-NN query holds at once (16 bytes each: 256 MB).
+QUERY_VALUES = 1 << 24
 #: Random valid bins whose density is the reference (drawn once, from a fixed seed).
 REFERENCE_BINS = 20_000
 
@@ -40,12 +44,20 @@ def coverage_weights(wi, wo, k: int) -> np.ndarray:
     if len(points) <= k:
         return np.ones(len(points))  # too few pairs to tell dense from thin
     # The k-th neighbour other than the pair itself; a density is k / (count · distance³).
-    own = cKDTree(points).query(points, k=k + 1)[0][:, -1]
-    reference = cKDTree(_reference_bins()).query(points, k=k)[0][:, -1]
+    own = _kth_distance(cKDTree(points), points, k + 1)
+    reference = _kth_distance(cKDTree(_reference_bins()), points, k)
     weights = np.maximum(own, 1e-12) ** 3 / np.maximum(reference, 1e-12) ** 3
     weights /= weights.mean()
     weights = np.minimum(weights, MAX_WEIGHT)
     return weights / weights.mean()
+
+
+def _kth_distance(tree: cKDTree, points: np.ndarray, k: int) -> np.ndarray:
+    """The distance from each point to its k-th nearest in ``tree``, in chunks whose neighbour lists stay within
+    :data:`QUERY_VALUES` values (a whole MERL table's 1.1 million pairs at k = 1024 would need 18 GB at once)."""
+    rows = max(1, QUERY_VALUES // k)
+    return np.concatenate([tree.query(points[start:start + rows], k=k)[0][:, -1]
+                           for start in range(0, len(points), rows)])
 
 
 def index_space(wi, wo) -> np.ndarray:
