@@ -359,11 +359,12 @@ def test_the_command_weighs_coverage_on_request_and_refuses_it_without_a_latent_
                                                                                         tmp_path, capsys):
     source = sorted(toy_materials.glob("*.binary"))[1]
     common = ("--model", run_dir, "--refine", "latent", "--pattern", "uniform", "--samples", 300)
-    assert _reconstruct(source, "--out", tmp_path / "plain", *common) == 0
+    assert _reconstruct(source, "--out", tmp_path / "plain", *common, "--coverage", 0) == 0
     assert _reconstruct(source, "--out", tmp_path / "weighted", *common, "--coverage", 16) == 0
-    plain, weighted = (json.loads((tmp_path / name / "reconstruction.json").read_text())["z"]
+    plain, weighted = (json.loads((tmp_path / name / "reconstruction.json").read_text())
                        for name in ("plain", "weighted"))
-    assert not np.allclose(plain, weighted)
+    assert not np.allclose(plain["z"], weighted["z"])
+    assert (plain["refine"]["coverage_k"], weighted["refine"]["coverage_k"]) == (0, 16)
     with pytest.raises(SystemExit) as exit_info:
         _reconstruct(source, "--out", tmp_path / "none", "--model", run_dir, "--refine", "none", "--coverage", 8)
     assert exit_info.value.code == 2 and "--coverage weighs the samples" in capsys.readouterr().err
@@ -371,6 +372,24 @@ def test_the_command_weighs_coverage_on_request_and_refuses_it_without_a_latent_
         _reconstruct(source, "--out", tmp_path / "bad", "--model", run_dir, "--coverage", -2)
     assert "whole number in 0" in capsys.readouterr().err
     assert not (tmp_path / "none").exists() and not (tmp_path / "bad").exists()
+
+
+def test_coverage_weights_are_on_by_default_where_the_samples_come_from_a_device(run_dir, toy_materials, tmp_path):
+    from frenbrdf.io import write_samples
+    from frenbrdf.material.outputs import DEVICE_COVERAGE_K
+
+    source = sorted(toy_materials.glob("*.binary"))[1]
+    quick = ("--model", run_dir, "--refine", "latent", "--samples", 300)
+    write_samples(tmp_path / "device.astm", read_samples(source, samples=300, seed=2, pattern="gonioreflectometer"))
+    write_samples(tmp_path / "scattered.csv", read_samples(source, samples=300, seed=2))
+    cases = {"bins": (source,), "uniform": (source, "--pattern", "uniform"), "astm": (tmp_path / "device.astm",),
+             "csv": (tmp_path / "scattered.csv",)}
+    for name, (input_file, *more) in cases.items():
+        options = quick if input_file == source else quick[:4]  # a file of samples is read whole
+        assert _reconstruct(input_file, "--out", tmp_path / name, *options, *more) == 0
+    used = {name: json.loads((tmp_path / name / "reconstruction.json").read_text())["refine"]["coverage_k"]
+            for name in cases}
+    assert used == {"bins": 0, "uniform": DEVICE_COVERAGE_K, "astm": DEVICE_COVERAGE_K, "csv": 0}
 
 
 def test_a_failure_while_writing_leaves_no_output(run_dir, toy_materials, tmp_path, monkeypatch):

@@ -240,7 +240,7 @@ def reconstruct(args: argparse.Namespace) -> int:
     if (args.width is not None or args.reciprocal) and args.refine != "full":
         raise ValueError(f"{'--width' if args.width is not None else '--reciprocal'} sets the NBRDF that "
                          f"--refine full fits; with --refine {args.refine} there is none")
-    if args.coverage and args.refine == "none":
+    if args.coverage is not None and args.refine == "none":
         raise ValueError("--coverage weighs the samples of the latent stage; with --refine none there is none")
     report = reconstruct_file(args.input, args.out, model=args.model, refine=args.refine, seed=args.seed,
                               progress=not args.quiet, overwrite=args.overwrite, width=args.width,
