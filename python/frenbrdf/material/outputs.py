@@ -31,8 +31,8 @@ import os
 
 import numpy as np
 
-from ..io.atomic import save_json
 from ..io.astm import SUFFIX as ASTM_SUFFIX
+from ..io.atomic import save_json
 from ..io.formats import read_samples, write_material
 from ..io.outputs import OutputFolder
 from ..io.patterns import DEFAULT as DEFAULT_PATTERN
