@@ -390,6 +390,10 @@ def test_coverage_weights_are_on_by_default_where_the_samples_come_from_a_device
     used = {name: json.loads((tmp_path / name / "reconstruction.json").read_text())["refine"]["coverage_k"]
             for name in cases}
     assert used == {"bins": 0, "uniform": DEVICE_COVERAGE_K, "astm": DEVICE_COVERAGE_K, "csv": 0}
+    # `full` was not judged with the weights: off unless asked for
+    assert _reconstruct(source, "--out", tmp_path / "full", "--model", run_dir, "--samples", 300, "--pattern",
+                        "uniform") == 0
+    assert json.loads((tmp_path / "full" / "reconstruction.json").read_text())["refine"]["coverage_k"] == 0
 
 
 def test_a_failure_while_writing_leaves_no_output(run_dir, toy_materials, tmp_path, monkeypatch):

@@ -215,8 +215,8 @@ def _reconstruct(subparsers) -> None:
     rec.add_argument("--coverage", type=options.coverage_k, metavar="K",
                      help="with --refine latent or full: the latent stage weighs each sample by how thinly the "
                      "samples cover its region (k-NN densities with this K; 0: every sample alike). Default: 32 "
-                     "where the samples come from a device (--pattern other than merl-bins, or an .astm file: "
-                     "+2 dB), else 0 (random bins: -0.2 dB); docs/usage.md")
+                     "with --refine latent where the samples come from a device (--pattern other than merl-bins, "
+                     "or an .astm file: +2 dB), else 0 (random bins: -0.2 dB; full: not measured); docs/usage.md")
     rec.add_argument("--seed", type=options.seed, default=0, help="seeds the sampling and the refinement (default 0)")
     rec.add_argument("--json", action="store_true", help="print the report as JSON")
     rec.add_argument("--quiet", action="store_true", help="no progress bars")

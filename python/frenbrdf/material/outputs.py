@@ -48,7 +48,7 @@ FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.pn
 
 
 #: The latent stage's coverage weights (:attr:`frenbrdf.models.reconstruct.RefineConfig.coverage_k`) where
-#: :func:`reconstruct_file` knows the samples come from a device: +1.96 and +1.86 dB through five device patterns on
+#: :func:`reconstruct_file` knows the samples come from a device, with ``refine="latent"``: +1.96 and +1.86 dB through five device patterns on
 #: two sets of 45 unseen procedural materials (research/results/latent-coverage/README.md); random bins, where the
 #: weights cost 0.23 dB, and files of samples that may be anything stay unweighted.
 DEVICE_COVERAGE_K = 32
@@ -94,8 +94,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
     coverage_k
         The latent stage weighs samples by how thinly they cover their region
         (:attr:`frenbrdf.models.reconstruct.RefineConfig.coverage_k`; 0: alike). None (the default):
-        :data:`DEVICE_COVERAGE_K` where the samples are known to come from a device (a ``pattern`` other than
-        ``merl-bins``, or an ``.astm`` file), else 0.
+        :data:`DEVICE_COVERAGE_K` with ``refine="latent"`` where the samples are known to come from a device (a
+        ``pattern`` other than ``merl-bins``, or an ``.astm`` file), else 0.
 
     Returns
     -------
@@ -109,7 +109,8 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         config = dataclasses.replace(config, keep_order=False)
     if coverage_k is None:
         from_device = pattern != DEFAULT_PATTERN or os.fspath(source).lower().endswith(ASTM_SUFFIX)
-        coverage_k = DEVICE_COVERAGE_K if from_device and config.latent_steps else 0
+        # Judged for `latent` only: `full`'s shorter latent stage before its weight fit was not measured with it.
+        coverage_k = DEVICE_COVERAGE_K if from_device and refine == "latent" else 0
     config = dataclasses.replace(config, coverage_k=coverage_k)  # checked before anything is read or written
     find_pattern(pattern)  # an unknown name is refused before anything is read or written
     out = check_out(source, out_dir, model, overwrite=overwrite)
