@@ -6,8 +6,8 @@ For changes to the SHT's kernels that move its speed by a few percent: on a virt
 processes run minutes apart differ by more than that. Both builds (``lib_native.so`` from
 ``cargo build --release --features python --lib``, copied aside) are loaded under different module
 names, checked against each other on the same maps, then timed with ``common.time_interleaved`` on
-the project's workload (192 maps, Gauss–Legendre 90 × 180, lmax 89; ``--batch`` another count of maps). Reported: NEW's time over
-BASE's, per-round median and quartiles (below 1: NEW is faster).
+the project's workload (192 maps, Gauss–Legendre 90 × 180, lmax 89; ``--batch`` another count of
+maps). Reported: NEW's time over BASE's, per-round median and quartiles (below 1: NEW is faster).
 """
 
 from __future__ import annotations

@@ -48,9 +48,10 @@ FILES = {"nbrdf": "material.pt", "merl": "material.binary", "render": "render.pn
 
 
 #: The latent stage's coverage weights (:attr:`frenbrdf.models.reconstruct.RefineConfig.coverage_k`) where
-#: :func:`reconstruct_file` knows the samples come from a device, with ``refine="latent"``: +1.96 and +1.86 dB through five device patterns on
-#: two sets of 45 unseen procedural materials (research/results/latent-coverage/README.md); random bins, where the
-#: weights cost 0.23 dB, and files of samples that may be anything stay unweighted.
+#: :func:`reconstruct_file` knows the samples come from a device, with ``refine="latent"``: +1.96 and +1.86 dB
+#: through five device patterns on two sets of 45 unseen procedural materials
+#: (research/results/latent-coverage/README.md); random bins, where the weights cost 0.23 dB, and files of samples
+#: that may be anything stay unweighted.
 DEVICE_COVERAGE_K = 32
 
 
