@@ -8,7 +8,7 @@
 #
 # Rebuilds version 2's tables as release/train_shipped_model.sh does (the MERL fits, the RGL fits but the four
 # measured materials, the default bank; `md5sum` of three printed to check them against the CPU's), then
-# trains the runs. RESUME=1 continues each run from its last.pt on the tables already there; on a CPU,
+# trains the runs. HELD_OUT (names, space-separated) replaces the four RGL fits left out. RESUME=1 continues each run from its last.pt on the tables already there; on a CPU,
 # `frenbrdf train --resume` from the last.pt that comes back does the same.
 # Writes OUT/run-NAME.tgz (the run folder with best.pt stripped of its optimizer state, its log) and, for
 # the runs named in KEEP_LAST (default: all), OUT/last-NAME.pt for a resume (at most 64 MiB come back).
@@ -30,7 +30,7 @@ nvidia-smi -L 2>/dev/null
 python3 -c "import torch; print('torch', torch.__version__, 'cuda', torch.cuda.is_available())"
 
 if [[ -z ${RESUME:-} ]]; then
-    HELD_OUT=" paper_white_rgb acrylic_felt_green_rgb vch_golden_yellow_rgb cg_sunflower_rgb "
+    HELD_OUT=" ${HELD_OUT:-paper_white_rgb acrylic_felt_green_rgb vch_golden_yellow_rgb cg_sunflower_rgb} "
     rgl=()
     for fit in "$SHARED"/rgl-nbrdf/*.h5; do
         [[ "$HELD_OUT" == *" $(basename "$fit" .h5) "* ]] || rgl+=("$fit")

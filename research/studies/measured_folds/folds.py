@@ -2,6 +2,7 @@
 
     python research/studies/measured_folds/folds.py others FOLD   # the measurements of every other fold
     python research/studies/measured_folds/folds.py groups        # compare_models.py's --group: KIND=NAME,...
+    python research/studies/measured_folds/folds.py all           # every measurement of every fold
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ FOLDS = json.loads((Path(__file__).resolve().parent / "folds.json").read_text())
 def main(argv: list[str]) -> None:
     if argv[:1] == ["others"] and len(argv) == 2:
         print(" ".join(name for k, fold in enumerate(FOLDS["folds"]) if k != int(argv[1]) for name in fold))
+    elif argv == ["all"]:
+        print(" ".join(name for fold in FOLDS["folds"] for name in fold))
     elif argv == ["groups"]:
         print(" ".join(kind.replace(" ", "-") + "=" + ",".join(names) for kind, names in FOLDS["kinds"].items()))
     else:
