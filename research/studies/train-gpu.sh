@@ -3,7 +3,8 @@
 # LIMIT seconds, with a copy of ../shared/data carried as .devdata:
 #
 #   run: LIMIT=520 bash research/studies/train-gpu.sh NAME=SEED:CONFIG ...
-#        (carry: .devdata, python/frenbrdf/_native.abi3.so)
+#        (carry: .devdata, python/frenbrdf/_native.abi3.so as `pip install` builds it: a `cargo build` one
+#        links this machine's libpython and fails to import there)
 #   run: RESUME=1 LIMIT=225 bash research/studies/train-gpu.sh NAME=SEED:CONFIG ...   (same warm machine)
 #
 # Rebuilds version 2's tables as release/train_shipped_model.sh does (the MERL fits, the RGL fits but the four
@@ -43,6 +44,7 @@ if [[ -z ${RESUME:-} ]]; then
     frenbrdf import-nbrdf "${rgl[@]}" "$WORK/rgl" --quiet &
     frenbrdf synth "$WORK/bank" ${BANK_N:+--n $BANK_N} --quiet &
     wait
+    rm -rf "$WORK/data"  # a failed earlier try on the same warm machine may have left dangling links
     mkdir -p "$WORK/data"
     ln -sf "$WORK"/{merl-a,merl-b,rgl,bank}/*.binary "$WORK/data/"
     echo "tables: $(ls "$WORK/data" | wc -l) in $((SECONDS - start)) s"

@@ -9,5 +9,5 @@ DATA=${1:?DATA folder}; WORK=${2:?WORK folder}
 CONFIG=$(dirname "$0")/config-v4.json
 mkdir -p "$WORK"
 for seed in 0 1 2; do echo "$seed"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
-    'frenbrdf train --data "$1" --config "$0" --seed "$2" --out "$3/v4-s$2" --quiet > "$3/v4-s$2.log" 2>&1' \
+    'frenbrdf train --data "$1" --config "$0" --seed "$3" --out "$2/v4-s$3" --quiet > "$2/v4-s$3.log" 2>&1' \
     "$CONFIG" "$DATA" "$WORK"
