@@ -4,7 +4,8 @@
 
 Per arm (`v4`, `v8`: each material's PSNR / ΔE the mean over the arm's three runs) and budget: the mean over the
 19 measurements, by kind, the materials whose ΔE exceeds 6, and `v8 − v4` per measurement with its 95 % interval;
-the same difference on the 40 held-out tables. Reported, not decided (the README).
+the same difference on the 40 held-out tables; where OUT holds evaluate_patterns.sh's two folders, each pattern's
+figures of both arms and their difference. Reported, not decided (the README).
 """
 
 from __future__ import annotations
@@ -60,6 +61,26 @@ def summarise(measured: dict, tables: dict) -> dict:
     return out
 
 
+def by_pattern(arms: dict[str, list[dict]]) -> dict:
+    """Pattern → budget → each arm's mean PSNR / ΔE over the 19 and `v8 − v4` per measurement."""
+    out = {}
+    for pattern in sorted({r["pattern"] for r in arms["v8"]}, key=[r["pattern"] for r in arms["v8"]].index):
+        for budget in sorted({r["budget"] for r in arms["v8"]}, key=[r["budget"] for r in arms["v8"]].index):
+            mine = {arm: [r for r in rows if r["pattern"] == pattern] for arm, rows in arms.items()}
+            psnr = {arm: per_material(rows, arm, budget, "psnr") for arm, rows in mine.items()}
+            delta_e = {arm: per_material(rows, arm, budget, "delta_e") for arm, rows in mine.items()}
+            out.setdefault(pattern, {})[budget] = {
+                **{arm: [float(np.mean(list(psnr[arm].values()))), float(np.mean(list(delta_e[arm].values())))]
+                   for arm in ARMS},
+                "v8 - v4": paired_interval([psnr["v8"][m] - psnr["v4"][m] for m in psnr["v8"]]),
+            }
+        # What the coverage weights add to `latent` with the `v8` runs (the CLI's default for a device's samples).
+        plain, weighted = (per_material([r for r in arms["v8"] if r["pattern"] == pattern], "v8", budget, "psnr")
+                           for budget in ("latent", "latent@coverage_k=32"))
+        out[pattern]["coverage - latent, v8"] = paired_interval([weighted[m] - plain[m] for m in plain])
+    return out
+
+
 def markdown(summary: dict) -> str:
     interval = lambda d: f"{d['mean']:+.2f} [{d['low']:+.2f}, {d['high']:+.2f}]"  # noqa: E731
     lines = ["| arm, budget | PSNR / ΔE, 19 measurements | goal | ΔE > 6 |", "|---|---|---|---|"]
@@ -78,6 +99,15 @@ def markdown(summary: dict) -> str:
     for budget, d in summary["v8 - v4"].items():
         table = summary["tables v8 - v4"].get(budget)
         lines.append(f"| {budget} | {interval(d)} | {interval(table) if table else '—'} |")
+    if "patterns" in summary:
+        lines += ["", "| pattern × 1,500, budget | v4 | v8 | `v8 − v4` |", "|---|---|---|---|"]
+        for pattern, budgets in summary["patterns"].items():
+            for budget, s in budgets.items():
+                if budget == "coverage - latent, v8":
+                    lines.append(f"| {pattern}, coverage − `latent` (`v8`) | | | {interval(s)} |")
+                    continue
+                arms = " | ".join(f"{s[arm][0]:.2f} / {s[arm][1]:.2f}" for arm in ARMS)
+                lines.append(f"| {pattern}, {budget} | {arms} | {interval(s['v8 - v4'])} |")
     return "\n".join(lines) + "\n"
 
 
@@ -85,6 +115,9 @@ def main(argv=None) -> int:
     out = Path((argv or sys.argv[1:])[0])
     measured, tables = (json.loads((out / part / "compare.json").read_text()) for part in ("measured", "tables"))
     summary = summarise(measured, tables)
+    if all((out / f"patterns-{arm}" / "compare.json").exists() for arm in ARMS):
+        summary["patterns"] = by_pattern({arm: json.loads((out / f"patterns-{arm}" / "compare.json").read_text())["rows"]
+                                          for arm in ARMS})
     save_json(out / "goals.json", summary)
     write_text(out / "goals.md", markdown(summary))
     print(markdown(summary))

@@ -1,0 +1,68 @@
+"""Renders for research/results/folds-v8 (README.md): the worst measurement of each kind by the `v8` arm's encoder
+(mean over its runs), as truth, `v4`'s first run from its encoder, and `v8`'s first run from its encoder, `latent`
+and `full`; 4,000 random valid bins, draw 0, as compare_models.py draws them.
+
+    python research/results/folds-v8/look.py OUT RUNS research/results/folds-v8/look.png
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from frenbrdf.io import read_material
+from frenbrdf.io.patterns import pattern_samples
+from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import image_metrics, refined_reconstruction
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+from compare_models import condition_rng  # noqa: E402
+
+KINDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
+COLUMNS = (("v4-s0", "none"), ("v8-s0", "none"), ("v8-s0", "latent"), ("v8-s0", "full"))
+
+
+def worst_of_each_kind(rows: list[dict]) -> list[tuple[str, str]]:
+    """(kind, material) with the lowest mean encoder PSNR over the `v8` runs, per kind."""
+    mine = [r for r in rows if r["model"].startswith("v8/") and r["budget"] == "none"]
+    psnr = {m: np.mean([r["psnr"] for r in mine if r["material"] == m]) for m in {r["material"] for r in mine}}
+    return [(kind, min(names, key=psnr.__getitem__)) for kind, names in KINDS["kinds"].items()]
+
+
+def main(out: str, runs: str, figure: str) -> None:
+    rows = json.loads((Path(out) / "measured" / "compare.json").read_text())["rows"]
+    cases = worst_of_each_kind(rows)
+    models = {name: load_model(Path(runs) / name) for name in {name for name, _ in COLUMNS}}
+    scene = Scene(resolution=128)
+    mask = material_mask(scene)
+    figure_, axes = plt.subplots(len(cases), 1 + len(COLUMNS), figsize=(10, 2.1 * len(cases)))
+    for row, (kind, material) in zip(axes, cases, strict=True):
+        truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
+        truth_image = tonemap(render_linear(truth, scene))
+        drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
+        images = [("truth", truth_image)]
+        for name, budget in COLUMNS:
+            _, image, seconds = refined_reconstruction(models[name], drawn, scene, refine_config(budget))
+            metrics = image_metrics(truth_image, image, mask)
+            title = f"{name.split('-')[0]} " + ("encoder" if budget == "none" else f"{budget}, {seconds:.1f} s")
+            images.append((f"{title}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}", image))
+        for axis, (title, image) in zip(row, images, strict=True):
+            axis.imshow(image.clip(0, 1))
+            axis.set_title(title, fontsize=7)
+            axis.set_xticks([]), axis.set_yticks([])
+        row[0].set_ylabel(f"{kind}\n{material[:24]}", fontsize=7)
+    figure_.tight_layout()
+    figure_.savefig(figure, dpi=80)
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:4])
