@@ -2,7 +2,7 @@
 (mean over its runs), as truth, `v4`'s first run from its encoder, and `v8`'s first run from its encoder, `latent`
 and `full`; 4,000 random valid bins, draw 0, as compare_models.py draws them.
 
-    python research/results/folds-v8/look.py OUT RUNS research/results/folds-v8/look.png
+    python research/results/folds-v8/look.py OUT RUNS research/results/folds-v8/look.jpg
 """
 
 from __future__ import annotations
