@@ -9,8 +9,9 @@
 #
 # Rebuilds version 2's tables as release/train_shipped_model.sh does (the MERL fits, the RGL fits but the four
 # measured materials, the default bank; `md5sum` of three printed to check them against the CPU's), then
-# trains the runs. HELD_OUT (names, space-separated) replaces the four RGL fits left out. RESUME=1 continues each run from its last.pt on the tables already there; on a CPU,
-# `frenbrdf train --resume` from the last.pt that comes back does the same.
+# trains the runs. HELD_OUT (names, space-separated) replaces the four RGL fits left out. RESUME=1 continues
+# each run from its last.pt on the tables already there; on a CPU, `frenbrdf train --resume` from the last.pt
+# that comes back does the same.
 # Writes OUT/run-NAME.tgz (the run folder with best.pt stripped of its optimizer state, its log) and, for
 # the runs named in KEEP_LAST (default: all), OUT/last-NAME.pt for a resume (at most 64 MiB come back).
 set -uo pipefail

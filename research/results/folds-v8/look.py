@@ -11,10 +11,6 @@ import json
 import sys
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
 from frenbrdf.io import read_material
@@ -26,6 +22,7 @@ from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from compare_models import condition_rng  # noqa: E402
+from image_grid import save_image_grid  # noqa: E402
 
 KINDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
 COLUMNS = (("v4-s0", "none"), ("v8-s0", "none"), ("v8-s0", "latent"), ("v8-s0", "full"))
@@ -44,8 +41,8 @@ def main(out: str, runs: str, figure: str) -> None:
     models = {name: load_model(Path(runs) / name) for name in {name for name, _ in COLUMNS}}
     scene = Scene(resolution=128)
     mask = material_mask(scene)
-    figure_, axes = plt.subplots(len(cases), 1 + len(COLUMNS), figsize=(10, 2.1 * len(cases)))
-    for row, (kind, material) in zip(axes, cases, strict=True):
+    grid = []
+    for kind, material in cases:
         truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
         truth_image = tonemap(render_linear(truth, scene))
         drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
@@ -55,13 +52,8 @@ def main(out: str, runs: str, figure: str) -> None:
             metrics = image_metrics(truth_image, image, mask)
             title = f"{name.split('-')[0]} " + ("encoder" if budget == "none" else f"{budget}, {seconds:.1f} s")
             images.append((f"{title}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}", image))
-        for axis, (title, image) in zip(row, images, strict=True):
-            axis.imshow(image.clip(0, 1))
-            axis.set_title(title, fontsize=7)
-            axis.set_xticks([]), axis.set_yticks([])
-        row[0].set_ylabel(f"{kind}\n{material[:24]}", fontsize=7)
-    figure_.tight_layout()
-    figure_.savefig(figure, dpi=80)
+        grid.append((f"{kind}\n{material[:24]}", images))
+    save_image_grid(grid, figure)
 
 
 if __name__ == "__main__":

@@ -12,11 +12,6 @@ import json
 import sys
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-
 from frenbrdf.io import read_material
 from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.io.sampling import as_table
@@ -27,6 +22,7 @@ from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from compare_models import condition_rng  # noqa: E402
+from image_grid import save_image_grid  # noqa: E402
 
 BUDGETS = {"latent": refine_config("latent"), "coverage 32": dataclasses.replace(refine_config("latent"), coverage_k=32)}
 
@@ -47,8 +43,8 @@ def main(out: str, families: str, figure: str) -> None:
     cases += [(Path("../shared/data/rgl-measured") / f"{name}.bsdf", "uniform") for name in unseen]
     model, scene = load_model("pretrained"), Scene(resolution=128)
     mask = material_mask(scene)
-    figure_, axes = plt.subplots(len(cases), 3, figsize=(6, 2.1 * len(cases)))
-    for row, (path, pattern) in zip(axes, cases, strict=True):
+    grid = []
+    for path, pattern in cases:
         truth = read_material(path)
         table = as_table(truth) if path.suffix == ".binary" else None
         truth_image = tonemap(render_linear(truth, scene))
@@ -58,13 +54,8 @@ def main(out: str, families: str, figure: str) -> None:
             _, image, _ = refined_reconstruction(model, drawn, scene, config)
             metrics = image_metrics(truth_image, image, mask)
             images.append((f"{name}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}", image))
-        for axis, (title, image) in zip(row, images, strict=True):
-            axis.imshow(image.clip(0, 1))
-            axis.set_title(title, fontsize=7)
-            axis.set_xticks([]), axis.set_yticks([])
-        row[0].set_ylabel(f"{path.stem[:22]}\n{pattern}", fontsize=7)
-    figure_.tight_layout()
-    figure_.savefig(figure, dpi=80)
+        grid.append((f"{path.stem[:22]}\n{pattern}", images))
+    save_image_grid(grid, figure)
 
 
 if __name__ == "__main__":
