@@ -1,0 +1,60 @@
+"""research/results/folds-v8/summarise.py: the goals' table of the fold figures, on rows made up here."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+STUDY = Path(__file__).resolve().parents[1] / "research" / "results" / "folds-v8"
+FOLDS = Path(__file__).resolve().parents[1] / "research" / "studies" / "measured_folds" / "folds.json"
+MATERIALS = [name for names in json.loads(FOLDS.read_text())["kinds"].values() for name in names]
+
+
+@pytest.fixture
+def summarise(monkeypatch):
+    monkeypatch.syspath_prepend(str(STUDY))
+    import summarise
+    return summarise
+
+
+def rows(psnr: dict[str, float], delta_e: dict[str, float], materials=MATERIALS, pattern="merl-bins"):
+    """Three runs of each arm; PSNR the arm's value + noise that averages out over the runs, ΔE the arm's value."""
+    out = []
+    for arm in ("v4", "v8"):
+        for run, noise in enumerate((-0.5, 0.0, 0.5)):
+            for m, material in enumerate(materials):
+                for budget, base in psnr.items():
+                    out.append({"model": f"{arm}/s{run}", "material": material, "budget": budget, "pattern": pattern,
+                                "psnr": base + (0.5 if arm == "v8" else 0.0) + noise + 0.01 * m,
+                                "delta_e": delta_e[budget] + (7.0 if arm == "v8" and material == materials[0] else 0.0)})
+    return out
+
+
+def test_goals_kinds_and_differences(summarise):
+    psnr = {"none": 30.2, "latent": 34.0, "full": 40.0}
+    delta_e = {"none": 2.0, "latent": 1.0, "full": 0.5}
+    tables = rows({"none": 35.0, "latent": 40.0}, delta_e, materials=["table-a", "table-b", "table-c"])
+    summary = summarise.summarise({"rows": rows(psnr, delta_e)}, {"rows": tables})
+    v4, v8 = summary["arms"]["v4"], summary["arms"]["v8"]
+    assert v4["none"]["psnr"] == pytest.approx(30.2 + 0.09)  # 0.01 × the mean material index, 9
+    assert v4["none"]["meets_goal"] and not v4["latent"]["meets_goal"] and v4["full"]["meets_goal"]
+    # One material's ΔE is 9 in `v8`: named as lost, while the mean (2.37) still meets the goal.
+    assert v8["none"]["hue_lost"] == {MATERIALS[0]: 9.0} and v8["none"]["meets_goal"]
+    assert v4["none"]["hue_lost"] == {}
+    assert v8["none"]["by_kind"]["fabric"][1] == pytest.approx(2.0 + 7.0 / 4)
+    for budget in ("none", "latent", "full"):
+        assert summary["v8 - v4"][budget]["mean"] == pytest.approx(0.5)
+    assert summary["tables v8 - v4"]["latent"]["mean"] == pytest.approx(0.5)
+    assert "| v8, none |" in summarise.markdown(summary)
+
+
+def test_patterns_compare_the_arms_and_the_coverage_weights(summarise):
+    psnr = {"none": 20.0, "latent": 32.0, "latent@coverage_k=32": 32.8}
+    delta_e = dict.fromkeys(psnr, 2.0)
+    arms = {arm: [r for r in rows(psnr, delta_e, pattern="uniform") if r["model"].startswith(arm)]
+            for arm in ("v4", "v8")}
+    patterns = summarise.by_pattern(arms)
+    assert patterns["uniform"]["latent"]["v8 - v4"]["mean"] == pytest.approx(0.5)
+    assert patterns["uniform"]["coverage - latent, v8"]["mean"] == pytest.approx(0.8)
+    assert np.isclose(patterns["uniform"]["none"]["v8"][0], 20.5 + 0.09)
