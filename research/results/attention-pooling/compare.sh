@@ -14,12 +14,8 @@ for pair in "$@"; do labels+=("${pair%%=*}"); models+=("${pair#*=}"); done
 if [[ -n ${FAMILIES:-} ]]; then
     scored=(--tables "$FAMILIES"/*.binary)
 else
-    tables=$(python -c "import json,sys; print(' '.join(f'{sys.argv[2]}/data/{n}.binary' for n in json.load(open(sys.argv[1]))['test']))" "$RUN/run/split.json" "$RUN")
-    trained_on=$(python -c "
-import json, sys, pathlib
-split = json.load(open(sys.argv[1])); seen = set(split['train']) | set(split['val'])
-names = [p.stem for p in pathlib.Path('../shared/data/rgl-measured').glob('*.bsdf') if p.stem in seen]
-print(' '.join(f'{label}={n}' for label in sys.argv[2:] for n in names))" "$RUN/run/split.json" "${labels[@]}")
+    tables=$(python research/studies/split_names.py tables "$RUN")
+    trained_on=$(python research/studies/split_names.py trained-on "$RUN" "${labels[@]}")
     scored=(--tables $tables --measurements ../shared/data/rgl-measured/*.bsdf --trained-on $trained_on)
 fi
 COMPARE=(python research/studies/compare_models.py --models "${models[@]}" --labels "${labels[@]}" "${scored[@]}"

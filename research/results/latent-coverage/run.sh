@@ -8,12 +8,8 @@
 #   bash research/results/latent-coverage/run.sh RUN FAMILIES OUT
 set -euo pipefail
 RUN=${1:?training work folder}; FAMILIES=${2:?families folder}; OUT=${3:?OUT folder}
-tables=$(python -c "import json,sys; print(' '.join(f'{sys.argv[2]}/data/{n}.binary' for n in json.load(open(sys.argv[1]))['test']))" "$RUN/run/split.json" "$RUN")
-trained_on=$(python -c "
-import json, sys, pathlib
-split = json.load(open(sys.argv[1])); seen = set(split['train']) | set(split['val'])
-print(' '.join(f'v8={p.stem}' for p in pathlib.Path('../shared/data/rgl-measured').glob('*.bsdf') if p.stem in seen))" \
-    "$RUN/run/split.json")
+tables=$(python research/studies/split_names.py tables "$RUN")
+trained_on=$(python research/studies/split_names.py trained-on "$RUN" v8)
 compare() {  # NAME, then the materials and what reads them
     local name=$1; shift
     OMP_NUM_THREADS=1 RAYON_NUM_THREADS=1 python research/studies/compare_models.py --models pretrained --labels v8 \
