@@ -45,8 +45,9 @@ if [[ -z ${RESUME:-} ]]; then
     frenbrdf import-nbrdf "${rgl[@]}" "$WORK/rgl" --quiet &
     frenbrdf synth "$WORK/bank" ${BANK_N:+--n $BANK_N} --quiet &
     wait
-    rm -rf "$WORK/data"  # a failed earlier try on the same warm machine may have left dangling links
     mkdir -p "$WORK/data"
+    # Links a failed earlier try on the same warm machine left (one dangling one failed the next); only links go.
+    find "$WORK/data" -maxdepth 1 -type l -delete
     ln -sf "$WORK"/{merl-a,merl-b,rgl,bank}/*.binary "$WORK/data/"
     echo "tables: $(ls "$WORK/data" | wc -l) in $((SECONDS - start)) s"
     md5sum "$WORK"/data/{alumina-oxide,cm_white_rgb,synth-000-orange-fabric}.binary
