@@ -1,18 +1,22 @@
 //! One part's loss and gradient: the forward and backward passes over its blocks of
-//! [`BLOCK`] samples, held feature-major (one [`Block`] per unit), in vectors of
-//! [`LANES`]. Each parameter's gradient gathers [`LANES`] partial sums over the part's
-//! blocks, added up once at its end; every sum runs in a fixed order.
+//! samples, held feature-major (one [`Block`] per unit), in vectors of [`LANES`]. Each
+//! parameter's gradient gathers [`LANES`] partial sums over the part's blocks, added up once
+//! at its end. Every sum runs sample by sample in order, so that the block's size (four
+//! vectors, eight where AVX-512's 32 registers hold a pair of units' sums) changes no result.
 
-use super::lanes::{Lanes, LANES};
+use super::lanes::{halving_sum, Lanes, LANES};
 use super::{Loss, WeightFit, N_INPUTS, N_OUTPUTS};
 
-/// Vectors per block.
-const VECTORS: usize = 4;
-/// Samples per block.
-pub const BLOCK: usize = VECTORS * LANES;
+/// Vectors per block: AVX-512's (fewer passes over the partial sums, which live in the
+/// second-level cache), and the others'.
+const WIDE: usize = 8;
+const NARROW: usize = 4;
+/// Samples per parallel task: a multiple of every block. (1,024 took 0.99 the time of 512 on
+/// two threads, research/performance.md: 512 keeps eight tasks in a batch of 4,096.)
+pub const PART: usize = 4 * WIDE * LANES;
 
-/// One unit's values (or gradients) over a block's samples.
-type Block = [[f32; LANES]; VECTORS];
+/// One unit's values (or gradients) over a block's N vectors of samples.
+type Block<const N: usize> = [[f32; LANES]; N];
 /// One parameter's partial gradient sums.
 type Partial = [f32; LANES];
 
@@ -30,27 +34,32 @@ pub fn part_gradient(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [
             return unsafe { part_gradient_avx2(fit, rows, scale, gradient) };
         }
     }
-    part_gradient_inline::<[f32; LANES]>(fit, rows, scale, gradient)
+    part_gradient_inline::<[f32; LANES], NARROW>(fit, rows, scale, gradient)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,fma")]
 fn part_gradient_avx512(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [f32]) -> f64 {
-    part_gradient_inline::<super::lanes::Avx512>(fit, rows, scale, gradient)
+    part_gradient_inline::<super::lanes::Avx512, WIDE>(fit, rows, scale, gradient)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn part_gradient_avx2(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [f32]) -> f64 {
-    part_gradient_inline::<super::lanes::Avx2>(fit, rows, scale, gradient)
+    part_gradient_inline::<super::lanes::Avx2, NARROW>(fit, rows, scale, gradient)
 }
 
 #[inline(always)]
-fn part_gradient_inline<V: Lanes>(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [f32]) -> f64 {
+fn part_gradient_inline<V: Lanes, const N: usize>(
+    fit: &WeightFit,
+    rows: &[u32],
+    scale: f32,
+    gradient: &mut [f32],
+) -> f64 {
     let layers = &fit.layers;
-    let zero: Block = [[0.0; LANES]; VECTORS];
+    let zero: Block<N> = [[0.0; LANES]; N];
     // activations[0]: the inputs; activations[l + 1]: layer l's outputs.
-    let mut activations: Vec<Vec<Block>> = std::iter::once(N_INPUTS)
+    let mut activations: Vec<Vec<Block<N>>> = std::iter::once(N_INPUTS)
         .chain(layers.iter().map(|l| l.outputs))
         .map(|width| vec![zero; width])
         .collect();
@@ -60,9 +69,9 @@ fn part_gradient_inline<V: Lanes>(fit: &WeightFit, rows: &[u32], scale: f32, gra
     let mut partials: Vec<Partial> = vec![[0.0; LANES]; fit.params.len()];
     let mut loss: Partial = [0.0; LANES];
 
-    for block in rows.chunks(BLOCK) {
+    for block in rows.chunks(N * LANES) {
         // Gather the block feature-major; missing samples of a last block are 0 and weigh 0.
-        if block.len() < BLOCK {
+        if block.len() < N * LANES {
             activations[0]
                 .iter_mut()
                 .chain(&mut targets)
@@ -86,17 +95,17 @@ fn part_gradient_inline<V: Lanes>(fit: &WeightFit, rows: &[u32], scale: f32, gra
             let weights = &fit.params[layer.weights()];
             let biases = &fit.params[layer.biases()];
             let hidden = l + 1 < layers.len();
-            dense::<V>(weights, Some(biases), inputs, outputs);
+            dense::<V, N>(weights, Some(biases), inputs, outputs);
             if hidden {
                 for out in outputs.iter_mut() {
-                    relu::<V>(out);
+                    relu::<V, N>(out);
                 }
             }
         }
 
-        // The loss and its gradient at the outputs.
-        for (j, predicted) in activations[layers.len()].iter().enumerate() {
-            for vector in 0..VECTORS {
+        // The loss and its gradient at the outputs, sample by sample.
+        for vector in 0..N {
+            for (j, predicted) in activations[layers.len()].iter().enumerate() {
                 for lane in 0..LANES {
                     let cos = cos_in[vector][lane];
                     let error = (predicted[vector][lane] - targets[j][vector][lane]) * cos;
@@ -127,55 +136,60 @@ fn part_gradient_inline<V: Lanes>(fit: &WeightFit, rows: &[u32], scale: f32, gra
             let inputs = &activations[l];
             let (weights, biases) = (layer.weights(), layer.biases());
             for (j, up) in upstream[..layer.outputs].iter().enumerate() {
-                add_sum::<V>(&mut partials[biases.start + j], up);
+                add_sum::<V, N>(&mut partials[biases.start + j], up);
             }
             // Each output unit's row of weight gradients, two units at a time where the registers allow.
             let mut weight_rows = partials[weights].chunks_exact_mut(layer.inputs).zip(&upstream);
             let pairs = if V::PAIRS { layer.outputs / 2 } else { 0 };
             for _ in 0..pairs {
                 let ((first, up0), (second, up1)) = (weight_rows.next().unwrap(), weight_rows.next().unwrap());
-                add_products::<V, 2>([first, second], [up0, up1], inputs);
+                add_products::<V, N, 2>([first, second], [up0, up1], inputs);
             }
             for (row, up) in weight_rows {
-                add_products::<V, 1>([row], [up], inputs);
+                add_products::<V, N, 1>([row], [up], inputs);
             }
             if l == 0 {
                 break;
             }
             let transposed = &fit.transposed[l];
-            dense::<V>(
+            dense::<V, N>(
                 transposed,
                 None,
                 &upstream[..layer.outputs],
                 &mut downstream[..layer.inputs],
             );
             for (down, input) in downstream.iter_mut().zip(inputs) {
-                gate::<V>(down, input); // back through the ReLU: nothing flows where it gave 0
+                gate::<V, N>(down, input); // back through the ReLU: nothing flows where it gave 0
             }
             std::mem::swap(&mut upstream, &mut downstream);
         }
     }
-    for (g, partial) in gradient.iter_mut().zip(partials) {
-        *g += halve(partial);
+    for (g, partial) in gradient.iter_mut().zip(&partials) {
+        *g += V::load(partial).halving_sum();
     }
-    halve(loss) as f64
+    halving_sum(loss) as f64
 }
 
 /// outputs[j] = biases[j] + Σ_k weights[j, k] · inputs[k] (row-major `weights`; no biases: 0),
 /// two outputs at a time where the vector unit has the registers for it (eight independent
 /// sums keep both of an AVX-512 core's FMA units busy).
 #[inline(always)]
-fn dense<V: Lanes>(weights: &[f32], biases: Option<&[f32]>, inputs: &[Block], outputs: &mut [Block]) {
+fn dense<V: Lanes, const N: usize>(
+    weights: &[f32],
+    biases: Option<&[f32]>,
+    inputs: &[Block<N>],
+    outputs: &mut [Block<N>],
+) {
     let width = inputs.len();
     let start = |j: usize| biases.map_or(0.0, |b| b[j]);
     let pairs = if V::PAIRS { outputs.len() / 2 } else { 0 };
     let mut rows = weights.chunks_exact(width).zip(outputs.iter_mut()).enumerate();
     for _ in 0..pairs {
         let ((j, (w0, out0)), (_, (w1, out1))) = (rows.next().unwrap(), rows.next().unwrap());
-        weighted_sums::<V, 2>([start(j), start(j + 1)], [w0, w1], inputs, [out0, out1]);
+        weighted_sums::<V, N, 2>([start(j), start(j + 1)], [w0, w1], inputs, [out0, out1]);
     }
     for (j, (w, out)) in rows {
-        weighted_sums::<V, 1>([start(j)], [w], inputs, [out]);
+        weighted_sums::<V, N, 1>([start(j)], [w], inputs, [out]);
     }
 }
 
@@ -183,37 +197,37 @@ fn dense<V: Lanes>(weights: &[f32], biases: Option<&[f32]>, inputs: &[Block], ou
 /// weighs. (Plain loops, no closures: a closure is compiled apart from the vector unit's
 /// function and would call the intrinsics instead of inlining them.)
 #[inline(always)]
-fn weighted_sums<V: Lanes, const R: usize>(
+fn weighted_sums<V: Lanes, const N: usize, const R: usize>(
     starts: [f32; R],
     weights: [&[f32]; R],
-    blocks: &[Block],
-    outputs: [&mut Block; R],
+    blocks: &[Block<N>],
+    outputs: [&mut Block<N>; R],
 ) {
     assert!(weights.iter().all(|w| w.len() == blocks.len()));
-    let mut sums = [[V::splat(0.0); VECTORS]; R];
+    let mut sums = [[V::splat(0.0); N]; R];
     for r in 0..R {
-        sums[r] = [V::splat(starts[r]); VECTORS];
+        sums[r] = [V::splat(starts[r]); N];
     }
     for (k, block) in blocks.iter().enumerate() {
-        let values = load::<V>(block);
+        let values = load::<V, N>(block);
         for r in 0..R {
             let w = V::splat(weights[r][k]);
-            for v in 0..VECTORS {
+            for v in 0..N {
                 sums[r][v] = w.mul_add(values[v], sums[r][v]);
             }
         }
     }
     for (sum, out) in sums.iter().zip(outputs) {
-        for v in 0..VECTORS {
+        for v in 0..N {
             sum[v].store(&mut out[v]);
         }
     }
 }
 
 #[inline(always)]
-fn load<V: Lanes>(block: &Block) -> [V; VECTORS] {
-    let mut values = [V::splat(0.0); VECTORS];
-    for v in 0..VECTORS {
+fn load<V: Lanes, const N: usize>(block: &Block<N>) -> [V; N] {
+    let mut values = [V::splat(0.0); N];
+    for v in 0..N {
         values[v] = V::load(&block[v]);
     }
     values
@@ -221,7 +235,7 @@ fn load<V: Lanes>(block: &Block) -> [V; VECTORS] {
 
 /// max(x, 0) of a block's values.
 #[inline(always)]
-fn relu<V: Lanes>(block: &mut Block) {
+fn relu<V: Lanes, const N: usize>(block: &mut Block<N>) {
     for values in block {
         let x = V::load(values);
         x.where_positive(x).store(values);
@@ -230,7 +244,7 @@ fn relu<V: Lanes>(block: &mut Block) {
 
 /// Zeroes the values of `block` where `gate` is not positive (a ReLU's backward pass).
 #[inline(always)]
-fn gate<V: Lanes>(block: &mut Block, gate: &Block) {
+fn gate<V: Lanes, const N: usize>(block: &mut Block<N>, gate: &Block<N>) {
     for (values, gate) in block.iter_mut().zip(gate) {
         V::load(values).where_positive(V::load(gate)).store(values);
     }
@@ -239,17 +253,21 @@ fn gate<V: Lanes>(block: &mut Block, gate: &Block) {
 /// For each of R units: partials[r][k] += the products of its gradient `ups[r]` and the
 /// block `inputs[k]`, vector by vector (the gradient of the weights from input k to it).
 #[inline(always)]
-fn add_products<V: Lanes, const R: usize>(partials: [&mut [Partial]; R], ups: [&Block; R], inputs: &[Block]) {
+fn add_products<V: Lanes, const N: usize, const R: usize>(
+    partials: [&mut [Partial]; R],
+    ups: [&Block<N>; R],
+    inputs: &[Block<N>],
+) {
     assert!(partials.iter().all(|row| row.len() == inputs.len()));
-    let mut up = [[V::splat(0.0); VECTORS]; R];
+    let mut up = [[V::splat(0.0); N]; R];
     for r in 0..R {
-        up[r] = load::<V>(ups[r]);
+        up[r] = load::<V, N>(ups[r]);
     }
     for (k, input) in inputs.iter().enumerate() {
-        let values = load::<V>(input);
+        let values = load::<V, N>(input);
         for r in 0..R {
             let mut sum = V::load(&partials[r][k]);
-            for v in 0..VECTORS {
+            for v in 0..N {
                 sum = up[r][v].mul_add(values[v], sum);
             }
             sum.store(&mut partials[r][k]);
@@ -259,23 +277,12 @@ fn add_products<V: Lanes, const R: usize>(partials: [&mut [Partial]; R], ups: [&
 
 /// partial += a block's values, vector by vector.
 #[inline(always)]
-fn add_sum<V: Lanes>(partial: &mut Partial, a: &Block) {
+fn add_sum<V: Lanes, const N: usize>(partial: &mut Partial, a: &Block<N>) {
     let mut sum = V::load(partial);
     for values in a {
         sum = sum.add(V::load(values));
     }
     sum.store(partial);
-}
-
-/// The sum of the partial sums, by halving (a fixed order).
-#[inline(always)]
-fn halve(mut partial: Partial) -> f32 {
-    for half in [8, 4, 2, 1] {
-        for i in 0..half {
-            partial[i] += partial[i + half];
-        }
-    }
-    partial[0]
 }
 
 #[cfg(test)]
@@ -292,7 +299,7 @@ mod tests {
             let loss = kernel(&mut gradient);
             (loss, gradient)
         };
-        let portable = gradient_of(&|g| part_gradient_inline::<[f32; LANES]>(&fit, &rows, 0.5, g));
+        let portable = gradient_of(&|g| part_gradient_inline::<[f32; LANES], NARROW>(&fit, &rows, 0.5, g));
         #[cfg(target_arch = "x86_64")]
         {
             if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {

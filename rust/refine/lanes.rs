@@ -16,6 +16,20 @@ pub trait Lanes: Copy {
     fn mul_add(self, b: Self, c: Self) -> Self;
     /// self where `gate` > 0, else 0 (a ReLU's pass, forward with gate = self, or backward).
     fn where_positive(self, gate: Self) -> Self;
+    /// The sum of the lanes by halving: lane i += lane i + h for h = 8, 4, 2, 1, the same
+    /// additions in the same order in every implementation.
+    fn halving_sum(self) -> f32;
+}
+
+/// [`Lanes::halving_sum`] on an array (the portable lanes' and the loss's).
+#[inline(always)]
+pub fn halving_sum(mut lanes: [f32; LANES]) -> f32 {
+    for half in [8, 4, 2, 1] {
+        for i in 0..half {
+            lanes[i] += lanes[i + half];
+        }
+    }
+    lanes[0]
 }
 
 /// The portable lanes; with FMA-less x86-64 CPUs `mul_add` is a library call per value.
@@ -45,6 +59,10 @@ impl Lanes for [f32; LANES] {
     fn where_positive(self, gate: Self) -> Self {
         std::array::from_fn(|k| if gate[k] > 0.0 { self[k] } else { 0.0 })
     }
+    #[inline(always)]
+    fn halving_sum(self) -> f32 {
+        halving_sum(self)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -55,6 +73,18 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{Lanes, LANES};
+
+    /// Eight lanes summed by halving (4, 2, 1), in SSE registers: the compiler turned the
+    /// array loop into scalar adds through the stack, a fifth of the kernel's time.
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[inline(always)]
+    unsafe fn halving_sum_of_eight(v: __m256) -> f32 {
+        let four = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+        let two = _mm_add_ps(four, _mm_movehl_ps(four, four)); // lanes 0 + 2, 1 + 3
+        _mm_cvtss_f32(_mm_add_ss(two, _mm_shuffle_ps::<0b01>(two, two)))
+    }
 
     /// One 512-bit register. Only `kernel::part_gradient_avx512` creates values of this
     /// type, after checking that the CPU has AVX-512F and FMA: that makes the intrinsics
@@ -92,6 +122,13 @@ mod x86 {
                     _mm512_cmp_ps_mask::<_CMP_GT_OQ>(gate.0, _mm512_setzero_ps()),
                     self.0,
                 ))
+            }
+        }
+        #[inline(always)]
+        fn halving_sum(self) -> f32 {
+            unsafe {
+                let high = _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(self.0)));
+                halving_sum_of_eight(_mm256_add_ps(_mm512_castps512_ps256(self.0), high))
             }
         }
     }
@@ -141,6 +178,10 @@ mod x86 {
                     _mm256_and_ps(self.1, _mm256_cmp_ps::<_CMP_GT_OQ>(gate.1, zero)),
                 )
             }
+        }
+        #[inline(always)]
+        fn halving_sum(self) -> f32 {
+            unsafe { halving_sum_of_eight(_mm256_add_ps(self.0, self.1)) }
         }
     }
 }

@@ -17,10 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::{invalid_argument, Result};
 use crate::parallel::in_pool;
-use kernel::{part_gradient, BLOCK};
-
-/// Samples per parallel task (a multiple of [`BLOCK`]).
-const PART: usize = 8 * BLOCK;
+use kernel::{part_gradient, PART};
 /// An NBRDF's inputs (Rusinkiewicz coordinates) and outputs (mapped RGB).
 pub const N_INPUTS: usize = 6;
 pub const N_OUTPUTS: usize = 3;
