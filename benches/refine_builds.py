@@ -11,10 +11,12 @@ BASE's, per-round median and quartiles (below 1: NEW is faster), and the two bui
 
 from __future__ import annotations
 
-import argparse
-import os
+import itertools
 import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from sht_builds import builds_parser, load_builds  # noqa: E402
 
 WIDTHS = (6, 64, 64, 3)
 SAMPLES, BATCH = 8000, 4096
@@ -26,7 +28,7 @@ def workload(steps: int, seed: int = 0):
 
     rng = np.random.default_rng(seed)
     tensors, decays = [], []
-    for inputs, outputs in zip(WIDTHS, WIDTHS[1:]):
+    for inputs, outputs in itertools.pairwise(WIDTHS):
         tensors += [rng.normal(0, 1 / np.sqrt(inputs), (outputs, inputs)).astype(np.float32),
                     rng.normal(0, 0.1, outputs).astype(np.float32)]
         decays += [1e-3, 0.0]
@@ -45,22 +47,14 @@ def steps_of(module, arguments) -> list[float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("base", type=Path)
-    parser.add_argument("new", type=Path)
-    parser.add_argument("--rounds", type=int, default=15)
-    parser.add_argument("--threads", type=int, default=2)
+    parser = builds_parser(__doc__.split("\n\n")[0], rounds=15, threads=2)
     parser.add_argument("--steps", type=int, default=100, help="Adam steps a call")
     args = parser.parse_args()
-    os.environ["RAYON_NUM_THREADS"] = str(args.threads)  # before either build starts its pool
-
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     import numpy as np
 
     from common import cpu_model, time_interleaved
-    from sht_builds import load
 
-    base, new = (load(path, f"{tag}._native") for tag, path in (("base", args.base), ("new", args.new)))
+    base, new = load_builds(args)
     check = workload(50)
     losses = [np.asarray(steps_of(module, check)) for module in (base, new)]
     agreement = float(np.abs(losses[1] - losses[0]).max() / np.abs(losses[0]).max())

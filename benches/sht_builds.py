@@ -31,24 +31,35 @@ def load(path: Path, name: str):
     return module
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def builds_parser(description: str, *, rounds: int, threads: int) -> argparse.ArgumentParser:
+    """The arguments of every two-builds harness: BASE.so NEW.so, ``--rounds``, ``--threads``."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("base", type=Path)
     parser.add_argument("new", type=Path)
+    parser.add_argument("--rounds", type=int, default=rounds)
+    parser.add_argument("--threads", type=int, default=threads)
+    return parser
+
+
+def load_builds(args: argparse.Namespace) -> tuple:
+    """Both builds, each under the name its PyInit symbol expects in a package of its own, on pools of
+    ``args.threads`` (set before either build starts its pool)."""
+    os.environ["RAYON_NUM_THREADS"] = str(args.threads)
+    return tuple(load(path, f"{tag}._native") for tag, path in (("base", args.base), ("new", args.new)))
+
+
+def main() -> None:
+    parser = builds_parser(__doc__.split("\n\n")[0], rounds=21, threads=1)
     parser.add_argument("--dtype", choices=("float32", "float64"), default="float32")
-    parser.add_argument("--rounds", type=int, default=21)
-    parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--batch", type=int, default=192, help="maps per call")
     args = parser.parse_args()
-    os.environ["RAYON_NUM_THREADS"] = str(args.threads)  # before either build starts its pool
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import numpy as np
 
     from common import cpu_model, time_interleaved
 
-    # Each build under the name its PyInit symbol expects, in a package of its own.
-    base, new = (load(path, f"{tag}._native") for tag, path in (("base", args.base), ("new", args.new)))
+    base, new = load_builds(args)
     nlat, nlon, lmax, batch = 90, 180, 89, args.batch
     maps = np.random.default_rng(0).standard_normal((batch, nlat * nlon)).astype(args.dtype)
     plans = [module.ShtPlan(nlat, nlon, lmax, "gauss", args.dtype) for module in (base, new)]
