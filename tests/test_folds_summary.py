@@ -76,3 +76,24 @@ def test_patterns_compare_the_arms_and_the_coverage_weights(summarise):
     lines = summarise.markdown(summary, ("v4", "v8")).splitlines()
     assert any(line.startswith("| uniform, none |") and line.endswith("| -10.00 |") for line in lines)
     assert any(line.startswith("| uniform, latent |") and line.endswith("| -2.00 |") for line in lines)
+
+
+def test_pipeline_encoder_configs(tmp_path, monkeypatch):
+    """pipeline/encoder_configs.py: a fold run's config made into the four device-encoder configs."""
+    monkeypatch.syspath_prepend(str(STUDY / "pipeline"))
+    import encoder_configs
+
+    run = {"data": "d", "out": "o", "seed": 3, "epochs": 3000, "holdout": ["a"], "validate_through": "merl-bins",
+           "model": {"encoder": {"pooling": "mean", "latent": 64}},
+           "sampling": {"patterns": {"merl-bins": 1.0}, "counts": None, "preset": "paper"}}
+    (tmp_path / "config.json").write_text(json.dumps(run))
+    encoder_configs.main([str(tmp_path / "config.json"), "packed/v8-s3", str(tmp_path / "out")])
+    configs = {path.stem: json.loads(path.read_text()) for path in (tmp_path / "out").glob("*.json")}
+    assert sorted(configs) == ["devices-attention", "devices-mean", "mixed-attention", "mixed-mean"]
+    for name, config in configs.items():
+        assert not {"data", "out", "seed"} & set(config)
+        assert config["decoder_from"] == "packed/v8-s3" and config["holdout"] == ["a"]
+        assert config["validate_through"] == "sampling" and config["epochs"] == 400
+        assert config["model"]["encoder"]["pooling"] == name.split("-")[1]
+        assert ("merl-bins" in config["sampling"]["patterns"]) == name.startswith("mixed")
+        assert len(config["sampling"]["patterns"]) >= 9
