@@ -15,6 +15,7 @@ from pathlib import Path
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parent / "peers")]
 from bsdf_eval import DEFAULT_FILE, direction_pairs  # noqa: E402
+
 from sht_builds import builds_parser, load_builds  # noqa: E402
 
 
