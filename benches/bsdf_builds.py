@@ -16,7 +16,7 @@ from pathlib import Path
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parent / "peers")]
 from bsdf_eval import DEFAULT_FILE, direction_pairs  # noqa: E402
 
-from sht_builds import builds_parser, load_builds  # noqa: E402
+from sht_builds import builds_parser, load_builds, timed_ratio  # noqa: E402
 
 
 def main() -> None:
@@ -26,19 +26,17 @@ def main() -> None:
     args = parser.parse_args()
     import numpy as np
 
-    from common import cpu_model, time_interleaved
+    from common import cpu_model
 
     measurements = [module.BsdfMeasurement.read(args.file) for module in load_builds(args)]
     wi, wo = direction_pairs(args.n)
     expected, got = (np.asarray(m.eval(wi, wo)) for m in measurements)
     error = float(np.abs(got - expected).max() / np.abs(expected).max())
-    rounds = time_interleaved(lambda: measurements[0].eval(wi, wo), lambda: measurements[1].eval(wi, wo),
-                              args.rounds).ratio_summary()
-    low, high = rounds["quartiles"]
+    rounds, ratio = timed_ratio(lambda: measurements[0].eval(wi, wo), lambda: measurements[1].eval(wi, wo),
+                                args.rounds)
     print(f"CPU: {cpu_model()}; {args.threads} thread(s); {args.n:,} pairs of {args.file.name}")
     print(f"BASE {args.n / rounds['first_median_s'] / 1e6:.1f} M/s, NEW {args.n / rounds['second_median_s'] / 1e6:.1f}; "
-          f"NEW's time / BASE's over {rounds['rounds']} rounds: median {rounds['median']:.3f} "
-          f"(quartiles {low:.3f}-{high:.3f}); largest difference {error:.1e} of the largest value")
+          f"{ratio}; largest difference {error:.1e} of the largest value")
 
 
 if __name__ == "__main__":

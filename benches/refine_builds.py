@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from sht_builds import builds_parser, load_builds  # noqa: E402
+from sht_builds import builds_parser, load_builds, timed_ratio  # noqa: E402
 
 WIDTHS = (6, 64, 64, 3)
 SAMPLES, BATCH = 8000, 4096
@@ -52,20 +52,18 @@ def main() -> None:
     args = parser.parse_args()
     import numpy as np
 
-    from common import cpu_model, time_interleaved
+    from common import cpu_model
 
     base, new = load_builds(args)
     check = workload(50)
     losses = [np.asarray(steps_of(module, check)) for module in (base, new)]
     agreement = float(np.abs(losses[1] - losses[0]).max() / np.abs(losses[0]).max())
     timed = workload(args.steps)
-    rounds = time_interleaved(lambda: steps_of(base, timed), lambda: steps_of(new, timed), args.rounds).ratio_summary()
-    low, high = rounds["quartiles"]
+    rounds, ratio = timed_ratio(lambda: steps_of(base, timed), lambda: steps_of(new, timed), args.rounds)
     print(f"CPU: {cpu_model()}; {args.threads} thread(s); {args.steps} steps of {BATCH} of {SAMPLES} samples, "
           f"widths {WIDTHS}")
     print(f"BASE {rounds['first_median_s'] * 1e3 / args.steps:.3f} ms a step, NEW "
-          f"{rounds['second_median_s'] * 1e3 / args.steps:.3f}; NEW's time / BASE's over {rounds['rounds']} rounds: "
-          f"median {rounds['median']:.3f} (quartiles {low:.3f}-{high:.3f}); losses after 50 steps "
+          f"{rounds['second_median_s'] * 1e3 / args.steps:.3f}; {ratio}; losses after 50 steps "
           f"{losses[0][-1]:.6g} and {losses[1][-1]:.6g} (largest relative difference {agreement:.1e})")
 
 

@@ -48,6 +48,16 @@ def load_builds(args: argparse.Namespace) -> tuple:
     return tuple(load(path, f"{tag}._native") for tag, path in (("base", args.base), ("new", args.new)))
 
 
+def timed_ratio(base_call, new_call, rounds: int) -> tuple[dict, str]:
+    """``common.time_interleaved``'s summary of the two calls (second / first: NEW's time over BASE's) and its line."""
+    from common import time_interleaved
+
+    summary = time_interleaved(base_call, new_call, rounds).ratio_summary()
+    low, high = summary["quartiles"]
+    return summary, (f"NEW's time / BASE's over {summary['rounds']} rounds: median {summary['median']:.3f} "
+                     f"(quartiles {low:.3f}-{high:.3f})")
+
+
 def main() -> None:
     parser = builds_parser(__doc__.split("\n\n")[0], rounds=21, threads=1)
     parser.add_argument("--dtype", choices=("float32", "float64"), default="float32")
@@ -57,7 +67,7 @@ def main() -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import numpy as np
 
-    from common import cpu_model, time_interleaved
+    from common import cpu_model
 
     base, new = load_builds(args)
     nlat, nlon, lmax, batch = 90, 180, 89, args.batch
@@ -67,14 +77,10 @@ def main() -> None:
     error = np.abs(got - expected).max() / np.abs(expected).max()
     if error > (1e-5 if args.dtype == "float32" else 1e-12):
         sys.exit(f"the builds disagree by {error:.1e} (relative): not timed")
-    rounds = time_interleaved(lambda: plans[0].analysis(maps), lambda: plans[1].analysis(maps),
-                              args.rounds).ratio_summary()
-    # ratio_summary's ratios are second / first in seconds: NEW's time over BASE's.
-    low, high = rounds["quartiles"]
+    rounds, ratio = timed_ratio(lambda: plans[0].analysis(maps), lambda: plans[1].analysis(maps), args.rounds)
     print(f"CPU: {cpu_model()}; {args.threads} thread(s); {args.dtype}; {batch} maps {nlat} x {nlon}, lmax {lmax}")
     print(f"BASE {batch / rounds['first_median_s']:,.0f} maps/s, NEW {batch / rounds['second_median_s']:,.0f}; "
-          f"NEW's time / BASE's over {rounds['rounds']} rounds: median {rounds['median']:.3f} "
-          f"(quartiles {low:.3f}-{high:.3f}); agreement {error:.1e}")
+          f"{ratio}; agreement {error:.1e}")
 
 
 if __name__ == "__main__":

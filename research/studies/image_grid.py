@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -25,3 +26,20 @@ def save_image_grid(rows: list[tuple[str, list[tuple[str, np.ndarray]]]], path: 
     figure.tight_layout()
     figure.savefig(path, dpi=80)
     plt.close(figure)
+
+
+def reconstruction_row(truth: Any, drawn: Any, columns: list[tuple[str, Any, Any]], scene: Any,
+                       mask: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The truth's render, then each column's reconstruction from the samples ``drawn``: ``columns`` are (title,
+    model, RefineConfig); each title may hold ``{seconds}`` (the reconstruction's) and gets its PSNR / ΔE below."""
+    from frenbrdf.render.renderer import render_linear, tonemap
+    from frenbrdf.render.scoring import image_metrics, refined_reconstruction
+
+    truth_image = tonemap(render_linear(truth, scene))
+    images = [("truth", truth_image)]
+    for title, model, config in columns:
+        _, image, seconds = refined_reconstruction(model, drawn, scene, config)
+        metrics = image_metrics(truth_image, image, mask)
+        images.append((f"{title.format(seconds=seconds)}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}",
+                       image))
+    return images

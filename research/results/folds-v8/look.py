@@ -17,12 +17,11 @@ from frenbrdf.io import read_material
 from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
-from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction
+from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from compare_models import condition_rng  # noqa: E402
-from image_grid import save_image_grid  # noqa: E402
+from image_grid import reconstruction_row, save_image_grid  # noqa: E402
 
 KINDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
 COLUMNS = (("v4-s0", "none"), ("v8-s0", "none"), ("v8-s0", "latent"), ("v8-s0", "full"))
@@ -39,20 +38,15 @@ def main(out: str, runs: str, figure: str) -> None:
     rows = json.loads((Path(out) / "measured" / "compare.json").read_text())["rows"]
     cases = worst_of_each_kind(rows)
     models = {name: load_model(Path(runs) / name) for name in {name for name, _ in COLUMNS}}
+    columns = [(f"{name.split('-')[0]} " + ("encoder" if budget == "none" else f"{budget}, {{seconds:.1f}} s"),
+                models[name], refine_config(budget)) for name, budget in COLUMNS]
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
     for kind, material in cases:
         truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
-        truth_image = tonemap(render_linear(truth, scene))
         drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
-        images = [("truth", truth_image)]
-        for name, budget in COLUMNS:
-            _, image, seconds = refined_reconstruction(models[name], drawn, scene, refine_config(budget))
-            metrics = image_metrics(truth_image, image, mask)
-            title = f"{name.split('-')[0]} " + ("encoder" if budget == "none" else f"{budget}, {seconds:.1f} s")
-            images.append((f"{title}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}", image))
-        grid.append((f"{kind}\n{material[:24]}", images))
+        grid.append((f"{kind}\n{material[:24]}", reconstruction_row(truth, drawn, columns, scene, mask)))
     save_image_grid(grid, figure)
 
 

@@ -56,8 +56,8 @@ def summarise(measured: dict, tables: dict | None, arms: tuple[str, str]) -> dic
     for budget in BUDGETS:
         new, old = per_material(rows, new_arm, budget, "psnr"), per_material(rows, base, budget, "psnr")
         out["difference"][budget] = paired_interval([new[m] - old[m] for m in new])
-    for budget in ("none", "latent"):
-        new, old = (per_material(tables["rows"] if tables else [], arm, budget, "psnr") for arm in (new_arm, base))
+    for budget in ("none", "latent") if tables else ():
+        new, old = (per_material(tables["rows"], arm, budget, "psnr") for arm in (new_arm, base))
         if new:
             out["tables difference"][budget] = paired_interval([new[m] - old[m] for m in new])
     return out
@@ -65,7 +65,8 @@ def summarise(measured: dict, tables: dict | None, arms: tuple[str, str]) -> dic
 
 def by_pattern(arms: dict[str, list[dict]]) -> dict:
     """Pattern → budget → each arm's mean PSNR / ΔE over the 19 and `NEW − BASE` per measurement (the arms in that
-    order), what the coverage weights add to the new arm's `latent`, and its distance from random bins."""
+    order), and what the coverage weights add to the new arm's `latent` (``markdown`` adds the distance from random
+    bins)."""
     base, new_arm = arms
     rows = arms[new_arm]
     out = {}

@@ -17,12 +17,11 @@ from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.io.sampling import as_table
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
-from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction
+from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from compare_models import condition_rng  # noqa: E402
-from image_grid import save_image_grid  # noqa: E402
+from image_grid import reconstruction_row, save_image_grid  # noqa: E402
 
 BUDGETS = {"latent": refine_config("latent"), "coverage 32": dataclasses.replace(refine_config("latent"), coverage_k=32)}
 
@@ -42,19 +41,14 @@ def main(out: str, families: str, figure: str) -> None:
               "paper_white_rgb", "vch_golden_yellow_rgb")
     cases += [(Path("../shared/data/rgl-measured") / f"{name}.bsdf", "uniform") for name in unseen]
     model, scene = load_model("pretrained"), Scene(resolution=128)
+    columns = [(name, model, config) for name, config in BUDGETS.items()]
     mask = material_mask(scene)
     grid = []
     for path, pattern in cases:
         truth = read_material(path)
         table = as_table(truth) if path.suffix == ".binary" else None
-        truth_image = tonemap(render_linear(truth, scene))
         drawn = pattern_samples(truth, pattern, 1500, condition_rng(0, pattern), table=table)
-        images = [("truth", truth_image)]
-        for name, config in BUDGETS.items():
-            _, image, _ = refined_reconstruction(model, drawn, scene, config)
-            metrics = image_metrics(truth_image, image, mask)
-            images.append((f"{name}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}", image))
-        grid.append((f"{path.stem[:22]}\n{pattern}", images))
+        grid.append((f"{path.stem[:22]}\n{pattern}", reconstruction_row(truth, drawn, columns, scene, mask)))
     save_image_grid(grid, figure)
 
 

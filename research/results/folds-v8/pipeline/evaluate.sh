@@ -2,7 +2,7 @@
 # The pipeline amendment's scores (../README.md): the three `pipe` candidates (PIPE/cand-s0 … s2) beside the three
 # `v8` runs (RUNS/v8-s0 … s2) read the 19 measurements from 4,000 random valid bins (draw 0), encoder, `latent` and
 # `full`; and the `pipe` candidates through the six patterns at 1,500 (draw 0, the same samples as the `v8` runs'
-# patterns-v8 report, which pair_patterns.py joins). Two processes, one thread each.
+# patterns-v8 report, which summarise.py --arms v8 pipe pairs with them). Two processes, one thread each.
 #
 #   bash research/results/folds-v8/pipeline/evaluate.sh RUNS PIPE OUT
 set -euo pipefail

@@ -18,12 +18,11 @@ import numpy as np
 from frenbrdf.io import read_material
 from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.models.autoencoder import load_model
-from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import image_metrics, refined_reconstruction
+from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "studies"))
 from compare_models import budget_config, condition_rng  # noqa: E402
-from image_grid import save_image_grid  # noqa: E402
+from image_grid import reconstruction_row, save_image_grid  # noqa: E402
 
 CASES = 5
 COUNT = 1500
@@ -46,22 +45,17 @@ def worst_readings(rows: list[dict]) -> list[tuple[str, str]]:
 
 def main(out: str, runs: str, pipe: str, figure: str) -> None:
     rows = json.loads((Path(out) / "patterns-pipe" / "compare.json").read_text())["rows"]
-    columns = (("v8", load_model(Path(runs) / "v8-s0"), "none"), ("pipe", load_model(Path(pipe) / "cand-s0"), "none"),
-               ("pipe", load_model(Path(pipe) / "cand-s0"), "latent@coverage_k=32"))
+    pipe = load_model(Path(pipe) / "cand-s0")
+    columns = [("v8 encoder", load_model(Path(runs) / "v8-s0"), budget_config("none")),
+               ("pipe encoder", pipe, budget_config("none")),
+               ("pipe latent, coverage", pipe, budget_config("latent@coverage_k=32"))]
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
     for pattern, material in worst_readings(rows):
         truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
-        truth_image = tonemap(render_linear(truth, scene))
         drawn = pattern_samples(truth, pattern, COUNT, condition_rng(0, pattern))
-        images = [("truth", truth_image)]
-        for name, model, budget in columns:
-            _, image, _ = refined_reconstruction(model, drawn, scene, budget_config(budget))
-            metrics = image_metrics(truth_image, image, mask)
-            title = f"{name} " + ("encoder" if budget == "none" else "latent, coverage")
-            images.append((f"{title}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}", image))
-        grid.append((f"{pattern}\n{material[:24]}", images))
+        grid.append((f"{pattern}\n{material[:24]}", reconstruction_row(truth, drawn, columns, scene, mask)))
     save_image_grid(grid, figure)
 
 
