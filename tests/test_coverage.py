@@ -57,3 +57,24 @@ def test_the_queries_in_chunks_give_the_same_weights(monkeypatch):
     whole = coverage_weights(wi, wo, 8)
     monkeypatch.setattr(coverage, "QUERY_VALUES", 50)  # chunks of 5 or 6 pairs
     assert np.array_equal(coverage_weights(wi, wo, 8), whole)
+
+
+def test_random_bins_leave_no_bin_uncovered_and_a_device_leaves_its_blind_side():
+    from frenbrdf.models.coverage import ANCHOR_BINS, uncovered_bins
+
+    bins, thinness = uncovered_bins(*random_bins(4000, 6))
+    assert len(bins) <= 0.01 * ANCHOR_BINS
+    wi, wo = random_bins(4000, 7)
+    near_mirror = index_space(wi, wo)[:, 0] < 0.4  # what a device that sees only the mirror directions gives
+    bins, thinness = uncovered_bins(wi[near_mirror], wo[near_mirror])
+    places = index_space(*bin_directions(bins))
+    assert np.all((thinness > 0) & (thinness <= 1))
+    assert np.all(places[:, 0] > 0.4)  # every uncovered bin lies on the side no pair saw
+    assert len(bins) > 0.4 * ANCHOR_BINS and np.mean(thinness[places[:, 0] > 0.7]) == pytest.approx(1.0)
+
+
+def test_refine_config_checks_anchor():
+    assert RefineConfig(anchor=0.5).anchor == 0.5
+    for anchor in (-0.1, float("nan"), 1e9, True, "1"):
+        with pytest.raises(ValueError, match="anchor"):
+            RefineConfig(anchor=anchor)

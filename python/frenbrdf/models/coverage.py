@@ -7,9 +7,15 @@ the rest. :func:`coverage_weights` weighs each sample by the density random vali
 density the samples themselves have there, both k-nearest-neighbour estimates in that index space
 (√(θ_h / (π/2)), θ_d / (π/2), φ_d mod π / π), so that the weighted loss estimates the loss over the whole table, as
 random bins' plain loss does. Taking the ratio of two estimates made the same way cancels the low estimates at the
-domain's edges (research/results/latent-gap/README.md, research/results/latent-coverage/README.md). The
-neighbours come from SciPy's k-d tree: the package's own k-NN core (kiddo) holds unit vectors, and these places are
-not.
+domain's edges (research/results/latent-gap/README.md, research/results/latent-coverage/README.md).
+
+Where the samples say nothing at all (a device that sees only the mirror directions), no weight helps: `latent` may
+move the material there freely, and does (a dark olive base turned bright blue by specular-only pairs).
+:func:`uncovered_bins` names random valid bins and how thinly the samples cover each, the places where `latent` can
+hold the encoder's guess instead (``RefineConfig.anchor``; research/results/latent-anchor/README.md).
+
+The neighbours come from SciPy's k-d tree: the package's own k-NN core (kiddo) holds unit vectors, and these places
+are not.
 """
 
 from __future__ import annotations
@@ -32,6 +38,11 @@ MAX_K = 1024
 QUERY_VALUES = 1 << 24
 #: Random valid bins whose density is the reference (drawn once, from a fixed seed).
 REFERENCE_BINS = 20_000
+#: Random valid bins :func:`uncovered_bins` looks at (drawn once, from another fixed seed).
+ANCHOR_BINS = 2_048
+#: How far (in :func:`index_space`, whose sides are 1) the nearest pair may lie before :func:`uncovered_bins` counts a
+#: bin as one the pairs say nothing of: about the spacing of 1,000 random bins.
+ANCHOR_RADIUS = 0.1
 
 
 def coverage_weights(wi, wo, k: int) -> np.ndarray:
@@ -52,6 +63,17 @@ def coverage_weights(wi, wo, k: int) -> np.ndarray:
     return weights / weights.mean()
 
 
+def uncovered_bins(wi, wo) -> tuple[np.ndarray, np.ndarray]:
+    """Where the pairs say nothing: flat indices of random valid MERL bins ``(M,)`` whose nearest pair lies farther
+    than :data:`ANCHOR_RADIUS` in :func:`index_space`, and how far ``(M,)`` in (0, 1]: the distance over the radius,
+    less 1, at most 1 (so 1 from twice the radius on). ``wi``, ``wo``: ``(N, 3)`` directions above the surface, N ≥ 1.
+    1,500 random bins leave almost none; a device that sees only the mirror directions leaves half the table."""
+    nearest = cKDTree(index_space(wi, wo)).query(_anchor_places(), k=1)[0]
+    thinness = np.minimum(nearest / ANCHOR_RADIUS - 1, 1.0)
+    far = thinness > 0
+    return _anchor_bins()[far], thinness[far]
+
+
 def _kth_distance(tree: cKDTree, points: np.ndarray, k: int) -> np.ndarray:
     """The distance from each point to its k-th nearest in ``tree``, in chunks whose neighbour lists stay within
     :data:`QUERY_VALUES` values (a whole MERL table's 1.1 million pairs at k = 1024 would need 18 GB at once)."""
@@ -65,6 +87,19 @@ def index_space(wi, wo) -> np.ndarray:
     theta_h, _, theta_d, phi_d = np.asarray(directions_to_rusinkiewicz(wi, wo)).reshape(-1, 4).T
     return np.stack([np.sqrt(np.clip(theta_h / (np.pi / 2), 0.0, 1.0)), np.clip(theta_d / (np.pi / 2), 0.0, 1.0),
                      np.mod(phi_d, np.pi) / np.pi], axis=1)
+
+
+@functools.cache
+def _anchor_bins() -> np.ndarray:
+    """:data:`ANCHOR_BINS` random valid bins' flat indices (the MERL table's θ_h, θ_d, φ_d grid)."""
+    valid = np.flatnonzero(merl_above_horizon())
+    return np.sort(np.random.default_rng(1).choice(valid, ANCHOR_BINS, replace=False))
+
+
+@functools.cache
+def _anchor_places() -> np.ndarray:
+    """:func:`_anchor_bins`' centres in :func:`index_space`."""
+    return (np.stack(np.unravel_index(_anchor_bins(), SHAPE[1:]), axis=1) + 0.5) / np.array(SHAPE[1:])
 
 
 @functools.cache

@@ -47,13 +47,15 @@ import torch
 from tqdm.auto import tqdm
 
 from .. import _native
-from .coverage import MAX_K, coverage_weights
+from ..io.sampling import bin_directions
+from .coverage import MAX_K, coverage_weights, uncovered_bins
 from .losses import LossConfig, reconstruction_loss, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
     NBRDF,
     ORDER_INPUT,
     mapped_samples,
+    nbrdf_coordinates,
     nbrdf_forward,
     pair_order,
     widen_params,
@@ -65,6 +67,8 @@ STAGES = ("encode", "latent", "weights")
 SCHEDULES = ("constant", "cosine")
 #: The most latents stage 1 may start from (:attr:`RefineConfig.starts`): more than any model's encoders.
 MAX_STARTS = 64
+#: The heaviest :attr:`RefineConfig.anchor`: beyond it the samples hardly move z at all.
+MAX_ANCHOR = 100.0
 #: Weight steps per call of the native loop: how often stage 2 updates its progress bar and checks its seconds.
 NATIVE_STEPS = 50
 
@@ -109,6 +113,12 @@ class RefineConfig:
     """Stage 1 weighs each sample's loss by how thinly the samples cover its region against random MERL bins
     (:func:`frenbrdf.models.coverage.coverage_weights`, k-NN density estimates with this k), so that a device's dense
     regions do not outweigh the rest; 0: every sample weighs alike. Stage 2 and the reported losses stay unweighted."""
+    anchor: float = 0.0
+    """Stage 1 holds the NBRDF near its start where the samples say little: a second loss, this many times as heavy
+    as the samples', compares the NBRDF at random valid MERL bins with the start's decoding there, each bin weighted
+    by how thinly the samples cover it (:func:`frenbrdf.models.coverage.uncovered_bins`; the samples' cos θ_i
+    weighting). Samples that cover the table leave it nearly without effect; a device that sees only part of the
+    domain keeps the encoder's guess for the rest instead of letting the search move it freely. 0: off."""
     seed: int = 0
     """Seeds the mini-batches (and a widened NBRDF's new weights)."""
     progress: bool = False
@@ -132,6 +142,9 @@ class RefineConfig:
         counted = isinstance(self.coverage_k, numbers.Integral) and not isinstance(self.coverage_k, bool)
         if not (counted and 0 <= self.coverage_k <= MAX_K):
             problems.append(f"coverage_k must be an integer from 0 to {MAX_K}, got {self.coverage_k!r}")
+        if not (isinstance(self.anchor, numbers.Real) and not isinstance(self.anchor, bool)
+                and 0 <= self.anchor <= MAX_ANCHOR):
+            problems.append(f"anchor must be a number from 0 to {MAX_ANCHOR:g}, got {self.anchor!r}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
         if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
@@ -252,7 +265,8 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
         if config.coverage_k:  # the weights enter as a factor of cos θ_i, which multiplies each sample's error
             weights = torch.from_numpy(coverage_weights(wi, wo, config.coverage_k).astype(np.float32))[None]
             weighted = _Samples(samples.coords, samples.values, samples.cos_in * weights)
-        refined = [_refine_latent(model, start, weighted, loss, config, record)
+        anchors = _anchor_samples(wi, wo) if config.anchor else None
+        refined = [_refine_latent(model, start, weighted, anchors, loss, config, record)
                    for start in _starts(encoding, config.starts)]
         z, record.losses["latent"] = min(refined, key=lambda pair: pair[1])  # the loss on all samples, computed once
         with torch.no_grad():
@@ -288,14 +302,36 @@ def _starts(encoding, count: int) -> list[torch.Tensor]:
     return [torch.from_numpy(np.asarray(latent, dtype=np.float32))[None] for latent in latents]
 
 
-def _refine_latent(model, z: torch.Tensor, samples: _Samples, loss: LossConfig, config: RefineConfig,
-                   record: _Record) -> tuple[torch.Tensor, float]:
-    """Stage 1 from one start: z after its steps, and the loss of its decoding on all samples."""
+def _anchor_samples(wi: np.ndarray, wo: np.ndarray) -> _Samples | None:
+    """:func:`~frenbrdf.models.coverage.uncovered_bins` of the samples as stage 1's anchors: NBRDF inputs and cos θ_i
+    times thinness (their values, the start's decoding, come per start); None where the samples cover every bin."""
+    bins, thinness = uncovered_bins(wi, wo)
+    if not len(bins):
+        return None
+    anchor_wi, anchor_wo = bin_directions(bins)
+    coords = nbrdf_coordinates(anchor_wi, anchor_wo)
+    weights = np.clip(anchor_wi[:, 2], 0.0, 1.0) * thinness
+    return _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None]
+                      for a in (coords, np.zeros((len(bins), 3)), weights)))
+
+
+def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples | None, loss: LossConfig,
+                   config: RefineConfig, record: _Record) -> tuple[torch.Tensor, float]:
+    """Stage 1 from one start: z after its steps, and the loss of its decoding on all samples. ``anchors``
+    (:func:`_anchor_samples`) hold the start's decoding where the samples are thin, with weight ``config.anchor``."""
+    if anchors is not None:
+        with torch.no_grad():
+            start = nbrdf_forward(model.network.decoder(z), anchors.coords)
+        anchors = _Samples(anchors.coords, start, anchors.cos_in)
     z = z.clone().requires_grad_(True)
 
     def latent_objective(batch: _Samples) -> torch.Tensor:
-        predicted = nbrdf_forward(model.network.decoder(z), batch.coords)
-        return reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind)
+        params = model.network.decoder(z)
+        value = reconstruction_loss(nbrdf_forward(params, batch.coords), batch.values, batch.cos_in, loss.kind)
+        if anchors is not None:
+            held = reconstruction_loss(nbrdf_forward(params, anchors.coords), anchors.values, anchors.cos_in, loss.kind)
+            value = value + config.anchor * held
+        return value
 
     with _frozen(model.network):
         latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
