@@ -3,12 +3,14 @@
 //!
 //! Every step is a loop over the lanes of fixed-size arrays, plain Rust that the compiler
 //! turns into SIMD. [`Tables::eval_chunk`] has that code compiled three times, for
-//! AVX-512, for AVX2 with FMA and for the baseline, and picks one at run time. Table
-//! lookups are loads per lane from copies of the tables laid out so that one lookup's
-//! values sit together: a VNDF node's density beside its CDF, a node's three colours; each
-//! lane sums its lookups four values at a time in an SSE register ([`Quad`]). (AVX-512's
-//! gather instructions, tried in their place, were no faster on an AMD Zen 4.) The input
-//! rows of the blocks ahead are prefetched ([`PREFETCH_BLOCKS`]).
+//! AVX-512, for AVX2 with FMA and for the baseline, and picks one at run time. The tables
+//! are copies laid out so that one lookup's values sit together: a VNDF node's density
+//! beside its CDF, a node's three colours. On Intel CPUs with AVX-512 they are read by
+//! gathers, two values of every lane at a time ([`gather`]); elsewhere by loads per lane,
+//! each lane summing its lookups four values at a time in an SSE register ([`Quad`]):
+//! AVX-512's gathers of one value, tried in their place on an AMD Zen 4, were no faster
+//! there. Both give the same values to the bit. The input rows of the blocks ahead are
+//! prefetched ([`PREFETCH_BLOCKS`]).
 //!
 //! Directions are normalised in float64 (after an exact scaling by a power of two) and
 //! rounded to float32, their sum too; the horizon test is the float64 path's, so both
@@ -20,6 +22,8 @@
 
 use std::f32::consts::{FRAC_2_PI, PI, TAU};
 
+#[cfg(target_arch = "x86_64")]
+use super::gather;
 use super::simd::{atan2, bilinear, elevation, lanes, lerp, two, Lanes, Quad, LANES};
 use super::warp::Marginal2D;
 use super::HORIZON;
@@ -50,6 +54,10 @@ fn unit_rows(rows: &Lanes<Vec3>) -> ([Lanes<f64>; 3], bool) {
     }
     (unit, valid)
 }
+
+/// Whether [`Tables::eval_chunk`] reads the tables by gathers on this CPU ([`gather::preferred`]).
+#[cfg(target_arch = "x86_64")]
+static GATHERS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
 
 /// Blocks ahead whose input rows [`Tables::chunk`] asks for. The hardware's prefetcher did
 /// not keep up with the two input streams: with 2 threads, a sixth of the time went on
@@ -122,8 +130,13 @@ impl Grid {
 
     /// A one-slice, one-channel table of these nodes at `pos`.
     #[inline(always)]
-    fn interpolate(self, values: &[f32], pos: &[Lanes<f32>; 2]) -> Lanes<f32> {
+    fn interpolate<const GATHERS: bool>(self, values: &[f32], pos: &[Lanes<f32>; 2]) -> Lanes<f32> {
         let (node, _, s, t) = self.patches(pos);
+        #[cfg(target_arch = "x86_64")]
+        if GATHERS {
+            let [v00, v10, v01, v11] = gather::patch(values, self.nx, &node);
+            return lanes!(|k| bilinear([v00[k], v10[k], v01[k], v11[k]], s[k], t[k]));
+        }
         let nx = self.nx as usize;
         lanes!(|k| {
             let node = node[k] as usize;
@@ -253,6 +266,10 @@ impl Tables {
     fn dispatch<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
+            if *GATHERS.get_or_init(gather::preferred) {
+                // SAFETY: `preferred` checked that the CPU has the features.
+                return unsafe { self.chunk_avx512::<CORNERS, true>(wi, wo, out) };
+            }
             if is_x86_feature_detected!("avx512f")
                 && is_x86_feature_detected!("avx512bw")
                 && is_x86_feature_detected!("avx512dq")
@@ -260,14 +277,14 @@ impl Tables {
                 && is_x86_feature_detected!("fma")
             {
                 // SAFETY: the CPU has the features the function is compiled for.
-                return unsafe { self.chunk_avx512::<CORNERS>(wi, wo, out) };
+                return unsafe { self.chunk_avx512::<CORNERS, false>(wi, wo, out) };
             }
             if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
                 // SAFETY: as above.
                 return unsafe { self.chunk_avx2::<CORNERS>(wi, wo, out) };
             }
         }
-        self.chunk::<CORNERS>(wi, wo, out)
+        self.chunk::<CORNERS, false>(wi, wo, out)
     }
 
     /// [`Tables::eval_chunk`] in each compiled copy that this CPU can run, for the tests.
@@ -279,38 +296,55 @@ impl Tables {
             assert!(evaluate(&mut out));
             results.push(out);
         };
-        run(&|out| self.chunk::<2>(wi, wo, out));
+        run(&|out| self.chunk::<2, false>(wi, wo, out));
         #[cfg(target_arch = "x86_64")]
         {
             if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
                 // SAFETY: the CPU has the features.
                 run(&|out| unsafe { self.chunk_avx2::<2>(wi, wo, out) });
             }
+            if is_x86_feature_detected!("avx512f")
+                && is_x86_feature_detected!("avx512bw")
+                && is_x86_feature_detected!("avx512dq")
+                && is_x86_feature_detected!("avx512vl")
+            {
+                // SAFETY: as above (whatever the vendor: the gathers are exact on any).
+                run(&|out| unsafe { self.chunk_avx512::<2, false>(wi, wo, out) });
+                run(&|out| unsafe { self.chunk_avx512::<2, true>(wi, wo, out) });
+            }
             run(&|out| self.dispatch::<2>(wi, wo, out));
         }
         results
     }
 
+    /// The AVX-512 copy, its tables read by gathers ([`gather`]) where `GATHERS`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl,avx2,fma")]
-    fn chunk_avx512<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
-        self.chunk::<CORNERS>(wi, wo, out)
+    fn chunk_avx512<const CORNERS: usize, const GATHERS: bool>(
+        &self,
+        wi: &[Vec3],
+        wo: &[Vec3],
+        out: &mut [[f64; 3]],
+    ) -> bool {
+        self.chunk::<CORNERS, GATHERS>(wi, wo, out)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn chunk_avx2<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
-        self.chunk::<CORNERS>(wi, wo, out)
+        self.chunk::<CORNERS, false>(wi, wo, out)
     }
 
-    /// Whole blocks of [`LANES`] pairs, then the rest padded with pairs at the pole.
+    /// Whole blocks of [`LANES`] pairs, then the rest padded with pairs at the pole; the
+    /// tables read by gathers where `GATHERS` (only in a copy compiled for AVX-512).
     #[inline(always)]
-    fn chunk<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
+    fn chunk<const CORNERS: usize, const GATHERS: bool>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
         let blocks = wi.chunks_exact(LANES).zip(wo.chunks_exact(LANES));
         for (index, ((wi_block, wo_block), out)) in blocks.zip(out.chunks_exact_mut(LANES)).enumerate() {
             prefetch_rows(wi, (index + PREFETCH_BLOCKS) * LANES);
             prefetch_rows(wo, (index + PREFETCH_BLOCKS) * LANES);
-            let Some(values) = self.block::<CORNERS>(wi_block.try_into().unwrap(), wo_block.try_into().unwrap()) else {
+            let (wi_block, wo_block) = (wi_block.try_into().unwrap(), wo_block.try_into().unwrap());
+            let Some(values) = self.block::<CORNERS, GATHERS>(wi_block, wo_block) else {
                 return false;
             };
             out.copy_from_slice(&values);
@@ -319,7 +353,7 @@ impl Tables {
         if done < wi.len() {
             let pad =
                 |rows: &[Vec3]| -> Lanes<Vec3> { lanes!(|k| rows.get(done + k).copied().unwrap_or([0.0, 0.0, 1.0])) };
-            let Some(values) = self.block::<CORNERS>(&pad(wi), &pad(wo)) else {
+            let Some(values) = self.block::<CORNERS, GATHERS>(&pad(wi), &pad(wo)) else {
                 return false;
             };
             out[done..].copy_from_slice(&values[..wi.len() - done]);
@@ -329,7 +363,11 @@ impl Tables {
 
     /// The values of a block of pairs; None where a row is not finite and non-zero.
     #[inline(always)]
-    fn block<const CORNERS: usize>(&self, wi: &Lanes<Vec3>, wo: &Lanes<Vec3>) -> Option<Lanes<[f64; 3]>> {
+    fn block<const CORNERS: usize, const GATHERS: bool>(
+        &self,
+        wi: &Lanes<Vec3>,
+        wo: &Lanes<Vec3>,
+    ) -> Option<Lanes<[f64; 3]>> {
         // Unit directions in float64 (scaled near the largest component first: a row may be tiny or
         // huge) and their sum, the half vector's direction, before rounding to float32: at
         // grazing angles ω_i + ω_o cancels, and float32 inputs would lose its direction.
@@ -414,11 +452,11 @@ impl Tables {
             );
         }
 
-        let sample = self.invert_vndf(&corners, &u_m);
-        let rgb = self.interpolate_rgb(&corners, &sample);
+        let sample = self.invert_vndf::<CORNERS, GATHERS>(&corners, &u_m);
+        let rgb = self.interpolate_rgb::<CORNERS, GATHERS>(&corners, &sample);
         let jacobian = if self.jacobian {
-            let ndf = self.ndf.interpolate(&self.ndf_values, &u_m);
-            let sigma = self.sigma.interpolate(&self.sigma_values, &u_wi);
+            let ndf = self.ndf.interpolate::<GATHERS>(&self.ndf_values, &u_m);
+            let sigma = self.sigma.interpolate::<GATHERS>(&self.sigma_values, &u_wi);
             lanes!(|k| ndf[k] / (4.0 * sigma[k]))
         } else {
             [1.0; LANES]
@@ -432,7 +470,7 @@ impl Tables {
 
     /// [`Marginal2D::invert_blended`] at `pos`: the sample-space point of each lane.
     #[inline(always)]
-    fn invert_vndf<const CORNERS: usize>(
+    fn invert_vndf<const CORNERS: usize, const GATHERS: bool>(
         &self,
         corners: &[(Lanes<u32>, Lanes<f32>); CORNERS],
         pos: &[Lanes<f32>; 2],
@@ -443,6 +481,41 @@ impl Tables {
         // and marginal CDF: per lane and slice, a load of four values for each row of the
         // patch (d and c at a node and at its right neighbour) and one for the rows (r and
         // the marginal CDF at row j, then at j + 1).
+        #[cfg(target_arch = "x86_64")]
+        let values = if GATHERS {
+            let (nodes, rows) = (&self.vndf_nodes, &self.vndf_rows);
+            gather::vndf(nodes, rows, (grid.nx, grid.ny), corners, &node, &node_row)
+        } else {
+            self.vndf_per_lane(corners, &node, &node_row)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let values = self.vndf_per_lane(corners, &node, &node_row);
+        let [[d00, c00, d10], [d01, c01, d11], [r0, marginal, r1]] = values;
+        let x = lanes!(|k| {
+            let (c0, c1) = (lerp(d00[k], d01[k], t[k]), lerp(d10[k], d11[k], t[k]));
+            let row_total = lerp(r0[k], r1[k], t[k]);
+            let row_mass = lerp(c00[k], c01[k], t[k]) + s[k] * (c0 + 0.5 * s[k] * (c1 - c0));
+            if row_total > 0.0 {
+                row_mass / row_total
+            } else {
+                0.0
+            }
+        });
+        let y = lanes!(|k| marginal[k] + t[k] * (r0[k] + 0.5 * t[k] * (r1[k] - r0[k])));
+        [x, y]
+    }
+
+    /// The per-lane path of [`gather::vndf`]'s values: per lane and slice, a load of four
+    /// values for each row of the patch (d and c at a node and at its right neighbour) and
+    /// one for the rows (r and the marginal CDF at row j, then at j + 1).
+    #[inline(always)]
+    fn vndf_per_lane<const CORNERS: usize>(
+        &self,
+        corners: &[(Lanes<u32>, Lanes<f32>); CORNERS],
+        node: &Lanes<u32>,
+        node_row: &Lanes<u32>,
+    ) -> [[Lanes<f32>; 3]; 3] {
+        let grid = self.vndf;
         let (nx, plane) = (grid.nx as usize, grid.plane() as usize);
         let mut low = [[0f32; 4]; LANES];
         let mut high = [[0f32; 4]; LANES];
@@ -463,32 +536,22 @@ impl Tables {
             (low[k], high[k], rows[k]) = (l.to_array(), h.to_array(), r.to_array());
         }
         // Back to one array per value, lanes innermost.
-        let [d00, c00, d10] = first_three(&low);
-        let [d01, c01, d11] = first_three(&high);
-        let [r0, marginal, r1] = first_three(&rows);
-        let x = lanes!(|k| {
-            let (c0, c1) = (lerp(d00[k], d01[k], t[k]), lerp(d10[k], d11[k], t[k]));
-            let row_total = lerp(r0[k], r1[k], t[k]);
-            let row_mass = lerp(c00[k], c01[k], t[k]) + s[k] * (c0 + 0.5 * s[k] * (c1 - c0));
-            if row_total > 0.0 {
-                row_mass / row_total
-            } else {
-                0.0
-            }
-        });
-        let y = lanes!(|k| marginal[k] + t[k] * (r0[k] + 0.5 * t[k] * (r1[k] - r0[k])));
-        [x, y]
+        [first_three(&low), first_three(&high), first_three(&rows)]
     }
 
     /// The RGB table at `pos`, blended over the slices; per channel.
     #[inline(always)]
-    fn interpolate_rgb<const CORNERS: usize>(
+    fn interpolate_rgb<const CORNERS: usize, const GATHERS: bool>(
         &self,
         corners: &[(Lanes<u32>, Lanes<f32>); CORNERS],
         pos: &[Lanes<f32>; 2],
     ) -> [Lanes<f32>; 3] {
         let grid = self.rgb;
         let (node, _, s, t) = grid.patches(pos);
+        #[cfg(target_arch = "x86_64")]
+        if GATHERS {
+            return gather::rgb(&self.rgb_nodes, (grid.nx, grid.ny), corners, &node, (&s, &t));
+        }
         let nx = grid.nx as usize;
         let plane = grid.plane() as usize;
         let mut sums = [[0f32; 4]; LANES];

@@ -20,6 +20,8 @@ mod batch;
 #[cfg(test)]
 mod batch_tests;
 mod eval;
+#[cfg(target_arch = "x86_64")]
+mod gather;
 mod merl_table;
 mod simd;
 pub mod synthetic;
