@@ -5,11 +5,11 @@
 //! turns into SIMD. [`Tables::eval_chunk`] has that code compiled three times, for
 //! AVX-512, for AVX2 with FMA and for the baseline, and picks one at run time. The tables
 //! are copies laid out so that one lookup's values sit together: a VNDF node's density
-//! beside its CDF, a node's three colours. On Intel CPUs with AVX-512 they are read by
-//! gathers, two values of every lane at a time ([`gather`]); elsewhere by loads per lane,
-//! each lane summing its lookups four values at a time in an SSE register ([`Quad`]):
-//! AVX-512's gathers of one value, tried in their place on an AMD Zen 4, were no faster
-//! there. Both give the same values to the bit. The input rows of the blocks ahead are
+//! beside its CDF, a node's three colours. On Intel CPUs with AVX-512 whose gathers no
+//! mitigation slows, they are read by gathers, two values of every lane at a time
+//! ([`gather`]); elsewhere by loads per lane, each lane summing its lookups four values at
+//! a time in an SSE register ([`Quad`]): gathers of one value each, tried in their place on
+//! an AMD Zen 4, were no faster there. Both give the same values to the bit. The input rows of the blocks ahead are
 //! prefetched ([`PREFETCH_BLOCKS`]).
 //!
 //! Directions are normalised in float64 (after an exact scaling by a power of two) and

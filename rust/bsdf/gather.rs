@@ -6,7 +6,7 @@
 //! gathers take 0.77× the time on 2 threads; on an AMD Zen 4 gathers of one value each were
 //! no faster than the per-lane loads (these of two values are not measured there;
 //! research/performance.md). [`super::batch::Tables::eval_chunk`] uses them on Intel CPUs
-//! with AVX-512 only. Both paths add the same products in the same order: their results are
+//! with AVX-512 only, and not where the microcode's Downfall mitigation slows them ([`preferred`]). Both paths add the same products in the same order: their results are
 //! equal to the bit.
 //!
 //! Every function here is called only from code compiled with AVX-512 (F, BW, DQ, VL) for a
@@ -176,7 +176,10 @@ fn offset_by(at: __m512i, by: __m512i) -> __m512i {
     unsafe { _mm512_add_epi32(at, by) }
 }
 
-/// Whether this CPU should take the gathers: AVX-512 (F, BW, DQ, VL) on an Intel CPU.
+/// Whether this CPU should take the gathers: AVX-512 (F, BW, DQ, VL) on an Intel CPU whose
+/// gathers run at full speed. Intel's microcode against Gather Data Sampling ("Downfall",
+/// Skylake to Tiger Lake) makes every gather several times slower; where the kernel does
+/// not say that no such mitigation runs, the per-lane loads stay.
 pub(super) fn preferred() -> bool {
     is_x86_feature_detected!("avx512f")
         && is_x86_feature_detected!("avx512bw")
@@ -184,10 +187,31 @@ pub(super) fn preferred() -> bool {
         && is_x86_feature_detected!("avx512vl")
         && is_x86_feature_detected!("fma")
         && intel()
+        && std::fs::read_to_string("/sys/devices/system/cpu/vulnerabilities/gather_data_sampling")
+            .is_ok_and(|status| gathers_at_full_speed(&status))
+}
+
+/// Whether the kernel's Gather Data Sampling status leaves the gathers as fast as the CPU
+/// makes them: not affected, or affected without the microcode's mitigation.
+fn gathers_at_full_speed(status: &str) -> bool {
+    status.starts_with("Not affected") || status.starts_with("Vulnerable")
 }
 
 /// The CPU's vendor is Intel (CPUID leaf 0: "GenuineIntel").
 fn intel() -> bool {
     let id = __cpuid(0); // leaf 0 exists on every x86_64 CPU
     [id.ebx, id.edx, id.ecx].map(u32::to_le_bytes).concat() == b"GenuineIntel"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::gathers_at_full_speed;
+
+    #[test]
+    fn gathers_are_taken_only_where_no_mitigation_slows_them() {
+        assert!(gathers_at_full_speed("Not affected\n"));
+        assert!(gathers_at_full_speed("Vulnerable: No microcode\n"));
+        assert!(!gathers_at_full_speed("Mitigation: Microcode\n"));
+        assert!(!gathers_at_full_speed("Unknown: Dependent on hypervisor status\n"));
+    }
 }

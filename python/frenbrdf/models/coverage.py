@@ -11,8 +11,9 @@ domain's edges (research/results/latent-gap/README.md, research/results/latent-c
 
 Where the samples say nothing at all (a device that sees only the mirror directions), no weight helps: `latent` may
 move the material there freely, and does (a dark olive base turned bright blue by specular-only pairs).
-:func:`uncovered_bins` names random valid bins and how thinly the samples cover each, the places where `latent` can
-hold the encoder's guess instead (``RefineConfig.anchor``; research/results/latent-anchor/README.md).
+:func:`uncovered_bins` names random valid bins far from every sample, the places where `latent` could
+hold the encoder's guess instead (``RefineConfig.anchor``; measured not to help on average:
+research/results/latent-anchor/README.md).
 
 The neighbours come from SciPy's k-d tree: the package's own k-NN core (kiddo) holds unit vectors, and these places
 are not.
