@@ -78,3 +78,16 @@ def test_refine_config_checks_anchor():
     for anchor in (-0.1, float("nan"), 1e9, True, "1"):
         with pytest.raises(ValueError, match="anchor"):
             RefineConfig(anchor=anchor)
+
+
+def test_the_summary_warns_where_only_the_mirror_reflection_was_sampled():
+    from frenbrdf.io.patterns import PATTERNS
+    from frenbrdf.models.coverage import MIRROR_ONLY_DEGREES, coverage_summary
+
+    rng = np.random.default_rng(8)
+    mirror = coverage_summary(*PATTERNS["specular"](1500, rng))
+    assert mirror["largest_half_angle_deg"] < MIRROR_ONLY_DEGREES and 0.3 < mirror["uncovered"] < 0.7
+    assert len(mirror["warnings"]) == 1 and "base colour" in mirror["warnings"][0]
+    for name in ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "flat-sample"):
+        assert coverage_summary(*PATTERNS[name](1500, rng))["warnings"] == [], name
+    assert coverage_summary(*random_bins(4000, 9))["uncovered"] < 0.01

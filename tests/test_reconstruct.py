@@ -310,6 +310,12 @@ def test_the_command_samples_a_material_by_the_pattern_asked_for(run_dir, toy_ma
         _reconstruct(source, "--out", tmp_path / "all", "--model", run_dir, "--pattern", "uniform", "--samples", "all")
     assert "--samples all draws every MERL bin; --pattern uniform draws N pairs" in capsys.readouterr().err
     assert not (tmp_path / "x").exists() and not (tmp_path / "csv").exists() and not (tmp_path / "all").exists()
+    capsys.readouterr()
+    assert _reconstruct(source, "--out", tmp_path / "mirror", "--model", run_dir, "--samples", 300,
+                        "--pattern", "specular", "--refine", "none") == 0
+    warnings = json.loads((tmp_path / "mirror" / "reconstruction.json").read_text())["coverage"]["warnings"]
+    assert len(warnings) == 1 and f"warning: {warnings[0]}" in capsys.readouterr().err
+    assert json.loads((tmp_path / "gonio" / "reconstruction.json").read_text())["coverage"]["warnings"] == []
 
 
 def test_the_command_on_a_csv_and_all_bins(run_dir, toy_materials, tmp_path):

@@ -245,6 +245,8 @@ def reconstruct(args: argparse.Namespace) -> int:
     report = reconstruct_file(args.input, args.out, model=args.model, refine=args.refine, seed=args.seed,
                               progress=not args.quiet, overwrite=args.overwrite, width=args.width,
                               reciprocal=args.reciprocal, coverage_k=args.coverage, **given)
+    for warning in report["coverage"]["warnings"]:
+        print(f"warning: {warning}", file=sys.stderr)
     if args.json:
         print(json.dumps(report, indent=2))
     else:

@@ -39,6 +39,7 @@ from ..io.patterns import DEFAULT as DEFAULT_PATTERN
 from ..io.patterns import pattern as find_pattern
 from ..io.samples import Measurements
 from ..models.autoencoder import Model, load_model
+from ..models.coverage import coverage_summary
 from ..models.reconstruct import Reconstruction, refine_config
 from ..render.renderer import Scene, material_mask, render, save_png
 
@@ -126,7 +127,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
               "model": {"path": str(model), "method": loaded.method, **({"version": loaded.card.get("version")}
                                                                           if loaded.card else {})},
               "refine": {"budget": refine, **dataclasses.asdict(config)}, "seed": seed, **result.summary(),
-              "ordered": result.nbrdf.ordered}
+              "ordered": result.nbrdf.ordered, "coverage": coverage_summary(measurements.wi, measurements.wo)}
     if measurements.truth is not None and measurements.table is not None:  # a whole material, not scattered samples
         images["truth"] = render(measurements.truth, scene)
         images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
