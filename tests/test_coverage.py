@@ -62,15 +62,15 @@ def test_the_queries_in_chunks_give_the_same_weights(monkeypatch):
 def test_random_bins_leave_no_bin_uncovered_and_a_device_leaves_its_blind_side():
     from frenbrdf.models.coverage import ANCHOR_BINS, uncovered_bins
 
-    bins, thinness = uncovered_bins(*random_bins(4000, 6))
+    bins, remoteness = uncovered_bins(*random_bins(4000, 6))
     assert len(bins) <= 0.01 * ANCHOR_BINS
     wi, wo = random_bins(4000, 7)
     near_mirror = index_space(wi, wo)[:, 0] < 0.4  # what a device that sees only the mirror directions gives
-    bins, thinness = uncovered_bins(wi[near_mirror], wo[near_mirror])
+    bins, remoteness = uncovered_bins(wi[near_mirror], wo[near_mirror])
     places = index_space(*bin_directions(bins))
-    assert np.all((thinness > 0) & (thinness <= 1))
+    assert np.all((remoteness > 0) & (remoteness <= 1))
     assert np.all(places[:, 0] > 0.4)  # every uncovered bin lies on the side no pair saw
-    assert len(bins) > 0.4 * ANCHOR_BINS and np.mean(thinness[places[:, 0] > 0.7]) == pytest.approx(1.0)
+    assert len(bins) > 0.4 * ANCHOR_BINS and np.mean(remoteness[places[:, 0] > 0.7]) == pytest.approx(1.0)
 
 
 def test_refine_config_checks_anchor():

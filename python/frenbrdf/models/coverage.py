@@ -74,9 +74,9 @@ def uncovered_bins(wi, wo) -> tuple[np.ndarray, np.ndarray]:
     less 1, at most 1 (so 1 from twice the radius on). ``wi``, ``wo``: ``(N, 3)`` directions above the surface, N ≥ 1.
     1,500 random bins leave almost none; a device that sees only the mirror directions leaves half the table."""
     nearest = cKDTree(index_space(wi, wo)).query(_anchor_places(), k=1)[0]
-    thinness = np.minimum(nearest / ANCHOR_RADIUS - 1, 1.0)
-    far = thinness > 0
-    return _anchor_bins()[far], thinness[far]
+    remoteness = np.minimum(nearest / ANCHOR_RADIUS - 1, 1.0)
+    far = remoteness > 0
+    return _anchor_bins()[far], remoteness[far]
 
 
 def coverage_summary(wi, wo) -> dict:

@@ -307,13 +307,13 @@ def _starts(encoding, count: int) -> list[torch.Tensor]:
 
 def _anchor_samples(wi: np.ndarray, wo: np.ndarray) -> _Samples | None:
     """:func:`~frenbrdf.models.coverage.uncovered_bins` of the samples as stage 1's anchors: NBRDF inputs and cos θ_i
-    times thinness (their values, the start's decoding, come per start); None where the samples cover every bin."""
-    bins, thinness = uncovered_bins(wi, wo)
+    times remoteness (their values, the start's decoding, come per start); None where no bin lies far from the samples."""
+    bins, remoteness = uncovered_bins(wi, wo)
     if not len(bins):
         return None
     anchor_wi, anchor_wo = bin_directions(bins)
     coords = nbrdf_coordinates(anchor_wi, anchor_wo)
-    weights = np.clip(anchor_wi[:, 2], 0.0, 1.0) * thinness
+    weights = np.clip(anchor_wi[:, 2], 0.0, 1.0) * remoteness
     return _Samples(*(torch.from_numpy(np.asarray(a, dtype=np.float32))[None]
                       for a in (coords, np.zeros((len(bins), 3)), weights)))
 
@@ -321,7 +321,7 @@ def _anchor_samples(wi: np.ndarray, wo: np.ndarray) -> _Samples | None:
 def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples | None, loss: LossConfig,
                    config: RefineConfig, record: _Record) -> tuple[torch.Tensor, float]:
     """Stage 1 from one start: z after its steps, and the loss of its decoding on all samples. ``anchors``
-    (:func:`_anchor_samples`) hold the start's decoding where the samples are thin, with weight ``config.anchor``."""
+    (:func:`_anchor_samples`) hold the start's decoding far from the samples, with weight ``config.anchor``."""
     if anchors is not None:
         with torch.no_grad():
             start = nbrdf_forward(model.network.decoder(z), anchors.coords)
