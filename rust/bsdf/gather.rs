@@ -3,15 +3,17 @@
 //! moves each lane's index out of the vector registers and loads four values at a time.
 //!
 //! Which of the two is faster depends on the CPU: on an Intel Xeon (Emerald Rapids) the
-//! gathers take 0.77× the time on 2 threads; on an AMD Zen 4 gathers of one value each were
+//! gathers take 0.76× the time on 2 threads; on an AMD Zen 4 gathers of one value each were
 //! no faster than the per-lane loads (these of two values are not measured there;
 //! research/performance.md). [`super::batch::Tables::eval_chunk`] uses them on Intel CPUs
-//! with AVX-512 only, and not where the microcode's Downfall mitigation slows them ([`preferred`]). Both paths add the same products in the same order: their results are
+//! with AVX-512 only, and not where the microcode's Downfall mitigation slows them
+//! ([`preferred`]). Both paths add the same products in the same order: their results are
 //! equal to the bit.
 //!
 //! Every function here is called only from code compiled with AVX-512 (F, BW, DQ, VL) for a
 //! CPU that has it, which makes its intrinsics sound; each checks that its indices lie in
-//! the table before it reads.
+//! the table before it reads (as unsigned numbers: an index the gathers would read as
+//! negative fails the check too).
 
 use std::arch::x86_64::*;
 
@@ -96,7 +98,6 @@ fn scaled(at: __m512i, by: u32) -> __m512i {
 /// and the next row's integral (`rows`). `nodes` holds (density, CDF) per node of each
 /// slice's `nx` × `ny` grid, `row_values` (integral, marginal CDF) per row of each slice.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn vndf<const CORNERS: usize>(
     nodes: &[f32],
     row_values: &[f32],
