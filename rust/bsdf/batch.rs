@@ -13,10 +13,11 @@
 //! prefetched ([`PREFETCH_BLOCKS`]).
 //!
 //! Directions are normalised in float64 (after an exact scaling by a power of two; 1/|v|
-//! from float32's square root and a Newton step) and rounded to float32, their sum too; the horizon test is the float64 path's, so both
-//! return 0 for the same pairs. Angles come from a polynomial
-//! atan2. The result stays within 1e-4 (relative; median a few 1e-6) of the float64 path
-//! where the value is not tiny (`batch_tests.rs`, on the RGL files).
+//! from float32's square root and a Newton step) and rounded to float32, their sum too;
+//! the horizon test is the float64 path's, so both return 0 for the same pairs. Angles
+//! come from a polynomial atan2. The result stays within 1e-4 (relative; median a few
+//! 1e-6) of the float64 path where the value is not tiny (`batch_tests.rs`, on the RGL
+//! files).
 //!
 //! [`MeasuredBsdf::eval_pair`]: super::MeasuredBsdf::eval_pair
 
