@@ -25,7 +25,7 @@ use std::f32::consts::{FRAC_2_PI, PI, TAU};
 
 #[cfg(target_arch = "x86_64")]
 use super::gather;
-use super::simd::{atan2, bilinear, elevation, lanes, lerp, two, Lanes, Quad, LANES};
+use super::simd::{atan2, bilinear, bilinear_weights, elevation, lanes, lerp, two, Lanes, Quad, LANES};
 use super::warp::Marginal2D;
 use super::HORIZON;
 use crate::coords::{normalize, Vec3};
@@ -64,6 +64,16 @@ fn unit_rows(rows: &Lanes<Vec3>) -> ([Lanes<f64>; 3], bool) {
 /// Whether [`Tables::eval_chunk`] reads the tables by gathers on this CPU ([`gather::preferred`]).
 #[cfg(target_arch = "x86_64")]
 static GATHERS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+
+/// Whether the CPU has what [`Tables::chunk_avx512`] is compiled for.
+#[cfg(target_arch = "x86_64")]
+fn avx512() -> bool {
+    is_x86_feature_detected!("avx512f")
+        && is_x86_feature_detected!("avx512bw")
+        && is_x86_feature_detected!("avx512dq")
+        && is_x86_feature_detected!("avx512vl")
+        && is_x86_feature_detected!("fma")
+}
 
 /// Blocks ahead whose input rows [`Tables::chunk`] asks for. The hardware's prefetcher did
 /// not keep up with the two input streams: with 2 threads, a sixth of the time went on
@@ -272,18 +282,13 @@ impl Tables {
     fn dispatch<const CORNERS: usize>(&self, wi: &[Vec3], wo: &[Vec3], out: &mut [[f64; 3]]) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
-            if *GATHERS.get_or_init(gather::preferred) {
-                // SAFETY: `preferred` checked that the CPU has the features.
-                return unsafe { self.chunk_avx512::<CORNERS, true>(wi, wo, out) };
-            }
-            if is_x86_feature_detected!("avx512f")
-                && is_x86_feature_detected!("avx512bw")
-                && is_x86_feature_detected!("avx512dq")
-                && is_x86_feature_detected!("avx512vl")
-                && is_x86_feature_detected!("fma")
-            {
+            if avx512() {
                 // SAFETY: the CPU has the features the function is compiled for.
-                return unsafe { self.chunk_avx512::<CORNERS, false>(wi, wo, out) };
+                return if *GATHERS.get_or_init(gather::preferred) {
+                    unsafe { self.chunk_avx512::<CORNERS, true>(wi, wo, out) }
+                } else {
+                    unsafe { self.chunk_avx512::<CORNERS, false>(wi, wo, out) }
+                };
             }
             if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
                 // SAFETY: as above.
@@ -309,11 +314,7 @@ impl Tables {
                 // SAFETY: the CPU has the features.
                 run(&|out| unsafe { self.chunk_avx2::<2>(wi, wo, out) });
             }
-            if is_x86_feature_detected!("avx512f")
-                && is_x86_feature_detected!("avx512bw")
-                && is_x86_feature_detected!("avx512dq")
-                && is_x86_feature_detected!("avx512vl")
-            {
+            if avx512() {
                 // SAFETY: as above (whatever the vendor: the gathers are exact on any).
                 run(&|out| unsafe { self.chunk_avx512::<2, false>(wi, wo, out) });
                 run(&|out| unsafe { self.chunk_avx512::<2, true>(wi, wo, out) });
@@ -484,19 +485,9 @@ impl Tables {
         let grid = self.vndf;
         let (node, node_row, s, t) = grid.patches(pos);
         // The blended density d and CDF c at the patch's corners, and the rows' integrals r
-        // and marginal CDF: per lane and slice, a load of four values for each row of the
-        // patch (d and c at a node and at its right neighbour) and one for the rows (r and
-        // the marginal CDF at row j, then at j + 1).
-        #[cfg(target_arch = "x86_64")]
-        let values = if GATHERS {
-            let (nodes, rows) = (&self.vndf_nodes, &self.vndf_rows);
-            gather::vndf(nodes, rows, (grid.nx, grid.ny), corners, &node, &node_row)
-        } else {
-            self.vndf_per_lane(corners, &node, &node_row)
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let values = self.vndf_per_lane(corners, &node, &node_row);
-        let [[d00, c00, d10], [d01, c01, d11], [r0, marginal, r1]] = values;
+        // and marginal CDF.
+        let [[d00, c00, d10], [d01, c01, d11], [r0, marginal, r1]] =
+            self.vndf_values::<CORNERS, GATHERS>(corners, &node, &node_row);
         let x = lanes!(|k| {
             let (c0, c1) = (lerp(d00[k], d01[k], t[k]), lerp(d10[k], d11[k], t[k]));
             let row_total = lerp(r0[k], r1[k], t[k]);
@@ -511,17 +502,22 @@ impl Tables {
         [x, y]
     }
 
-    /// The per-lane path of [`gather::vndf`]'s values: per lane and slice, a load of four
-    /// values for each row of the patch (d and c at a node and at its right neighbour) and
-    /// one for the rows (r and the marginal CDF at row j, then at j + 1).
+    /// [`gather::vndf`]'s values, by gathers where `GATHERS`, else per lane and slice: a
+    /// load of four values for each row of the patch (d and c at a node and at its right
+    /// neighbour) and one for the rows (r and the marginal CDF at row j, then at j + 1).
     #[inline(always)]
-    fn vndf_per_lane<const CORNERS: usize>(
+    fn vndf_values<const CORNERS: usize, const GATHERS: bool>(
         &self,
         corners: &[(Lanes<u32>, Lanes<f32>); CORNERS],
         node: &Lanes<u32>,
         node_row: &Lanes<u32>,
     ) -> [[Lanes<f32>; 3]; 3] {
         let grid = self.vndf;
+        #[cfg(target_arch = "x86_64")]
+        if GATHERS {
+            let (nodes, rows) = (&self.vndf_nodes, &self.vndf_rows);
+            return gather::vndf(nodes, rows, (grid.nx, grid.ny), corners, node, node_row);
+        }
         let (nx, plane) = (grid.nx as usize, grid.plane() as usize);
         let mut low = [[0f32; 4]; LANES];
         let mut high = [[0f32; 4]; LANES];
@@ -563,7 +559,7 @@ impl Tables {
         let mut sums = [[0f32; 4]; LANES];
         for k in 0..LANES {
             let (s, t) = (s[k], t[k]);
-            let bilinear_weights = [(1.0 - s) * (1.0 - t), s * (1.0 - t), (1.0 - s) * t, s * t];
+            let bilinear_weights = bilinear_weights(s, t);
             let mut sum = Quad::zero();
             for (slice, weight) in corners {
                 let base = slice[k] as usize * plane + node[k] as usize;

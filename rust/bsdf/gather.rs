@@ -17,7 +17,7 @@
 
 use std::arch::x86_64::*;
 
-use super::simd::{lanes, Lanes, LANES};
+use super::simd::{bilinear_weights, lanes, Lanes, LANES};
 
 /// Lanes of u32 or f32 as a 512-bit register, and back.
 #[inline(always)]
@@ -127,7 +127,7 @@ pub(super) fn vndf<const CORNERS: usize>(
 }
 
 /// The RGB table's values at each lane's patch, blended over the slices with the bilinear
-/// weights `(1 − s)(1 − t)`, `s(1 − t)`, `(1 − s)t`, `st`, as the per-lane path sums them.
+/// weights ([`bilinear_weights`]), as the per-lane path sums them.
 /// `nodes` holds (red, green, blue, 0) per node of each slice's `nx` × `ny` grid.
 #[inline(always)]
 pub(super) fn rgb<const CORNERS: usize>(
@@ -137,12 +137,12 @@ pub(super) fn rgb<const CORNERS: usize>(
     node: &Lanes<u32>,
     (s, t): (&Lanes<f32>, &Lanes<f32>),
 ) -> [Lanes<f32>; 3] {
-    let (s, t) = (*s, *t);
-    let bilinear = [
-        lanes!(|k| (1.0 - s[k]) * (1.0 - t[k])),
-        lanes!(|k| s[k] * (1.0 - t[k])),
-        lanes!(|k| (1.0 - s[k]) * t[k]),
-        lanes!(|k| s[k] * t[k]),
+    // [`bilinear_weights`] as one array per corner (lanes innermost, as the sums want them).
+    let bilinear: [Lanes<f32>; 4] = [
+        lanes!(|k| bilinear_weights(s[k], t[k])[0]),
+        lanes!(|k| bilinear_weights(s[k], t[k])[1]),
+        lanes!(|k| bilinear_weights(s[k], t[k])[2]),
+        lanes!(|k| bilinear_weights(s[k], t[k])[3]),
     ];
     // SAFETY: see the module's docs.
     let mut sums = [unsafe { _mm512_setzero_ps() }; 3];
@@ -177,17 +177,12 @@ fn offset_by(at: __m512i, by: __m512i) -> __m512i {
     unsafe { _mm512_add_epi32(at, by) }
 }
 
-/// Whether this CPU should take the gathers: AVX-512 (F, BW, DQ, VL) on an Intel CPU whose
-/// gathers run at full speed. Intel's microcode against Gather Data Sampling ("Downfall",
-/// Skylake to Tiger Lake) makes every gather several times slower; where the kernel does
-/// not say that no such mitigation runs, the per-lane loads stay.
+/// Whether a CPU with AVX-512 should take the gathers: an Intel CPU whose gathers run at
+/// full speed. Intel's microcode against Gather Data Sampling ("Downfall", Skylake to
+/// Tiger Lake) makes every gather several times slower; where the kernel does not say that
+/// no such mitigation runs, the per-lane loads stay.
 pub(super) fn preferred() -> bool {
-    is_x86_feature_detected!("avx512f")
-        && is_x86_feature_detected!("avx512bw")
-        && is_x86_feature_detected!("avx512dq")
-        && is_x86_feature_detected!("avx512vl")
-        && is_x86_feature_detected!("fma")
-        && intel()
+    intel()
         && std::fs::read_to_string("/sys/devices/system/cpu/vulnerabilities/gather_data_sampling")
             .is_ok_and(|status| gathers_at_full_speed(&status))
 }

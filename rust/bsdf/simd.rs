@@ -33,6 +33,13 @@ pub fn bilinear([v00, v10, v01, v11]: [f32; 4], s: f32, t: f32) -> f32 {
     lerp(lerp(v00, v10, s), lerp(v01, v11, s), t)
 }
 
+/// The weights of a patch's corners (x fastest) at (s, t): `(1 − s)(1 − t)`, `s(1 − t)`,
+/// `(1 − s)t`, `st`, in the order both table-reading paths of [`super::batch`] sum them.
+#[inline(always)]
+pub fn bilinear_weights(s: f32, t: f32) -> [f32; 4] {
+    [(1.0 - s) * (1.0 - t), s * (1.0 - t), (1.0 - s) * t, s * t]
+}
+
 /// atan2 in float32 within a few ulp, branch-free so that it vectorises: an odd polynomial
 /// for atan on [0, 1] (SLEEF's `atanf` coefficients), then the octant.
 #[inline(always)]

@@ -73,7 +73,12 @@ def uncovered_bins(wi, wo) -> tuple[np.ndarray, np.ndarray]:
     than :data:`ANCHOR_RADIUS` in :func:`index_space`, and how far ``(M,)`` in (0, 1]: the distance over the radius,
     less 1, at most 1 (so 1 from twice the radius on). ``wi``, ``wo``: ``(N, 3)`` directions above the surface, N ≥ 1.
     1,500 random bins leave almost none; a device that sees only the mirror directions leaves half the table."""
-    nearest = cKDTree(index_space(wi, wo)).query(_anchor_places(), k=1)[0]
+    return _far_bins(index_space(wi, wo))
+
+
+def _far_bins(places: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`uncovered_bins` of pairs at ``places`` (:func:`index_space`)."""
+    nearest = cKDTree(places).query(_anchor_places(), k=1)[0]
     remoteness = np.minimum(nearest / ANCHOR_RADIUS - 1, 1.0)
     far = remoteness > 0
     return _anchor_bins()[far], remoteness[far]
@@ -83,8 +88,8 @@ def coverage_summary(wi, wo) -> dict:
     """What the pairs ``(N, 3)`` each show of a material, JSON-ready: the largest angle of their half vectors from
     the normal (degrees), the share of random valid bins that lie far from every pair (:func:`uncovered_bins`), and
     ``warnings``: what the pairs cannot tell, in words (empty where nothing is known to be missing)."""
-    theta_h = np.asarray(directions_to_rusinkiewicz(wi, wo)).reshape(-1, 4)[:, 0]
-    largest = float(np.degrees(theta_h.max()))
+    places = index_space(wi, wo)
+    largest = float(np.degrees(places[:, 0].max() ** 2 * np.pi / 2))  # the place's first axis is √(θ_h / (π/2))
     warnings = []
     if largest < MIRROR_ONLY_DEGREES:
         warnings.append(f"every sample's half vector lies within {largest:.0f}° of the normal: the samples show the "
@@ -92,7 +97,7 @@ def coverage_summary(wi, wo) -> dict:
                         "from the mirror direction) is a guess. From such samples `latent` gave real measurements "
                         "back 5.3 dB worse than from random bins, some with the wrong base colour "
                         "(docs/results.md); sample away from the mirror direction too if you can")
-    return {"largest_half_angle_deg": largest, "uncovered": len(uncovered_bins(wi, wo)[0]) / ANCHOR_BINS,
+    return {"largest_half_angle_deg": largest, "uncovered": len(_far_bins(places)[0]) / ANCHOR_BINS,
             "warnings": warnings}
 
 
