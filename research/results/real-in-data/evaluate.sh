@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The scores of research/results/real-in-data (README.md): the three `mf` runs (WORK/mf-f0-s0 … f2-s0), each on
+# the measurements of its own fold (it trained on the others), 4,000 random valid bins (draw 0: folds-v8's draws),
+# encoder, `latent` and `full`; and on the 40 held-out tables, encoder and `latent`. Two processes, one thread
+# each. decide.py pairs these rows with folds-v8's `v8` rows.
+#
+#   bash research/results/real-in-data/evaluate.sh WORK DATA OUT
+#   (DATA the 197 tables the `v8` runs trained on, whose held-out ones are read)
+set -euo pipefail
+WORK=${1:?WORK folder}; DATA=${2:?DATA folder}; OUT=${3:?OUT folder}
+HERE=$(dirname "$0")
+COMPARE="python $HERE/../../studies/compare_models.py"
+FOLDS="python $HERE/../../studies/measured_folds/folds.py"
+models=(); labels=(); trained_on=()
+for fold in 0 1 2; do
+    models+=("$WORK/mf-f$fold-s0"); labels+=("mf/f$fold-s0")
+    for name in $($FOLDS others "$fold"); do trained_on+=("mf/f$fold-s0=$name"); done
+done
+mkdir -p "$OUT"
+OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
+    --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full --samples 4000 --resolution 128 \
+    --group $($FOLDS groups) comparison-four=acrylic_felt_green_rgb,paper_white_rgb,vch_golden_yellow_rgb,cg_sunflower_rgb \
+    --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
+OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" \
+    --held-out "$HERE/../folds-v8/config-v8.json" "$DATA" --budgets none latent --samples 4000 --resolution 128 \
+    --out "$OUT/tables" > "$OUT/tables.log" 2>&1 &
+wait
