@@ -4,7 +4,7 @@
 
 OUT is evaluate.sh's output (the `mf` rows). Its rows are joined with folds-v8's `v8` rows (the same draws) into
 OUT/with-v8/{measured,tables}/compare.json, so that `folds-v8/summarise.py OUT/with-v8 --arms v8 mf` prints the
-goals' table. The rule, encoder PSNR (budget ``none``), each arm's figure per material the mean over its runs:
+goals' table (and, where OUT holds evaluate_patterns.sh's `patterns-mf`, the table per pattern). The rule, encoder PSNR (budget ``none``), each arm's figure per material the mean over its runs:
 (a) `mf − v8` over the 19 measurements has its 95 % interval above 0, (b) each fold's mean of that difference over
 its own measurements is above 0, (c) on the 40 tables the interval is not wholly below 0. Writes OUT/decision.json.
 """
@@ -49,6 +49,10 @@ def main(argv=None) -> int:
     out = Path((argv or sys.argv[1:])[0])
     measured = differences(joined("measured", out))
     tables = differences(joined("tables", out))
+    if (out / "patterns-mf").exists():  # issue 47's table, for summarise.py: both arms' readings side by side
+        for arm, source in (("v8", FOLDS_V8), ("mf", out)):
+            save_json(out / "with-v8" / f"patterns-{arm}" / "compare.json",
+                      json.loads((source / f"patterns-{arm}" / "compare.json").read_text()))
     if len(measured) != sum(map(len, FOLDS)):
         raise SystemExit(f"expected the {sum(map(len, FOLDS))} measurements, found {len(measured)}")
     folds = [float(np.mean([measured[m] for m in fold])) for fold in FOLDS]
