@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The scores of research/results/real-in-data (README.md): the three `mf` runs (WORK/mf-f0-s0 … f2-s0), each on
 # the measurements of its own fold (it trained on the others), 4,000 random valid bins (draw 0: folds-v8's draws),
-# encoder, `latent` and `full`; and on the 40 held-out tables, encoder and `latent`. Two processes, one thread
-# each. decide.py pairs these rows with folds-v8's `v8` rows.
+# encoder, `latent` and `full`; and on the 40 held-out tables, encoder and `latent`; two processes, one thread
+# each. Then issue 47's table: each measurement through random bins and the five device patterns at 1,500 samples
+# (folds-v8's patterns-v8 draws), encoder, `latent`, and `latent` with the coverage weights of `frenbrdf
+# reconstruct` (K = 32). decide.py pairs these rows with folds-v8's `v8` rows.
 #
 #   bash research/results/real-in-data/evaluate.sh WORK DATA OUT
 #   (DATA the 197 tables the `v8` runs trained on, whose held-out ones are read)
@@ -25,3 +27,8 @@ OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" \
     --held-out "$HERE/../folds-v8/config-v8.json" "$DATA" --budgets none latent --samples 4000 --resolution 128 \
     --out "$OUT/tables" > "$OUT/tables.log" 2>&1 &
 wait
+OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
+    --measurements ../shared/data/rgl-measured/*.bsdf --samples 1500 \
+    --patterns merl-bins uniform in-plane gonioreflectometer image-based specular \
+    --budgets none latent latent@coverage_k=32 --resolution 128 --group $($FOLDS groups) \
+    --out "$OUT/patterns-mf" > "$OUT/patterns-mf.log" 2>&1
