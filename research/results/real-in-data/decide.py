@@ -5,8 +5,9 @@
 OUT is evaluate.sh's output (the `mf` rows). Its rows are joined with folds-v8's `v8` rows (the same draws) into
 OUT/with-v8/{measured,tables}/compare.json, so that `folds-v8/summarise.py OUT/with-v8 --arms v8 mf` prints the
 goals' table (and the table per pattern from evaluate.sh's `patterns-mf`). The rule, encoder PSNR (budget
-``none``), each arm's figure per material the mean over its runs: (a) `mf − v8` over the 19 measurements has its 95 % interval above 0, (b) each fold's mean of that difference over
-its own measurements is above 0, (c) on the 40 tables the interval is not wholly below 0. Writes OUT/decision.json.
+``none``), each arm's figure per material the mean over its runs: (a) `mf − v8` over the 19 measurements has its
+95 % interval above 0, (b) each fold's mean of that difference over its own measurements is above 0, (c) on the 40
+tables the interval is not wholly below 0. Writes OUT/decision.json.
 """
 
 from __future__ import annotations
