@@ -43,3 +43,18 @@ def reconstruction_row(truth: Any, drawn: Any, columns: list[tuple[str, Any, Any
         images.append((f"{title.format(seconds=seconds)}\n{metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.1f}",
                        image))
     return images
+
+
+def measurement_row(material: str, columns: list[tuple[str, Any, Any]], scene: Any, mask: np.ndarray,
+                    pattern: str = "merl-bins", count: int = 4000,
+                    measured: Path = Path("../shared/data/rgl-measured")) -> list[tuple[str, np.ndarray]]:
+    """:func:`reconstruction_row` of the RGL measurement ``material`` (its ``.bsdf`` in ``measured``) from ``count``
+    samples of ``pattern``, draw 0, as compare_models.py draws them (the studies' readings of the 19)."""
+    from compare_models import condition_rng
+
+    from frenbrdf.io import read_material
+    from frenbrdf.io.patterns import pattern_samples
+
+    truth = read_material(measured / f"{material}.bsdf")
+    drawn = pattern_samples(truth, pattern, count, condition_rng(0, pattern))
+    return reconstruction_row(truth, drawn, columns, scene, mask)

@@ -13,15 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from frenbrdf.io import read_material
-from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import condition_rng  # noqa: E402
-from image_grid import reconstruction_row, save_image_grid  # noqa: E402
+from image_grid import measurement_row, save_image_grid  # noqa: E402
 
 KINDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
 COLUMNS = (("v4-s0", "none"), ("v8-s0", "none"), ("v8-s0", "latent"), ("v8-s0", "full"))
@@ -44,9 +41,7 @@ def main(out: str, runs: str, figure: str) -> None:
     mask = material_mask(scene)
     grid = []
     for kind, material in cases:
-        truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
-        drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
-        grid.append((f"{kind}\n{material[:24]}", reconstruction_row(truth, drawn, columns, scene, mask)))
+        grid.append((f"{kind}\n{material[:24]}", measurement_row(material, columns, scene, mask)))
     save_image_grid(grid, figure)
 
 

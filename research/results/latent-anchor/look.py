@@ -12,14 +12,12 @@ import json
 import sys
 from pathlib import Path
 
-from frenbrdf.io import read_material
-from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import budget_config, condition_rng  # noqa: E402
-from image_grid import reconstruction_row, save_image_grid  # noqa: E402
+from compare_models import budget_config  # noqa: E402
+from image_grid import measurement_row, save_image_grid  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from decide import BASE, CANDIDATE  # noqa: E402
@@ -54,10 +52,8 @@ def main(out: str, pipe: str, figure: str) -> None:
     mask = material_mask(scene)
     grid = []
     for pattern, material, change in largest_changes(rows):
-        truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
-        drawn = pattern_samples(truth, pattern, COUNT, condition_rng(0, pattern))
         grid.append((f"{pattern} ({change:+.1f} dB)\n{material[:24]}",
-                     reconstruction_row(truth, drawn, columns, scene, mask)))
+                     measurement_row(material, columns, scene, mask, pattern, COUNT)))
     save_image_grid(grid, figure)
 
 

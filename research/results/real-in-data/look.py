@@ -11,15 +11,12 @@ import json
 import sys
 from pathlib import Path
 
-from frenbrdf.io import read_material
-from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
 from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import condition_rng  # noqa: E402
-from image_grid import reconstruction_row, save_image_grid  # noqa: E402
+from image_grid import measurement_row, save_image_grid  # noqa: E402
 
 FOLDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
 
@@ -41,9 +38,7 @@ def main(out: str, v8_runs: str, mf_runs: str, figure: str) -> None:
         fold = next(k for k, names in enumerate(FOLDS["folds"]) if material in names)
         columns = [(f"{name} {'encoder' if budget == 'none' else 'latent'}", model, refine_config(budget))
                    for budget in ("none", "latent") for name, model in (("v8", v8), ("mf", mf[fold]))]
-        truth = read_material(Path("../shared/data/rgl-measured") / f"{material}.bsdf")
-        drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
-        grid.append((f"{kind}\n{material[:24]}", reconstruction_row(truth, drawn, columns, scene, mask)))
+        grid.append((f"{kind}\n{material[:24]}", measurement_row(material, columns, scene, mask)))
     save_image_grid(grid, figure)
 
 
