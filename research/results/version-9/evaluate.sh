@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# The scores of research/results/version-9 (README.md): the shipped version 8 (`pretrained`, the baseline) and the
+# candidate V9 (a packed folder), on the 40 held-out tables of folds-v8 (4,000 random valid bins, draw 0, encoder
+# and `latent`: the rule's reading) and the 19 measurements (encoder, `latent`, `full`: training data of V9); then
+# the 40 tables through issue 47's six patterns at 1,500 samples, encoder and `latent`. Two processes, one thread
+# each.
+#
+#   bash research/results/version-9/evaluate.sh V9 DATA OUT      (DATA: the 197 tables, local/fv8/data)
+set -euo pipefail
+V9=${1:?V9 packed folder}; DATA=${2:?DATA folder}; OUT=${3:?OUT folder}
+HERE=$(dirname "$0")
+COMPARE="python $HERE/../../studies/compare_models.py --models pretrained $V9 --labels v8 v9 --resolution 128"
+FOLDS="python $HERE/../../studies/measured_folds/folds.py"
+HELD_OUT=(--held-out "$HERE/../folds-v8/config-v8.json" "$DATA")
+mkdir -p "$OUT"
+OMP_NUM_THREADS=1 $COMPARE "${HELD_OUT[@]}" --budgets none latent --samples 4000 \
+    --out "$OUT/tables" > "$OUT/tables.log" 2>&1 &
+OMP_NUM_THREADS=1 $COMPARE --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full \
+    --samples 4000 --group $($FOLDS groups) \
+    comparison-four=acrylic_felt_green_rgb,paper_white_rgb,vch_golden_yellow_rgb,cg_sunflower_rgb \
+    --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
+wait
+OMP_NUM_THREADS=1 $COMPARE "${HELD_OUT[@]}" --budgets none latent --samples 1500 \
+    --patterns merl-bins uniform in-plane gonioreflectometer image-based specular \
+    --out "$OUT/patterns" > "$OUT/patterns.log" 2>&1
