@@ -3,7 +3,7 @@
 # candidate V9 (a packed folder), on the 40 held-out tables of folds-v8 (4,000 random valid bins, draw 0, encoder
 # and `latent`: the rule's reading) and the 19 measurements (encoder, `latent`, `full`: training data of V9); then
 # the 40 tables through issue 47's six patterns at 1,500 samples, encoder and `latent`. Two processes, one thread
-# each.
+# each (the patterns in two halves).
 #
 #   bash research/results/version-9/evaluate.sh V9 DATA OUT      (DATA: the 197 tables, local/fv8/data)
 set -euo pipefail
@@ -20,6 +20,8 @@ OMP_NUM_THREADS=1 $COMPARE --measurements ../shared/data/rgl-measured/*.bsdf --b
     comparison-four=acrylic_felt_green_rgb,paper_white_rgb,vch_golden_yellow_rgb,cg_sunflower_rgb \
     --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
 wait
-OMP_NUM_THREADS=1 $COMPARE "${HELD_OUT[@]}" --budgets none latent --samples 1500 \
-    --patterns merl-bins uniform in-plane gonioreflectometer image-based specular \
-    --out "$OUT/patterns" > "$OUT/patterns.log" 2>&1
+for half in "merl-bins uniform in-plane" "gonioreflectometer image-based specular"; do
+    OMP_NUM_THREADS=1 $COMPARE "${HELD_OUT[@]}" --budgets none latent --samples 1500 --patterns $half \
+        --out "$OUT/patterns-${half%% *}" > "$OUT/patterns-${half%% *}.log" 2>&1 &
+done
+wait
