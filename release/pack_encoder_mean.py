@@ -9,8 +9,8 @@ training config and the first encoder; each member (a run trained with ``--decod
 adds its encoder, after a check that its decoder and mapping are exactly the base's; with
 ``--without-base-encoder`` z is the members' mean alone (version 5: encoders trained on other sampling
 patterns than the base's). The card is the
-base's with the members named, the version given, and the held-out test split (``WORK/split.json``'s
-``test``, files in ``WORK/data``; by source: ``WORK/merl``, ``WORK/bank``, ``WORK/rgl-train``) measured
+base's with the members named, the version given, and the held-out test split (``WORK/run/split.json``'s
+``test``, files in ``WORK/data``; by source: ``WORK/sources.json``; WORK is train_shipped_model.py's) measured
 anew, encoder only and refined, as assembled (float32) and as packed.
 """
 
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
     parser.add_argument("--members", nargs="+", required=True, help="run folders of encoders for the base's decoder")
-    parser.add_argument("--work", required=True, help="release/train_shipped_model.sh's folder (data/, split.json, sources)")
+    parser.add_argument("--work", required=True, help="train_shipped_model.py's --work (data/, run/split.json, sources.json)")
     parser.add_argument("--without-base-encoder", action="store_true",
                         help="z is the mean of the members' encoders only (the base gives the decoder and mapping)")
     parser.add_argument("--choice", choices=ENCODER_CHOICES, default="mean",
@@ -98,8 +98,9 @@ def main(argv=None) -> int:
     checkpoint, mapping, card = assemble(args.base, args.members, base_encoder=not args.without_base_encoder,
                                       choice=args.choice)
     work = Path(args.work)
-    test = [work / "data" / f"{name}.binary" for name in sorted(json.loads((work / "split.json").read_text())["test"])]
-    folders = [work / name for name in ("merl", "bank", "rgl-train")]
+    test = [work / "data" / f"{name}.binary"
+            for name in sorted(json.loads((work / "run" / "split.json").read_text())["test"])]
+    sources = json.loads((work / "sources.json").read_text())
     model = Model.from_checkpoint(checkpoint, mapping)
     held_out = reconstruction_rows(model, test, frequency_metric=False)
     refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
@@ -108,8 +109,8 @@ def main(argv=None) -> int:
                               "choice": args.choice, "poolings": poolings(checkpoint),
                               "samplings": [member_sampling(member) for member in args.members], "why": args.why,
                               "command": run_metadata()["command"]},
-                 "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
-                 "held_out_refined_by_source": by_source(refined, folders),
+                 "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, sources),
+                 "held_out_refined_by_source": by_source(refined, sources),
                  "held_out_by_pattern": by_pattern(model, test)})
     card.pop("bytes", None)
     pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)

@@ -26,7 +26,7 @@ import numpy as np
 
 from frenbrdf import Model, Run
 from frenbrdf.data.folders import list_materials
-from frenbrdf.io.atomic import write_text
+from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.models import pretrained
 from frenbrdf.render.scoring import reconstruction_rows
 from frenbrdf.training import load_config, train
@@ -65,10 +65,14 @@ def by_pattern(model: Model, test: list[Path], *, seed: int = 0, progress: bool 
             for pattern in CARD_PATTERNS}
 
 
-def by_source(rows: list[dict], folders: list[Path]) -> dict[str, dict]:
-    """:func:`summary` of the rows of each source folder (MERL-derived and bank materials apart), and of all."""
-    names = {folder.name: {path.stem for path in list_materials(folder)} for folder in folders}
-    groups = {name: [row for row in rows if row["material"] in members] for name, members in names.items()}
+def source_names(folders: list[Path]) -> dict[str, list[str]]:
+    """The material names of each source folder, by the folder's name (the card's sources)."""
+    return {folder.name: [path.stem for path in list_materials(folder)] for folder in folders}
+
+
+def by_source(rows: list[dict], sources: dict[str, list[str]]) -> dict[str, dict]:
+    """:func:`summary` of the rows of each source (:func:`source_names`), and of all."""
+    groups = {name: [row for row in rows if row["material"] in set(members)] for name, members in sources.items()}
     return {"all": summary(rows), **{name: {**summary(group), "n": len(group)} for name, group in groups.items()
                                      if group}}
 
@@ -79,8 +83,9 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
 
     ``reuse``: a finished run in ``work`` (its ``best.pt``) is evaluated, packed and documented
     again instead of trained anew."""
-    sources = [folder.name for folder in folders]
+    sources = source_names(folders)
     linked_data(folders, work / "data")
+    save_json(work / "sources.json", sources)  # for release/pack_encoder_mean.py's card
     cfg = load_config(config_path, data=str(work / "data"), out=str(work / "run"), seed=seed)
     cfg.progress = progress
     run = Run(cfg.out) if reuse and (Path(cfg.out) / "best.pt").exists() else train(cfg, overwrite=True)
@@ -89,14 +94,14 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
     refined = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, refine="latent",
                                   progress=progress)
     card = {"version": pretrained.VERSION, "command": run_metadata()["command"],
-            "training_config": json.loads(Path(config_path).read_text()), "data": sources,
+            "training_config": json.loads(Path(config_path).read_text()), "data": list(sources),
             "materials": {"train": len(run.split.train), "validation": len(run.split.val), "test": len(test)},
             "seed": seed, "best_epoch": run.best_epoch, "epochs": run.history[-1]["epoch"] + 1,
             # Training time without the validation renders, as the run logged it (a reused run's own).
             "training_seconds": round(run.history[-1].get("seconds", run.seconds or 0.0), 1),
             "trained_on": trained_on or run_metadata()["cpu"],
-            "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, folders),
-            "held_out_refined_by_source": by_source(refined, folders),
+            "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, sources),
+            "held_out_refined_by_source": by_source(refined, sources),
             "held_out_by_pattern": by_pattern(run.model(), test, seed=seed, progress=progress)}
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)
     packed = Model.pretrained(dest)
@@ -123,8 +128,8 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
   {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}
-- **Regenerate**: `bash release/train_shipped_model.sh` (the MERL fits, the RGL fits but the four measured
-  materials of [research/measurements.md](../research/measurements.md), the bank; then training and packing). These files
+- **Regenerate**: `bash release/train_shipped_model.sh` (the data, the decoder's training, its device encoders and
+  packing: [release/README.md](../release/README.md)). These files
   were packed by `{card['command']}`.
 - **Packing**: weights in float16; f_ref as ln(f_ref + ε) in 16 bits, differences along φ_d,
   compressed (relative error of f_ref + ε below 1e-4).

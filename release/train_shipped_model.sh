@@ -1,26 +1,42 @@
 #!/usr/bin/env bash
-# Regenerates the shipped model (docs/pretrained.md): the training folders from ../shared/data, one
-# training run (on a GPU where torch sees one: release/shipped_model.json says device "auto"), packing
-# and the model card. The four RGL materials whose real measurements research/measurements.md reports
-# are never trained on: their fits are left out here.
+# Regenerates the shipped model (docs/pretrained.md), version 9's recipe (research/results/version-9): the training
+# folders from ../shared/data, the decoder's training run (on a GPU where torch sees one: shipped_model.json says
+# device "auto"), its four device encoders, then the decoder with its own encoder and the four, `best-fit`, packed
+# into the package with its card.
 #
 #   bash release/train_shipped_model.sh [SHARED_DATA] [WORK]        # then: git diff python/frenbrdf/models/pretrained
 #
-# Version 7's decoder was trained by this config (version 4's, research/results/hue-turn, with the larger sizes of
-# research/results/capacity-v4) with version 4's 42 test tables held out, on a 2-core AMD EPYC Zen 4, one
-# thread, best epoch 547 of 623, 1,620 s (capacity-v4's train.sh, seed 0), then packed with --reuse and given its
-# device encoders by release/pack_encoder_mean.py (research/results/capacity-v4/README.md says how).
+# Data: the published NBRDF fits of the MERL materials, the RGL fits of every material that has no real measurement
+# in SHARED_DATA/rgl-measured, the measurements themselves (.bsdf), the default bank and 45 procedural families.
+# shipped_model.json holds out version 8's test tables (its `holdout`) for the card.
 set -euo pipefail
 SHARED=${1:-../shared/data}
 WORK=${2:-pretrained-work}
-HELD_OUT=" paper_white_rgb acrylic_felt_green_rgb vch_golden_yellow_rgb cg_sunflower_rgb "
+HERE=$(dirname "$0")
+mkdir -p "$WORK/measured"
 
 frenbrdf import-nbrdf "$SHARED"/merl-nbrdf/*.h5 "$WORK/merl" --quiet
-rgl=()
+fits=()
 for fit in "$SHARED"/rgl-nbrdf/*.h5; do
-    [[ "$HELD_OUT" == *" $(basename "$fit" .h5) "* ]] || rgl+=("$fit")
+    [[ -f "$SHARED/rgl-measured/$(basename "$fit" .h5).bsdf" ]] || fits+=("$fit")
 done
-frenbrdf import-nbrdf "${rgl[@]}" "$WORK/rgl-train" --quiet
+frenbrdf import-nbrdf "${fits[@]}" "$WORK/rgl-fits" --quiet
+for measurement in "$SHARED"/rgl-measured/*.bsdf; do ln -sfn "$(realpath "$measurement")" "$WORK/measured/"; done
 frenbrdf synth "$WORK/bank" --quiet
-python release/train_shipped_model.py --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-train" \
-    --config release/shipped_model.json --work "$WORK/pack" "${@:3}"
+frenbrdf synth "$WORK/families" --n 45 --seed 0 --mix families --quiet
+
+# The decoder, packed alone (WORK/base), trained on a folder of links to the five (WORK/base-work/data).
+python "$HERE/train_shipped_model.py" --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-fits" \
+    --data "$WORK/measured" --data "$WORK/families" --config "$HERE/shipped_model.json" --work "$WORK/base-work" \
+    --dest "$WORK/base" --card "$WORK/base.md" --quiet
+# Its four device encoders (research/results/folds-v8's amendment), two at a time.
+python "$HERE/../research/results/folds-v8/pipeline/encoder_configs.py" "$WORK/base-work/run/config.json" \
+    "$WORK/base" "$WORK/encoder-configs"
+KINDS="mixed-mean mixed-attention devices-mean devices-attention"
+for kind in $KINDS; do echo "$kind"; done | xargs -P 2 -L 1 bash -c \
+    'frenbrdf train --data "$0/base-work/data" --config "$0/encoder-configs/$1.json" --seed 0 --out "$0/encoders/$1" --quiet' \
+    "$WORK"
+members=()
+for kind in $KINDS; do members+=("$WORK/encoders/$kind"); done
+python "$HERE/pack_encoder_mean.py" --base "$WORK/base" --members "${members[@]}" --choice best-fit \
+    --why '[version-9](../research/results/version-9/README.md)' --version 9 --work "$WORK/base-work"

@@ -661,6 +661,21 @@ def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
     assert frenbrdf.Model.pretrained(tmp_path / "packed").card["held_out"] == card["held_out"]
     assert abs(card["held_out"]["packed"]["psnr"] - card["held_out"]["float32"]["psnr"]) < 0.1
     assert "| PSNR (dB) |" in (tmp_path / "card.md").read_text()
+    work = tmp_path / "work"
+    sources = json.loads((work / "sources.json").read_text())
+    assert list(sources) == [toy_materials.name] == card["data"]
+    test_count = card["materials"]["test"]
+    assert card["held_out_by_source"][toy_materials.name]["n"] == test_count
+    # Its encoders packed from the same work folder, as release/train_shipped_model.sh does last.
+    member = frenbrdf.training.train(frenbrdf.training.load_config(
+        str(config), data=str(work / "data"), out=str(tmp_path / "member"), seed=1,
+        decoder_from=str(tmp_path / "packed"), progress=False))
+    assert script_module("pack_encoder_mean").main([
+        "--base", str(tmp_path / "packed"), "--members", str(member.path), "--choice", "best-fit", "--version", "t",
+        "--work", str(work), "--dest", str(tmp_path / "packed-2"), "--card", str(tmp_path / "card-2.md")]) == 0
+    card = frenbrdf.Model.pretrained(tmp_path / "packed-2").card
+    assert card["encoders"]["members"] == [str(member.path)] and card["version"] == "t"
+    assert card["held_out_by_source"][toy_materials.name]["n"] == test_count
 
 
 #: The PSNR (dB, metric renderer, refine="full") the shipped model must reach on a bank material.
