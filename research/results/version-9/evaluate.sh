@@ -2,8 +2,8 @@
 # The scores of research/results/version-9 (README.md): the shipped version 8 (`pretrained`, the baseline) and the
 # candidate V9 (a packed folder), on the 40 held-out tables of folds-v8 (4,000 random valid bins, draw 0, encoder
 # and `latent`: the rule's reading) and the 19 measurements (encoder, `latent`, `full`: training data of V9); then
-# the 40 tables through issue 47's six patterns at 300, 1,500 and 4,000 samples, encoder (and `latent` at 1,500). Two processes, one thread
-# each (the patterns in two halves).
+# the 40 tables through issue 47's six patterns at 300, 1,500 and 4,000 samples, encoder (and `latent` at 1,500).
+# Two processes, one thread each (the patterns in two halves).
 #
 #   bash research/results/version-9/evaluate.sh V9 DATA OUT      (DATA: the 197 tables, local/fv8/data)
 set -euo pipefail
@@ -21,7 +21,8 @@ OMP_NUM_THREADS=1 $COMPARE --measurements ../shared/data/rgl-measured/*.bsdf --b
     --out "$OUT/measured" > "$OUT/measured.log" 2>&1 &
 wait
 for half in "merl-bins uniform in-plane" "gonioreflectometer image-based specular"; do
-    OMP_NUM_THREADS=1 $COMPARE "${HELD_OUT[@]}" --budgets none latent --samples 300 1500 4000 --refine-counts 1500 --patterns $half \
+    OMP_NUM_THREADS=1 $COMPARE "${HELD_OUT[@]}" --budgets none latent --patterns $half \
+        --samples 300 1500 4000 --refine-counts 1500 \
         --out "$OUT/patterns-${half%% *}" > "$OUT/patterns-${half%% *}.log" 2>&1 &
 done
 wait
