@@ -14,9 +14,17 @@ import pytest
 
 import frenbrdf
 from frenbrdf.data import synth
-from frenbrdf.data.analytic import FILM_THICKNESS_RANGE
-from frenbrdf.data.microfacet import fresnel, thin_film_fresnel
-from frenbrdf.data.synth import FAMILY_SHARES, FEATURE_SHARES, KIND_SHARES, KINDS, METALS, AnalyticMaterial
+from frenbrdf.data.analytic import FILM_THICKNESS_RANGE, FLAKE_GRATING_RANGE, MAX_GRATING_EFFICIENCY
+from frenbrdf.data.microfacet import SPECTRUM, fresnel, ring_density, spectrum_rgb, thin_film_fresnel
+from frenbrdf.data.synth import (
+    DIFFRACTIVE_SHARES,
+    FAMILY_SHARES,
+    FEATURE_SHARES,
+    KIND_SHARES,
+    KINDS,
+    METALS,
+    AnalyticMaterial,
+)
 from frenbrdf.io.merl import CHANNEL_SCALES, SHAPE
 from frenbrdf.io.outputs import MARKER
 
@@ -47,6 +55,11 @@ EXTREMES = {
     "white-pearl-flakes": AnalyticMaterial("white-pearl-flakes", diffuse=WHITE, flakes=1.0, flake_roughness=0.05,
                                            flake_film_thickness=FILM_THICKNESS_RANGE[0], flake_film_ior=3.0,
                                            coat=1.0, coat_roughness=0.01),
+    # the finest grating and the sharpest flakes: the orders take the most light, at the widest angles
+    "white-grating-flakes": AnalyticMaterial("white-grating-flakes", diffuse=WHITE, flakes=1.0, flake_roughness=0.02,
+                                             flake_grating=FLAKE_GRATING_RANGE[0],
+                                             flake_grating_efficiency=MAX_GRATING_EFFICIENCY, coat=1.0,
+                                             coat_roughness=0.01),
 }
 #: White dielectric bases are energy-preserving: they reflect all the light they receive.
 PRESERVING = ("white-lambert", "white-mirror-plastic", "white-rough-plastic", "white-fabric", "white-retro")
@@ -68,10 +81,15 @@ def families() -> list[AnalyticMaterial]:
 
 
 @pytest.fixture(scope="module")
-def one_of_each_kind(bank, features, families) -> dict[str, AnalyticMaterial]:
+def diffractive() -> list[AnalyticMaterial]:
+    return synth.material_bank(15, seed=0, mix="diffractive")
+
+
+@pytest.fixture(scope="module")
+def one_of_each_kind(bank, features, families, diffractive) -> dict[str, AnalyticMaterial]:
     """A material of every kind any mix draws (names end in the kind drawn: a glitter is a "carpaint")."""
-    return {kind: next(m for m in bank + features + families if m.name.endswith(f"-{kind}"))
-            for kind in {*KINDS, *FEATURE_SHARES, *FAMILY_SHARES}}
+    return {kind: next(m for m in bank + features + families + diffractive if m.name.endswith(f"-{kind}"))
+            for kind in {*KINDS, *FEATURE_SHARES, *FAMILY_SHARES, *DIFFRACTIVE_SHARES}}
 
 
 def directional_albedo(material: AnalyticMaterial, theta_i: float, n: int = 128) -> np.ndarray:
@@ -256,6 +274,10 @@ def test_top_lobes_that_reflect_more_than_all_light_are_refused():
         {"film_thickness": 300.0},  # a film lies on a coat
         {"film_thickness": 10.0, "coat": 1.0},
         {"metal_n": SILVER[0], "metal_k": SILVER[1], "flakes": 0.5},
+        {"flake_grating": 800.0},  # a grating lies on flakes
+        {"flakes": 0.5, "flake_grating": 100.0},  # no order of visible light would leave the surface
+        {"flakes": 0.5, "flake_grating": 800.0, "flake_film_thickness": 300.0},  # on aluminium flakes only
+        {"flakes": 0.5, "flake_grating": 800.0, "flake_grating_efficiency": 0.9},  # orders beyond all the light
     ],
 )
 def test_unphysical_feature_lobes_are_refused(fields):
@@ -348,6 +370,46 @@ def test_a_thin_film_tends_to_the_bare_coat_and_shifts_colour_with_angle():
     assert r[1] < 1e-12 and r[0] > 1e-4 and r[2] > 1e-4
     normal, oblique = thin_film_fresnel(np.array([[1.0], [0.5]]), 1.8, 400.0, 1.5)
     assert np.abs(normal / normal.sum() - oblique / oblique.sum()).max() > 0.05  # iridescence
+
+
+def test_grating_rings_hold_the_plane_and_the_spectrum_turns_white_light_white():
+    rho = np.linspace(0.0, 6.0, 600_001)
+    for radius, width in ((0.0, 0.05), (0.5, 0.04), (1.5, 0.3)):
+        mass = np.trapezoid(2 * np.pi * rho * ring_density(rho, radius, width), rho)
+        assert mass == pytest.approx(1.0, abs=1e-6), (radius, width)
+    weights = spectrum_rgb()
+    np.testing.assert_allclose(weights.sum(axis=0), 1.0)
+    assert np.all(weights >= 0)
+    peaks = np.array(SPECTRUM)[weights.argmax(axis=0)]  # red, green, blue: long, middle, short wavelengths
+    assert peaks[2] < 480 < peaks[1] < 580 < peaks[0]
+
+
+def test_a_grating_on_flakes_puts_rainbows_where_the_grating_equation_says():
+    """Each order lies where 2 μ_d sin θ_h = m λ / p, so its rings stay put in ρ = 2 μ_d sin θ_h, moving out in θ_h
+    as θ_d grows; red lies outside blue (dispersion); the orders take at most 1.25 η of the light."""
+    period, efficiency = 1000.0, 0.5
+    flakes = AnalyticMaterial("holo", diffuse=(0.0, 0.0, 0.0), flakes=1.0, flake_roughness=0.01,
+                              flake_grating=period, flake_grating_efficiency=efficiency)
+    for theta_d in np.radians([10.0, 40.0]):
+        theta_h = np.radians(np.linspace(3.0, 25.0, 2001))
+        half = np.stack([np.sin(theta_h), np.zeros_like(theta_h), np.cos(theta_h)], axis=-1)
+        # ω_i and ω_o at θ_d either side of the half vector, in the plane perpendicular to the one of θ_h
+        side = np.array([0.0, np.sin(theta_d), 0.0])
+        wi, wo = half * np.cos(theta_d) + side, half * np.cos(theta_d) - side
+        f = synth.evaluate(flakes, wi, wo)
+        rho = 2 * np.cos(theta_d) * np.sin(theta_h[f.argmax(axis=0)])  # where each channel's first order peaks
+        blue_wavelength, red_wavelength = (SPECTRUM[i] for i in spectrum_rgb()[:, [2, 0]].argmax(axis=0))
+        assert rho[2] == pytest.approx(blue_wavelength / period, abs=0.03), np.degrees(theta_d)
+        assert rho[0] == pytest.approx(red_wavelength / period, abs=0.03), np.degrees(theta_d)
+    for theta in np.radians([0.0, 45.0, 80.0]):
+        orders = directional_albedo(dataclasses.replace(flakes, flake_grating_efficiency=efficiency), theta)
+        mirror_only = directional_albedo(dataclasses.replace(flakes, flake_grating_efficiency=0.0), theta)
+        assert np.all(orders - (1 - 1.25 * efficiency) * mirror_only <= 1.25 * efficiency + 1e-3), theta
+
+
+def test_the_diffractive_mix_holds_grating_flakes_of_real_pigments(diffractive):
+    assert {m.kind for m in diffractive} == {"diffractive"}
+    assert all(500.0 <= m.flake_grating <= 2000.0 and m.coat > 0 for m in diffractive)  # 500–2,000 lines/mm
 
 
 def test_car_paint_flakes_tint_the_highlight_around_a_white_coat_glint():

@@ -38,7 +38,8 @@ def _synth(subparsers) -> None:
                        help="default: paints, plastics, metals, fabrics, clear coats; features: what real "
                             "measurements show beyond those (car-paint flakes, retro-reflection, thin films, "
                             "sheen, coats over saturated bases); families: thin-film iridescence, pearlescent "
-                            "pigments whose colour turns with angle, glitter of one hue over a base of another")
+                            "pigments whose colour turns with angle, glitter of one hue over a base of another; "
+                            "diffractive: flakes with a grating, rainbows about every highlight")
     synth.add_argument("--overwrite", action="store_true",
                        help="write into out_dir although it holds other files (they are kept)")
     synth.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -48,7 +48,14 @@ A material is a *base* under an optional clear *coat*:
   s · c_flake · f_aluminium``, a mixture of two bases each reflecting at most all light.
   Interference (pearlescent) pigments replace the aluminium by mica flakes under a thin
   high-index film (titanium dioxide): their lobe's Fresnel factor is Airy's, so the colour
-  the flakes reflect turns with θ_d, as in colour-shift paints and films;
+  the flakes reflect turns with θ_d, as in colour-shift paints and films. Diffractive
+  ("holographic") pigments put a grating of period ``p`` on the aluminium flakes: a share ``η``
+  of their light goes into the first orders and ``η/4`` into the second, each a ring where
+  ``2 μ_d sin θ_h = m λ / p`` (:func:`~frenbrdf.data.microfacet.ring_density`: the grating
+  equation; as wide as the flakes' tilts turn a reflection) integrated over the visible
+  spectrum to RGB, the rest stays in the mirror lobe: rainbows about every highlight that
+  move out with θ_d. The orders reflect at most ``1.25 η`` of the light (microfacet.py says
+  why), the mirror lobe at most ``1 − 1.25 η``;
 - coat of weight ``c``: ``f = c · f_coat + (1 − c E_c(μ_i)) (1 − c E_c(μ_o)) · f_base``,
   with ``f_coat`` a GGX dielectric lobe (white, or coloured by a thin film) and ``E_c`` its
   directional albedo, the fraction of light the coat reflects (its Fresnel reflectance
@@ -102,7 +109,7 @@ import numpy as np
 
 from ..io.merl import CHANNEL_SCALES
 from .hemisphere import RETRO_QUADRATURE_NODES, Albedo, Geometry, directional_albedo, geometry, merl_geometry
-from .microfacet import fresnel, ggx_d, ggx_visibility, thin_film_fresnel
+from .microfacet import SPECTRUM, fresnel, ggx_d, ggx_visibility, ring_density, spectrum_rgb, thin_film_fresnel
 
 #: Complex refractive index (n, k) per RGB channel of some metals (the metals of a synthetic bank).
 METALS = {
@@ -125,6 +132,11 @@ RETRO_MIN_ROUGHNESS = 0.05
 FILM_THICKNESS_RANGE = (50.0, 2000.0)
 #: Refractive index of the mica flakes under an interference pigment's film.
 MICA_IOR = 1.55
+#: Grating periods accepted on diffractive flakes, in nm: from where the first order of red light still leaves the
+#: surface at normal incidence (p > λ/2) to where the orders crowd into the highlight.
+FLAKE_GRATING_RANGE = (350.0, 5000.0)
+#: Most of a grating flake's light its orders take (η of the first, η/4 of the second: at most all of it).
+MAX_GRATING_EFFICIENCY = 0.8
 
 RGB = tuple[float, float, float]
 
@@ -174,6 +186,10 @@ class AnalyticMaterial:
     """Thickness in nm of a thin film on mica flakes (0: aluminium flakes): interference pigments."""
     flake_film_ior: float = 2.5
     """Refractive index of the film on the flakes (titanium dioxide: about 2.5)."""
+    flake_grating: float = 0.0
+    """Period in nm of a grating on aluminium flakes (0: none): diffractive pigments."""
+    flake_grating_efficiency: float = 0.3
+    """Share η of the grating flakes' light diffracted into the first orders (η/4 more into the second)."""
     retro: RGB = (0.0, 0.0, 0.0)
     """Weight per channel of a dielectric base's retro-reflective lobe (0: none)."""
     retro_roughness: float = 0.3
@@ -215,14 +231,23 @@ class AnalyticMaterial:
                 _check_range(self.name, field, getattr(self, field), *FILM_THICKNESS_RANGE)
         if self.flake_film_thickness and not self.flakes:
             raise ValueError(f"{self.name}: a flake film lies on flakes; give flakes > 0")
+        if self.flake_grating:
+            _check_range(self.name, "flake_grating", self.flake_grating, *FLAKE_GRATING_RANGE)
+            if not self.flakes or self.flake_film_thickness:
+                raise ValueError(f"{self.name}: a grating lies on aluminium flakes; give flakes > 0 and no flake film")
+        _check_range(self.name, "flake_grating_efficiency", self.flake_grating_efficiency, 0.0,
+                     MAX_GRATING_EFFICIENCY)
 
     @property
     def kind(self) -> str:
         """The feature that names the material, the first that applies of ``"iridescent"``
-        (thin film), ``"pearlescent"`` (interference flakes), ``"carpaint"`` (flakes), ``"coated"``,
+        (thin film), ``"diffractive"`` (grating flakes), ``"pearlescent"`` (interference flakes),
+        ``"carpaint"`` (flakes), ``"coated"``,
         ``"metal"``, ``"retroreflective"``, ``"fabric"`` (sheen), ``"plastic"`` and ``"diffuse"``."""
         if self.film_thickness:
             return "iridescent"
+        if self.flake_grating:
+            return "diffractive"
         if self.flake_film_thickness:
             return "pearlescent"
         if self.flakes:
@@ -291,11 +316,28 @@ def _metal_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
 
 
 def _flake_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
-    """Tinted flakes whose orientations spread as a GGX distribution: aluminium, or mica under a thin film."""
+    """Tinted flakes whose orientations spread as a GGX distribution: aluminium, aluminium under a grating, or mica
+    under a thin film."""
+    if m.flake_grating:
+        mirror = (1.0 - 1.25 * m.flake_grating_efficiency) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
+        return np.asarray(m.flake_colour) * (mirror + _grating_orders(m, g))
     if not m.flake_film_thickness:
         return np.asarray(m.flake_colour) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
     film = thin_film_fresnel(g.cos_d, m.flake_film_ior, m.flake_film_thickness, MICA_IOR)
     return np.asarray(m.flake_colour) * film * _facets(g, m.flake_roughness)
+
+
+def _grating_orders(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
+    """The grating flakes' first and second orders: per order and wavelength a ring in the plane of the directions'
+    tangential parts (:func:`~frenbrdf.data.microfacet.ring_density`), as wide as the flakes' tilts turn a
+    reflection (2α), weighted to RGB over the spectrum, with aluminium's Fresnel reflectance."""
+    rho = 2.0 * g.cos_d * np.sqrt(np.maximum(1.0 - g.cos_h * g.cos_h, 0.0))  # |ω_i,t + ω_o,t|
+    rings = 0.0
+    for order, efficiency in ((1, m.flake_grating_efficiency), (2, m.flake_grating_efficiency / 4)):
+        for wavelength, rgb in zip(SPECTRUM, spectrum_rgb(), strict=True):
+            rings = rings + efficiency * rgb * ring_density(rho, order * wavelength / m.flake_grating,
+                                                             2.0 * m.flake_roughness)
+    return rings * fresnel(g.cos_d, *METALS["aluminium"])
 
 
 def _top_lobes(m: AnalyticMaterial, g: Geometry) -> np.ndarray | float:

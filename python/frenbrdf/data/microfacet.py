@@ -23,15 +23,29 @@ interface from air into a medium of complex refractive index ``n + i k`` (Born &
     F   = (R_s + R_p) / 2
 
 Dielectrics are the case ``k = 0``.
+
+*Grating rings* (:func:`ring_density`): a grating of period ``p`` on flakes parallel to the surface sends order
+``m`` of wavelength ``λ`` where the tangential parts of ``ω_i`` and ``ω_o`` add up to ``m λ / p`` (the grating
+equation), that is where ``ρ = |ω_i,t + ω_o,t| = 2 μ_d sin θ_h = m λ / p``. A flake's grating lies at any angle in
+its plane, so each order of each wavelength is a ring in the plane of tangential parts, blurred by the flakes'
+tilts: rainbows about every highlight that move out as θ_d grows (diffractive, "holographic" pigments). As
+``μ_o dω_o`` is the area element of that plane, ``f = η F(μ_d) R(ρ)`` with ``R`` a density on the plane
+(``∫ R d²u = 1``) reflects ``η F`` times the part of the ring inside the unit disk: at most ``η``.
 """
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+from scipy.special import erf
 
 #: Wavelengths (nm) at which the RGB channels evaluate a thin film (as the metals' ``n, k`` of
 #: :data:`frenbrdf.data.analytic.METALS` are given).
 WAVELENGTHS = (650.0, 550.0, 450.0)
+
+#: Wavelengths (nm) over which a diffracting lobe is integrated (:func:`spectrum_rgb`).
+SPECTRUM = tuple(float(w) for w in range(400, 701, 10))
 
 
 def fresnel(cos: np.ndarray, n, k) -> np.ndarray:
@@ -88,3 +102,32 @@ def thin_film_fresnel(cos: np.ndarray, film_ior: float, thickness: float, substr
         cross = 2.0 * r12 * r23 * np.cos(delta)
         polarised.append((r12**2 + r23**2 + cross) / (1.0 + (r12 * r23) ** 2 + cross))
     return 0.5 * (polarised[0] + polarised[1])
+
+
+def ring_density(rho: np.ndarray, radius: float | np.ndarray, width: float) -> np.ndarray:
+    """A density on the plane, ``∫ R d²u = 1``, on a ring: Gaussian in the distance ``rho`` from the origin about
+    ``radius`` with standard deviation ``width``."""
+    # 2π ∫₀^∞ exp(−(ρ − r)² / 2w²) ρ dρ, in closed form.
+    w2 = width * width
+    mass = 2.0 * np.pi * (w2 * np.exp(-radius * radius / (2.0 * w2))
+                          + radius * width * np.sqrt(np.pi / 2.0) * (1.0 + erf(radius / (width * np.sqrt(2.0)))))
+    return np.exp(-(rho - radius) ** 2 / (2.0 * w2)) / mass
+
+
+@functools.cache
+def spectrum_rgb() -> np.ndarray:
+    """Linear sRGB weights ``(len(SPECTRUM), 3)`` of each wavelength of :data:`SPECTRUM`, each channel summing to 1
+    (an equal-energy spectrum is white): the CIE 1931 matching functions in the analytic fit of Wyman, Sloan &
+    Shirley 2013 ("Simple analytic approximations to the CIE XYZ color matching functions"), to sRGB (D65) with
+    what falls outside its gamut clipped to 0."""
+    wavelengths = np.array(SPECTRUM)
+
+    def lobe(mean, left, right):
+        return np.exp(-0.5 * ((wavelengths - mean) / np.where(wavelengths < mean, left, right)) ** 2)
+
+    xyz = np.stack([1.056 * lobe(599.8, 37.9, 31.0) + 0.362 * lobe(442.0, 16.0, 26.7) - 0.065 * lobe(501.1, 20.4, 26.2),
+                    0.821 * lobe(568.8, 46.9, 40.5) + 0.286 * lobe(530.9, 16.3, 31.1),
+                    1.217 * lobe(437.0, 11.8, 36.0) + 0.681 * lobe(459.0, 26.0, 13.8)], axis=1)
+    to_srgb = np.array([[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]])
+    rgb = np.maximum(xyz @ to_srgb.T, 0.0)
+    return rgb / rgb.sum(axis=0)

@@ -45,7 +45,7 @@ from .analytic import (
 )
 from .microfacet import ggx_d, ggx_visibility
 
-__all__ = ["FAMILY_SHARES", "FEATURE_SHARES", "KINDS", "KIND_SHARES", "MANIFEST_NAME", "MIXES", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
+__all__ = ["DIFFRACTIVE_SHARES", "FAMILY_SHARES", "FEATURE_SHARES", "KINDS", "KIND_SHARES", "MANIFEST_NAME", "MIXES", "METALS", "MIN_ROUGHNESS", "RGB", "SHEEN_ROUGHNESS_RANGE",
            "AnalyticMaterial", "draw_material", "evaluate", "ggx_d", "ggx_visibility", "material_bank", "merl_table", "write_bank"]
 
 #: The kinds of material in the default bank, and the share of each.
@@ -64,8 +64,14 @@ FEATURE_SHARES = {"carpaint": 0.30, "retroreflective": 0.20, "iridescent": 0.15,
 #: coat (colour-shift paints and wraps), and glitter: sparkles of one hue over a base of another.
 FAMILY_SHARES = {"iridescent": 1 / 3, "pearlescent": 1 / 3, "glitter": 1 / 3}
 
+#: The ``diffractive`` mix: flake paints whose flakes carry a grating, rainbows about every highlight (RGL's
+#: irid_flake_paint2, which no family above imitates). A mix of its own, so that the ``families`` banks that
+#: trained the shipped model stay as they were drawn.
+DIFFRACTIVE_SHARES = {"diffractive": 1.0}
+
 #: The banks :func:`material_bank` can draw, by name.
-MIXES = {"default": KIND_SHARES, "features": FEATURE_SHARES, "families": FAMILY_SHARES}
+MIXES = {"default": KIND_SHARES, "features": FEATURE_SHARES, "families": FAMILY_SHARES,
+         "diffractive": DIFFRACTIVE_SHARES}
 
 #: The manifest written next to the tables by :func:`write_bank`.
 MANIFEST_NAME = "bank.json"
@@ -222,10 +228,19 @@ def _sample_glitter(rng: np.random.Generator) -> tuple[str, dict]:
     return _flake_paint(rng, lambda r: r.uniform(0.2, 0.8), (0.6, 1.0), (0.1, 0.5), (0.02, 0.15))
 
 
+def _sample_diffractive(rng: np.random.Generator) -> tuple[str, dict]:
+    # Aluminium flakes carrying a grating of 500–2,000 lines/mm (holographic pigments) over a dark, mostly greyish
+    # base under a clear coat; the flakes tilt little, so their rings stay sharp.
+    base = _saturated_colour(rng, rng.uniform(), saturation=(0.0, 0.6), value=(0.03, 0.35))
+    flakes = {"flakes": rng.uniform(0.2, 0.7), "flake_roughness": _log_uniform(rng, 0.02, 0.15),
+              "flake_grating": _log_uniform(rng, 500.0, 2000.0), "flake_grating_efficiency": rng.uniform(0.1, 0.6)}
+    return _colour_name(base), {"diffuse": base, **flakes, **_clear_coat(rng)}
+
+
 _SAMPLERS = {"diffuse": _sample_diffuse, "plastic": _sample_plastic, "metal": _sample_metal,
              "fabric": _sample_fabric, "coated": _sample_coated, "carpaint": _sample_carpaint,
              "retroreflective": _sample_retroreflective, "iridescent": _sample_iridescent,
-             "pearlescent": _sample_pearlescent, "glitter": _sample_glitter}
+             "pearlescent": _sample_pearlescent, "glitter": _sample_glitter, "diffractive": _sample_diffractive}
 
 
 def draw_material(rng: np.random.Generator, kind: str | None = None, name: str = "{label}-{kind}") -> AnalyticMaterial:

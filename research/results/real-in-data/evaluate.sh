@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# The scores of research/results/real-in-data (README.md): the three `mf` runs (WORK/mf-f0-s0 … f2-s0), each on
+# The scores of research/results/real-in-data (README.md): the `mf` runs (each WORK/mf-fF-sS with a best.pt), each on
 # the measurements of its own fold (it trained on the others), 4,000 random valid bins (draw 0: folds-v8's draws),
 # encoder, `latent` and `full`; and on the 40 held-out tables, encoder and `latent`; two processes, one thread
 # each. Then issue 47's table: each measurement through random bins and the five device patterns at 1,500 samples
 # (folds-v8's patterns-v8 draws), encoder, `latent`, and `latent` with the coverage weights of `frenbrdf
 # reconstruct` (K = 32). decide.py pairs these rows with folds-v8's `v8` rows.
 #
-#   bash research/results/real-in-data/evaluate.sh WORK DATA OUT
+#   [ARMS="mf mfd"] bash research/results/real-in-data/evaluate.sh WORK DATA OUT   (ARMS: research/results/diffractive)
 #   (DATA the 197 tables the `v8` runs trained on, whose held-out ones are read)
 set -euo pipefail
 WORK=${1:?WORK folder}; DATA=${2:?DATA folder}; OUT=${3:?OUT folder}
@@ -14,9 +14,13 @@ HERE=$(dirname "$0")
 COMPARE="python $HERE/../../studies/compare_models.py"
 FOLDS="python $HERE/../../studies/measured_folds/folds.py"
 models=(); labels=(); trained_on=()
-for fold in 0 1 2; do
-    models+=("$WORK/mf-f$fold-s0"); labels+=("mf/f$fold-s0")
-    for name in $($FOLDS others "$fold"); do trained_on+=("mf/f$fold-s0=$name"); done
+for arm in ${ARMS:-mf}; do  # the first arm is the baseline of the differences
+    for run in "$WORK/$arm"-f[012]-s*; do
+        [[ -f $run/best.pt ]] || continue
+        label=$arm/${run##*/$arm-}; fold=${label#*/f}; fold=${fold%%-*}
+        models+=("$run"); labels+=("$label")
+        for name in $($FOLDS others "$fold"); do trained_on+=("$label=$name"); done
+    done
 done
 mkdir -p "$OUT"
 OMP_NUM_THREADS=1 $COMPARE --models "${models[@]}" --labels "${labels[@]}" --trained-on "${trained_on[@]}" \
