@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The scores of research/results/real-in-data (README.md): the `mf` runs (each WORK/mf-fF-sS with a best.pt), each on
+# The scores of research/results/real-in-data (README.md): the finished `mf` runs (WORK/mf-fF-sS), each on
 # the measurements of its own fold (it trained on the others), 4,000 random valid bins (draw 0: folds-v8's draws),
 # encoder, `latent` and `full`; and on the 40 held-out tables, encoder and `latent`; two processes, one thread
 # each. Then issue 47's table: each measurement through random bins and the five device patterns at 1,500 samples
@@ -16,7 +16,7 @@ FOLDS="python $HERE/../../studies/measured_folds/folds.py"
 models=(); labels=(); trained_on=()
 for arm in ${ARMS:-mf}; do  # the first arm is the baseline of the differences
     for run in "$WORK/$arm"-f[012]-s*; do
-        [[ -f $run/best.pt ]] || continue
+        grep -q "best epoch" "$run.log" 2> /dev/null || continue  # finished: train.sh's log ends with it
         label=$arm/${run##*/$arm-}; fold=${label#*/f}; fold=${fold%%-*}
         models+=("$run"); labels+=("$label")
         for name in $($FOLDS others "$fold"); do trained_on+=("$label=$name"); done
