@@ -54,8 +54,8 @@ A material is a *base* under an optional clear *coat*:
   ``2 μ_d sin θ_h = m λ / p`` (:func:`~frenbrdf.data.microfacet.ring_density`: the grating
   equation; as wide as the flakes' tilts turn a reflection) integrated over the visible
   spectrum to RGB, the rest stays in the mirror lobe: rainbows about every highlight that
-  move out with θ_d. The orders reflect at most ``1.25 η`` of the light (microfacet.py says
-  why), the mirror lobe at most ``1 − 1.25 η``;
+  move out with θ_d. The orders reflect at most ``1.25 η`` of the light (:mod:`~frenbrdf.data.microfacet`
+  says why), the mirror lobe at most ``1 − 1.25 η``;
 - coat of weight ``c``: ``f = c · f_coat + (1 − c E_c(μ_i)) (1 − c E_c(μ_o)) · f_base``,
   with ``f_coat`` a GGX dielectric lobe (white, or coloured by a thin film) and ``E_c`` its
   directional albedo, the fraction of light the coat reflects (its Fresnel reflectance
@@ -132,8 +132,8 @@ RETRO_MIN_ROUGHNESS = 0.05
 FILM_THICKNESS_RANGE = (50.0, 2000.0)
 #: Refractive index of the mica flakes under an interference pigment's film.
 MICA_IOR = 1.55
-#: Grating periods accepted on diffractive flakes, in nm: from where the first order of red light still leaves the
-#: surface at normal incidence (p > λ/2) to where the orders crowd into the highlight.
+#: Grating periods accepted on diffractive flakes, in nm: from where the first order of red light (700 nm) can
+#: still leave the surface, at grazing incidence (p ≥ λ/2), to where the orders crowd into the highlight.
 FLAKE_GRATING_RANGE = (350.0, 5000.0)
 #: Most of a grating flake's light its orders take (η of the first, η/4 of the second: at most all of it).
 MAX_GRATING_EFFICIENCY = 0.8

@@ -130,4 +130,6 @@ def spectrum_rgb() -> np.ndarray:
                     1.217 * lobe(437.0, 11.8, 36.0) + 0.681 * lobe(459.0, 26.0, 13.8)], axis=1)
     to_srgb = np.array([[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]])
     rgb = np.maximum(xyz @ to_srgb.T, 0.0)
-    return rgb / rgb.sum(axis=0)
+    weights = rgb / rgb.sum(axis=0)
+    weights.flags.writeable = False  # cached: one array for every caller
+    return weights
