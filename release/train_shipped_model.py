@@ -146,7 +146,8 @@ With the latent refined on the same samples (`--refine latent`; `frenbrdf recons
 {by_source_text(card['held_out_refined_by_source'])}.
 
 {patterns_text(card)}
-Real gonio-photometer measurements that no training saw: [research/measurements.md](../research/measurements.md).
+Real gonio-photometer measurements: [research/measurements.md](../research/measurements.md); this recipe on measurements
+outside its training, judged by folds: [results.md](results.md#with-real-measurements-in-the-training-data).
 """
 
 

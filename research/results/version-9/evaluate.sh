@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# The scores of research/results/version-9 (README.md): the shipped version 8 (`pretrained`, the baseline) and the
-# candidate V9 (a packed folder), on the 40 held-out tables of folds-v8 (4,000 random valid bins, draw 0, encoder
-# and `latent`: the rule's reading) and the 19 measurements (encoder, `latent`, `full`: training data of V9); then
+# The scores of research/results/version-9 (README.md): version 8 (V8, the baseline) and the candidate V9 (packed
+# folders; version 8's three files are in git before version 9 replaced them, e.g. `git show
+# 5702e44:python/frenbrdf/models/pretrained/model.pt`), on the 40 held-out tables of folds-v8 (4,000 random valid
+# bins, draw 0, encoder and `latent`: the rule's reading) and the 19 measurements (encoder, `latent`, `full`: training data of V9); then
 # the 40 tables through issue 47's six patterns at 300, 1,500 and 4,000 samples, encoder (and `latent` at 1,500).
 # Two processes, one thread each (the patterns in two halves).
 #
-#   bash research/results/version-9/evaluate.sh V9 DATA OUT      (DATA: the 197 tables, local/fv8/data)
+#   bash research/results/version-9/evaluate.sh V8 V9 DATA OUT      (DATA: the 197 tables, local/fv8/data)
 set -euo pipefail
-V9=${1:?V9 packed folder}; DATA=${2:?DATA folder}; OUT=${3:?OUT folder}
+V8=${1:?V8 packed folder}; V9=${2:?V9 packed folder}; DATA=${3:?DATA folder}; OUT=${4:?OUT folder}
 HERE=$(dirname "$0")
-COMPARE="python $HERE/../../studies/compare_models.py --models pretrained $V9 --labels v8 v9 --resolution 128"
+COMPARE="python $HERE/../../studies/compare_models.py --models $V8 $V9 --labels v8 v9 --resolution 128"
 FOLDS="python $HERE/../../studies/measured_folds/folds.py"
 HELD_OUT=(--held-out "$HERE/../folds-v8/config-v8.json" "$DATA")
 mkdir -p "$OUT"

@@ -3,7 +3,10 @@ through random bins (4,000) and through a device's pattern (1,500, at most one c
 and version 9 from their encoders, and version 9 with `latent` as `frenbrdf reconstruct` runs it for the pattern
 (the coverage weights, K = 32, for a device's samples); draw 0, as compare_models.py draws them.
 
-    python research/results/version-9/look.py OUT V9 DATA research/results/version-9/look.jpg
+    python research/results/version-9/look.py OUT V8 V9 DATA research/results/version-9/look.jpg
+
+V8 and V9 are packed folders (version 8's: its three files from git, e.g. ``git show
+5702e44:python/frenbrdf/models/pretrained/model.pt``).
 """
 
 from __future__ import annotations
@@ -13,7 +16,6 @@ import sys
 from collections import defaultdict
 from pathlib import Path
 
-from frenbrdf import Model
 from frenbrdf.io.patterns import DEFAULT as RANDOM_BINS
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.render.renderer import Scene, material_mask
@@ -41,11 +43,11 @@ def worst(rows: list[dict], devices: bool, count: int) -> list[tuple[str, str]]:
     return cases[:CASES["devices" if devices else "random bins"]]
 
 
-def main(out: str, v9: str, data: str, figure: str) -> None:
+def main(out: str, v8: str, v9: str, data: str, figure: str) -> None:
     tables = json.loads((Path(out) / "tables" / "compare.json").read_text())["rows"]
     patterns = [row for half in sorted(Path(out).glob("patterns-*/compare.json"))
                 for row in json.loads(half.read_text())["rows"]]
-    v8, v9 = Model.pretrained(), load_model(v9)
+    v8, v9 = load_model(v8), load_model(v9)
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
@@ -60,4 +62,4 @@ def main(out: str, v9: str, data: str, figure: str) -> None:
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:5])
+    main(*sys.argv[1:6])
