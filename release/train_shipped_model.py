@@ -72,7 +72,8 @@ def source_names(folders: list[Path]) -> dict[str, list[str]]:
 
 def by_source(rows: list[dict], sources: dict[str, list[str]]) -> dict[str, dict]:
     """:func:`summary` of the rows of each source (:func:`source_names`), and of all."""
-    groups = {name: [row for row in rows if row["material"] in set(members)] for name, members in sources.items()}
+    members = {name: set(names) for name, names in sources.items()}
+    groups = {name: [row for row in rows if row["material"] in names] for name, names in members.items()}
     return {"all": summary(rows), **{name: {**summary(group), "n": len(group)} for name, group in groups.items()
                                      if group}}
 
