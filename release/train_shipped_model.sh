@@ -13,6 +13,7 @@ set -euo pipefail
 SHARED=${1:-../shared/data}
 WORK=${2:-pretrained-work}
 HERE=$(dirname "$0")
+source "$HERE/link_inputs.sh"
 mkdir -p "$WORK/measured"
 
 frenbrdf import-nbrdf "$SHARED"/merl-nbrdf/*.h5 "$WORK/merl" --quiet
@@ -21,7 +22,7 @@ for fit in "$SHARED"/rgl-nbrdf/*.h5; do
     [[ -f "$SHARED/rgl-measured/$(basename "$fit" .h5).bsdf" ]] || fits+=("$fit")
 done
 frenbrdf import-nbrdf "${fits[@]}" "$WORK/rgl-fits" --quiet
-for measurement in "$SHARED"/rgl-measured/*.bsdf; do ln -sfn "$(realpath "$measurement")" "$WORK/measured/"; done
+link_into "$WORK/measured" "$SHARED"/rgl-measured/*.bsdf
 frenbrdf synth "$WORK/bank" --quiet
 frenbrdf synth "$WORK/families" --n 45 --seed 0 --mix families --quiet
 

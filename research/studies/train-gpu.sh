@@ -18,6 +18,7 @@ set -uo pipefail
 export PYTHONPATH=$PWD/python PYTHONUNBUFFERED=1
 SHARED=${SHARED:-.devdata}
 WORK=${WORK:-/tmp/gpu-runs}
+source "$(dirname "$0")/../../release/link_inputs.sh"
 OUT=${OUT:-$WORK/out}
 LIMIT=${LIMIT:-470}
 DEVICE=${DEVICE:-cuda}
@@ -46,9 +47,10 @@ if [[ -z ${RESUME:-} ]]; then
     frenbrdf synth "$WORK/bank" ${BANK_N:+--n $BANK_N} --quiet &
     wait
     mkdir -p "$WORK/data"
-    # Links a failed earlier try on the same warm machine left (one dangling one failed the next); only links go.
-    find "$WORK/data" -maxdepth 1 -type l -delete
-    ln -sf "$WORK"/{merl-a,merl-b,rgl,bank}/*.binary "$WORK/data/"
+    # A failed earlier try on the same warm machine can leave links into its own folders dangling (one failed the
+    # next): those go, and nothing else in the folder.
+    find "$WORK/data" -maxdepth 1 -xtype l -lname "$(realpath "$WORK")/*" -delete
+    link_into "$WORK/data" "$WORK"/{merl-a,merl-b,rgl,bank}/*.binary || exit 1
     echo "tables: $(ls "$WORK/data" | wc -l) in $((SECONDS - start)) s"
     md5sum "$WORK"/data/{alumina-oxide,cm_white_rgb,synth-000-orange-fabric}.binary
 fi

@@ -9,7 +9,8 @@ D=research/results/bright-carpaint
 frenbrdf() { python -m frenbrdf.cli "$@"; }
 [[ -d $W/bank ]] || python $D/bank.py $W/bank
 mkdir -p $W/data
-ln -sf "$PWD"/local/v2/data/*.binary "$PWD"/$W/bank/*.binary $W/data/
+source release/link_inputs.sh  # run from the repository root, as the paths here are
+link_into $W/data "$PWD"/local/v2/data/*.binary "$PWD"/$W/bank/*.binary
 echo "tables: $(ls $W/data | wc -l)"
 train() {  # seed threads
     OMP_NUM_THREADS=$2 MKL_NUM_THREADS=$2 frenbrdf train --data $W/data --config research/results/hue-turn/config.json \

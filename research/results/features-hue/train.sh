@@ -8,7 +8,8 @@ W=local/feat-hue
 frenbrdf() { python -m frenbrdf.cli "$@"; }
 [[ -d $W/features ]] || frenbrdf synth $W/features --mix features --n 60 --seed 1 --quiet
 mkdir -p $W/data
-ln -sf "$PWD"/local/v2/data/*.binary "$PWD"/$W/features/*.binary $W/data/
+source release/link_inputs.sh  # run from the repository root, as the paths here are
+link_into $W/data "$PWD"/local/v2/data/*.binary "$PWD"/$W/features/*.binary
 echo "tables: $(ls $W/data | wc -l)"
 train() {  # seed threads
     OMP_NUM_THREADS=$2 MKL_NUM_THREADS=$2 frenbrdf train --data $W/data --config research/results/hue-turn/config.json \

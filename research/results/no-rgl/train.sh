@@ -6,7 +6,8 @@ set -eu
 export PYTHONPATH=$PWD/python
 W=local/no-rgl
 mkdir -p $W/data
-for f in "$PWD"/local/v2/data/*.binary; do [[ $f == *_rgb.binary ]] || ln -sf "$f" $W/data/; done
+source release/link_inputs.sh  # run from the repository root, as the paths here are
+for f in "$PWD"/local/v2/data/*.binary; do [[ $f == *_rgb.binary ]] || link_into $W/data "$f"; done
 echo "tables: $(ls $W/data | wc -l)"
 train() {  # seed threads
     OMP_NUM_THREADS=$2 MKL_NUM_THREADS=$2 python -m frenbrdf.cli train --data $W/data \

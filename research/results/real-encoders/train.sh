@@ -9,11 +9,12 @@
 set -euo pipefail
 V4DATA=${1:?}; FAMILIES=${2:?}; BASE=${3:?}; WORK=${4:?}
 MEASURED=${MEASURED:-../shared/data/rgl-measured}
+source "$(dirname "$0")/../../../release/link_inputs.sh"
 mkdir -p "$WORK/data"
-for path in "$V4DATA"/* "$FAMILIES"/*.binary; do ln -sfn "$(realpath "$path")" "$WORK/data/"; done
+link_into "$WORK/data" "$V4DATA"/* "$FAMILIES"/*.binary
 while read -r name; do
     # Beside the material's fit, under a name of its own (a folder holds one file per material).
-    if [[ -f "$MEASURED/$name.bsdf" ]]; then ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$WORK/data/$name-measured.bsdf"; fi
+    if [[ -f "$MEASURED/$name.bsdf" ]]; then link_as "$WORK/data/$name-measured.bsdf" "$MEASURED/$name.bsdf"; fi
 done < research/studies/sampling_patterns/v4-trained-on.txt
 echo "$(ls "$WORK"/data/*.bsdf | wc -l) measurements, $(ls "$WORK"/data/*.binary | wc -l) tables in $WORK/data"
 # The base run's config, its data and output fields aside (the command line gives them).

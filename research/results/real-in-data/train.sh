@@ -11,13 +11,14 @@ DATA=${1:?DATA folder}; FAMILIES=${2:?FAMILIES bank folder}; WORK=${3:?WORK fold
 MEASURED=${4:-../shared/data/rgl-measured}
 SEED=${SEED:-0}; ARM=${ARM:-mf}
 HERE=$(dirname "$0")
+source "$HERE/../../../release/link_inputs.sh"
 CONFIG=$HERE/../folds-v8/config-v8.json
 for fold in 0 1 2; do
     folder="$WORK/data-$ARM-f$fold"
     mkdir -p "$folder"
-    for path in "$DATA"/* "$FAMILIES"/*.binary; do ln -sfn "$(realpath "$path")" "$folder/"; done
+    link_into "$folder" "$DATA"/* "$FAMILIES"/*.binary
     for name in $(python "$HERE/../../studies/measured_folds/folds.py" others "$fold"); do
-        ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$folder/"
+        link_into "$folder" "$MEASURED/$name.bsdf"
     done
 done
 for fold in 0 1 2; do echo "$fold"; done | OMP_NUM_THREADS=1 xargs -P 3 -L 1 bash -c \

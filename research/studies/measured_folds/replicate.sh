@@ -8,8 +8,9 @@
 #   bash research/studies/measured_folds/replicate.sh DATA CONFIG OLDWORK WORK
 set -euo pipefail
 DATA=${1:?DATA folder}; CONFIG=${2:?CONFIG json}; OLDWORK=${3:?train.sh WORK folder}; WORK=${4:?new WORK folder}
+source "$(dirname "$0")/../../../release/link_inputs.sh"
 mkdir -p "$WORK"
-for fold in 0 1 2; do ln -sfn "$(realpath "$OLDWORK/data-f$fold-families")" "$WORK/data-f$fold-families"; done
+for fold in 0 1 2; do link_into "$WORK" "$OLDWORK/data-f$fold-families"; done
 # One run per line: the data folder, the seed, the run's name.
 {
     for seed in 3 4; do echo "$DATA $seed fits-s$seed"; done

@@ -10,11 +10,12 @@ set -euo pipefail
 DATA=${1:?DATA folder}; CONFIG=${2:?CONFIG json}; WORK=${3:?WORK folder}
 MEASURED=${4:-../shared/data/rgl-measured}
 HERE=$(dirname "$0")
+source "$HERE/../../../release/link_inputs.sh"
 for fold in 0 1 2; do
     folder="$WORK/data-f$fold"
     mkdir -p "$folder"
-    for path in "$DATA"/*; do ln -sfn "$(realpath "$path")" "$folder/"; done
-    python - "$HERE/folds.json" "$fold" <<'PY' | while read -r name; do ln -sfn "$(realpath "$MEASURED/$name.bsdf")" "$folder/"; done
+    link_into "$folder" "$DATA"/*
+    python - "$HERE/folds.json" "$fold" <<'PY' | while read -r name; do link_into "$folder" "$MEASURED/$name.bsdf"; done
 import json, sys
 folds = json.load(open(sys.argv[1]))["folds"]
 print("\n".join(name for k, fold in enumerate(folds) if k != int(sys.argv[2]) for name in fold))

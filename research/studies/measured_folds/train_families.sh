@@ -7,10 +7,11 @@
 #   bash research/studies/measured_folds/train_families.sh CONFIG WORK FAMILIES
 set -euo pipefail
 CONFIG=${1:?CONFIG json}; WORK=${2:?WORK folder of train.sh}; FAMILIES=${3:?FAMILIES bank folder}
+source "$(dirname "$0")/../../../release/link_inputs.sh"
 for fold in 0 1 2; do
     folder="$WORK/data-f$fold-families"
     mkdir -p "$folder"
-    for path in "$WORK/data-f$fold"/* "$FAMILIES"/*.binary; do ln -sfn "$(realpath "$path")" "$folder/"; done
+    link_into "$folder" "$WORK/data-f$fold"/* "$FAMILIES"/*.binary
 done
 for seed in 0 1; do for fold in 0 1 2; do echo "$fold $seed"; done; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c \
     'frenbrdf train --data "$1/data-f$2-families" --config "$0" --seed "$3" --out "$1/families-f$2-s$3" --quiet \
