@@ -14,8 +14,13 @@ import pytest
 
 import frenbrdf
 from frenbrdf.data import synth
-from frenbrdf.data.analytic import FILM_THICKNESS_RANGE, FLAKE_GRATING_RANGE, MAX_GRATING_EFFICIENCY
-from frenbrdf.data.microfacet import SPECTRUM, fresnel, ring_density, spectrum_rgb, thin_film_fresnel
+from frenbrdf.data.analytic import (
+    FILM_THICKNESS_RANGE,
+    FLAKE_GRATING_RANGE,
+    GRATING_MIN_ROUGHNESS,
+    MAX_GRATING_EFFICIENCY,
+)
+from frenbrdf.data.microfacet import SPECTRUM, cie_xyz, fresnel, ring_density, spectrum_rgb, thin_film_fresnel
 from frenbrdf.data.synth import (
     DIFFRACTIVE_SHARES,
     FAMILY_SHARES,
@@ -267,21 +272,22 @@ def test_top_lobes_that_reflect_more_than_all_light_are_refused():
 
 
 @pytest.mark.parametrize(
-    "fields",
+    ("fields", "named"),
     [
-        {"retro": (0.1, 0.1, 0.1), "retro_roughness": 0.01},  # finer than the MERL bins resolve
-        {"flakes": 1.5},
-        {"film_thickness": 300.0},  # a film lies on a coat
-        {"film_thickness": 10.0, "coat": 1.0},
-        {"metal_n": SILVER[0], "metal_k": SILVER[1], "flakes": 0.5},
-        {"flake_grating": 800.0},  # a grating lies on flakes
-        {"flakes": 0.5, "flake_grating": 100.0},  # no order of visible light would leave the surface
-        {"flakes": 0.5, "flake_grating": 800.0, "flake_film_thickness": 300.0},  # on aluminium flakes only
-        {"flakes": 0.5, "flake_grating": 800.0, "flake_grating_efficiency": 0.9},  # orders beyond all the light
+        ({"retro": (0.1, 0.1, 0.1), "retro_roughness": 0.01}, "retro_roughness"),  # finer than MERL bins resolve
+        ({"flakes": 1.5}, "flakes"),
+        ({"film_thickness": 300.0}, "film lies on the coat"),
+        ({"film_thickness": 10.0, "coat": 1.0}, "film_thickness"),
+        ({"metal_n": SILVER[0], "metal_k": SILVER[1], "flakes": 0.5}, "metal"),
+        ({"flake_grating": 800.0}, "grating lies on aluminium flakes"),
+        ({"flakes": 0.5, "flake_grating": 100.0}, "flake_grating"),  # no visible order would leave the surface
+        ({"flakes": 0.5, "flake_grating": 800.0, "flake_film_thickness": 300.0}, "grating lies on aluminium flakes"),
+        ({"flakes": 0.5, "flake_grating": 800.0, "flake_grating_efficiency": 0.9}, "flake_grating_efficiency"),
+        ({"flakes": 0.5, "flake_grating": 800.0, "flake_roughness": 0.01}, "flake_roughness under a grating"),
     ],
 )
-def test_unphysical_feature_lobes_are_refused(fields):
-    with pytest.raises(ValueError):
+def test_unphysical_feature_lobes_are_refused(fields, named):
+    with pytest.raises(ValueError, match=named):
         AnalyticMaterial("x", **fields)
 
 
@@ -377,6 +383,10 @@ def test_grating_rings_hold_the_plane_and_the_spectrum_turns_white_light_white()
     for radius, width in ((0.0, 0.05), (0.5, 0.04), (1.5, 0.3)):
         mass = np.trapezoid(2 * np.pi * rho * ring_density(rho, radius, width), rho)
         assert mass == pytest.approx(1.0, abs=1e-6), (radius, width)
+    # The fit against the CIE 1931 table: x̄(600), ȳ(555), ȳ(500), z̄(450), x̄(450).
+    xyz = cie_xyz(np.array([600.0, 555.0, 500.0, 450.0, 450.0]))
+    np.testing.assert_allclose(xyz[[0, 1, 2, 3, 4], [0, 1, 1, 2, 0]], [1.0622, 1.0000, 0.3230, 1.7721, 0.3362],
+                               rtol=0.04)
     weights = spectrum_rgb()
     np.testing.assert_allclose(weights.sum(axis=0), 1.0)
     assert np.all(weights >= 0)
@@ -388,10 +398,10 @@ def test_a_grating_on_flakes_puts_rainbows_where_the_grating_equation_says():
     """Each order lies where 2 μ_d sin θ_h = m λ / p, so its rings stay put in ρ = 2 μ_d sin θ_h, moving out in θ_h
     as θ_d grows; red lies outside blue (dispersion); the orders take at most 1.25 η of the light."""
     period, efficiency = 1000.0, 0.5
-    flakes = AnalyticMaterial("holo", diffuse=(0.0, 0.0, 0.0), flakes=1.0, flake_roughness=0.01,
+    flakes = AnalyticMaterial("holo", diffuse=(0.0, 0.0, 0.0), flakes=1.0, flake_roughness=GRATING_MIN_ROUGHNESS,
                               flake_grating=period, flake_grating_efficiency=efficiency)
     for theta_d in np.radians([10.0, 40.0]):
-        theta_h = np.radians(np.linspace(3.0, 25.0, 2001))
+        theta_h = np.radians(np.linspace(8.0, 25.0, 2001))  # beyond the mirror lobe's tail
         half = np.stack([np.sin(theta_h), np.zeros_like(theta_h), np.cos(theta_h)], axis=-1)
         # ω_i and ω_o at θ_d either side of the half vector, in the plane perpendicular to the one of θ_h
         side = np.array([0.0, np.sin(theta_d), 0.0])
@@ -402,9 +412,25 @@ def test_a_grating_on_flakes_puts_rainbows_where_the_grating_equation_says():
         assert rho[2] == pytest.approx(blue_wavelength / period, abs=0.03), np.degrees(theta_d)
         assert rho[0] == pytest.approx(red_wavelength / period, abs=0.03), np.degrees(theta_d)
     for theta in np.radians([0.0, 45.0, 80.0]):
-        orders = directional_albedo(dataclasses.replace(flakes, flake_grating_efficiency=efficiency), theta)
+        orders = directional_albedo(flakes, theta)
         mirror_only = directional_albedo(dataclasses.replace(flakes, flake_grating_efficiency=0.0), theta)
         assert np.all(orders - (1 - 1.25 * efficiency) * mirror_only <= 1.25 * efficiency + 1e-3), theta
+
+
+def test_the_finest_grating_at_its_least_roughness_gives_a_smooth_rainbow_not_lines():
+    """The spectrum is sampled every 10 nm: at the least roughness a grating allows, the finest grating's first
+    order still shows one band per channel (green, whose weights have one lobe), not a line per wavelength."""
+    flakes = AnalyticMaterial("holo", diffuse=(0.0, 0.0, 0.0), flakes=1.0, flake_roughness=GRATING_MIN_ROUGHNESS,
+                              flake_grating=FLAKE_GRATING_RANGE[0], flake_grating_efficiency=0.5)
+    theta_d = np.radians(10.0)
+    theta_h = np.radians(np.linspace(20.0, 89.0, 4001))  # ρ from 0.67 to 1.97: the first order (1.14 to 2)
+    half = np.stack([np.sin(theta_h), np.zeros_like(theta_h), np.cos(theta_h)], axis=-1)
+    side = np.array([0.0, np.sin(theta_d), 0.0])
+    green = synth.evaluate(flakes, half * np.cos(theta_d) + side, half * np.cos(theta_d) - side)[:, 1]
+    steps = np.diff(green)
+    slopes = np.sign(steps[np.abs(steps) > 1e-6 * green.max()])  # rising +1, falling −1, flat parts left out
+    peaks = np.count_nonzero((slopes[:-1] > 0) & (slopes[1:] < 0))
+    assert peaks == 1, peaks  # at 0.005, a third of the least roughness, 13
 
 
 def test_the_diffractive_mix_holds_grating_flakes_of_real_pigments(diffractive):

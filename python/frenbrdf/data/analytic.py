@@ -55,7 +55,8 @@ A material is a *base* under an optional clear *coat*:
   equation; as wide as the flakes' tilts turn a reflection) integrated over the visible
   spectrum to RGB, the rest stays in the mirror lobe: rainbows about every highlight that
   move out with θ_d. The orders reflect at most ``1.25 η`` of the light (:mod:`~frenbrdf.data.microfacet`
-  says why), the mirror lobe at most ``1 − 1.25 η``;
+  says why), the mirror lobe at most ``1 − 1.25 η``; the part of an order beyond the horizon
+  is absorbed (at normal incidence all of it where ``m λ / p > 1``);
 - coat of weight ``c``: ``f = c · f_coat + (1 − c E_c(μ_i)) (1 − c E_c(μ_o)) · f_base``,
   with ``f_coat`` a GGX dielectric lobe (white, or coloured by a thin film) and ``E_c`` its
   directional albedo, the fraction of light the coat reflects (its Fresnel reflectance
@@ -135,8 +136,14 @@ MICA_IOR = 1.55
 #: Grating periods accepted on diffractive flakes, in nm: from where the first order of red light (700 nm) can
 #: still leave the surface, at grazing incidence (p ≥ λ/2), to where the orders crowd into the highlight.
 FLAKE_GRATING_RANGE = (350.0, 5000.0)
+#: The second orders' share of a grating's light against the first orders' (η and η/4).
+SECOND_ORDER_SHARE = 0.25
 #: Most of a grating flake's light its orders take (η of the first, η/4 of the second: at most all of it).
-MAX_GRATING_EFFICIENCY = 0.8
+MAX_GRATING_EFFICIENCY = 1.0 / (1.0 + SECOND_ORDER_SHARE)
+#: Least flake roughness under a grating: the spectrum is sampled every 10 nm, and a ring narrower than the step
+#: between neighbouring wavelengths' rings (m · 10 nm / p, at most 0.057 at p = 350 nm) would show them as separate
+#: lines; at 0.015 the rings (2α wide) overlap to a rainbow smooth within 1 %.
+GRATING_MIN_ROUGHNESS = 0.015
 
 RGB = tuple[float, float, float]
 
@@ -235,6 +242,8 @@ class AnalyticMaterial:
             _check_range(self.name, "flake_grating", self.flake_grating, *FLAKE_GRATING_RANGE)
             if not self.flakes or self.flake_film_thickness:
                 raise ValueError(f"{self.name}: a grating lies on aluminium flakes; give flakes > 0 and no flake film")
+            _check_range(self.name, "flake_roughness under a grating", self.flake_roughness, GRATING_MIN_ROUGHNESS,
+                         1.0)
         _check_range(self.name, "flake_grating_efficiency", self.flake_grating_efficiency, 0.0,
                      MAX_GRATING_EFFICIENCY)
 
@@ -319,7 +328,8 @@ def _flake_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     """Tinted flakes whose orientations spread as a GGX distribution: aluminium, aluminium under a grating, or mica
     under a thin film."""
     if m.flake_grating:
-        mirror = (1.0 - 1.25 * m.flake_grating_efficiency) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
+        orders = (1.0 + SECOND_ORDER_SHARE) * m.flake_grating_efficiency
+        mirror = (1.0 - orders) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
         return np.asarray(m.flake_colour) * (mirror + _grating_orders(m, g))
     if not m.flake_film_thickness:
         return np.asarray(m.flake_colour) * _ggx_lobe(g, m.flake_roughness, *METALS["aluminium"])
@@ -330,10 +340,12 @@ def _flake_lobe(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
 def _grating_orders(m: AnalyticMaterial, g: Geometry) -> np.ndarray:
     """The grating flakes' first and second orders: per order and wavelength a ring in the plane of the directions'
     tangential parts (:func:`~frenbrdf.data.microfacet.ring_density`), as wide as the flakes' tilts turn a
-    reflection (2α), weighted to RGB over the spectrum, with aluminium's Fresnel reflectance."""
+    reflection (2α), weighted to RGB over the spectrum, with aluminium's Fresnel reflectance. The part of a ring
+    that lies beyond the horizon (tangential parts outside the unit disk: at normal incidence the whole order where
+    ``m λ / p > 1``) is absorbed, not handed back to the mirror lobe: a fine grating darkens its flakes there."""
     rho = 2.0 * g.cos_d * np.sqrt(np.maximum(1.0 - g.cos_h * g.cos_h, 0.0))  # |ω_i,t + ω_o,t|
     rings = 0.0
-    for order, efficiency in ((1, m.flake_grating_efficiency), (2, m.flake_grating_efficiency / 4)):
+    for order, efficiency in ((1, m.flake_grating_efficiency), (2, SECOND_ORDER_SHARE * m.flake_grating_efficiency)):
         for wavelength, rgb in zip(SPECTRUM, spectrum_rgb(), strict=True):
             rings = rings + efficiency * rgb * ring_density(rho, order * wavelength / m.flake_grating,
                                                              2.0 * m.flake_roughness)

@@ -114,20 +114,25 @@ def ring_density(rho: np.ndarray, radius: float | np.ndarray, width: float) -> n
     return np.exp(-(rho - radius) ** 2 / (2.0 * w2)) / mass
 
 
-@functools.cache
-def spectrum_rgb() -> np.ndarray:
-    """Linear sRGB weights ``(len(SPECTRUM), 3)`` of each wavelength of :data:`SPECTRUM`, each channel summing to 1
-    (an equal-energy spectrum is white): the CIE 1931 matching functions in the analytic fit of Wyman, Sloan &
-    Shirley 2013 ("Simple analytic approximations to the CIE XYZ color matching functions"), to sRGB (D65) with
-    what falls outside its gamut clipped to 0."""
-    wavelengths = np.array(SPECTRUM)
+def cie_xyz(wavelengths: np.ndarray) -> np.ndarray:
+    """The CIE 1931 2° colour matching functions x̄, ȳ, z̄ at ``wavelengths`` (nm), ``(..., 3)``: the multi-lobe
+    analytic fit of Wyman, Sloan & Shirley 2013 ("Simple analytic approximations to the CIE XYZ color matching
+    functions")."""
 
     def lobe(mean, left, right):
         return np.exp(-0.5 * ((wavelengths - mean) / np.where(wavelengths < mean, left, right)) ** 2)
 
-    xyz = np.stack([1.056 * lobe(599.8, 37.9, 31.0) + 0.362 * lobe(442.0, 16.0, 26.7) - 0.065 * lobe(501.1, 20.4, 26.2),
-                    0.821 * lobe(568.8, 46.9, 40.5) + 0.286 * lobe(530.9, 16.3, 31.1),
-                    1.217 * lobe(437.0, 11.8, 36.0) + 0.681 * lobe(459.0, 26.0, 13.8)], axis=1)
+    return np.stack([1.056 * lobe(599.8, 37.9, 31.0) + 0.362 * lobe(442.0, 16.0, 26.7) - 0.065 * lobe(501.1, 20.4, 26.2),
+                     0.821 * lobe(568.8, 46.9, 40.5) + 0.286 * lobe(530.9, 16.3, 31.1),
+                     1.217 * lobe(437.0, 11.8, 36.0) + 0.681 * lobe(459.0, 26.0, 13.8)], axis=-1)
+
+
+@functools.cache
+def spectrum_rgb() -> np.ndarray:
+    """Linear sRGB weights ``(len(SPECTRUM), 3)`` of each wavelength of :data:`SPECTRUM`, each channel summing to 1
+    (an equal-energy spectrum is white): the CIE 1931 matching functions (:func:`cie_xyz`) to sRGB (D65) with
+    what falls outside its gamut clipped to 0."""
+    xyz = cie_xyz(np.array(SPECTRUM))
     to_srgb = np.array([[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]])
     rgb = np.maximum(xyz @ to_srgb.T, 0.0)
     weights = rgb / rgb.sum(axis=0)
