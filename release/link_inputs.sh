@@ -13,7 +13,7 @@ link_as() {
         return 1
     fi
     target=$(realpath "$source")
-    if [[ -L "$link" && "$(realpath -m "$link")" == "$target" ]]; then
+    if [[ -L "$link" && "$link" -ef "$source" ]]; then
         return 0
     fi
     if [[ -e "$link" || -L "$link" ]]; then

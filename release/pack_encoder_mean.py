@@ -34,7 +34,15 @@ from frenbrdf.render.scoring import reconstruction_rows
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/
 from common import run_metadata  # noqa: E402
-from train_shipped_model import ROOT, by_pattern, by_source, card_markdown, summary  # noqa: E402
+from train_shipped_model import (  # noqa: E402
+    ROOT,
+    by_pattern,
+    by_source,
+    card_markdown,
+    held_out_files,
+    read_sources,
+    summary,
+)
 
 
 def assemble(base: str | None, members: list[str], *, base_encoder: bool = True,
@@ -98,9 +106,8 @@ def main(argv=None) -> int:
     checkpoint, mapping, card = assemble(args.base, args.members, base_encoder=not args.without_base_encoder,
                                       choice=args.choice)
     work = Path(args.work)
-    test = [work / "data" / f"{name}.binary"
-            for name in sorted(json.loads((work / "run" / "split.json").read_text())["test"])]
-    sources = json.loads((work / "sources.json").read_text())
+    test = held_out_files(work, json.loads((work / "run" / "split.json").read_text())["test"])
+    sources = read_sources(work)
     model = Model.from_checkpoint(checkpoint, mapping)
     held_out = reconstruction_rows(model, test, frequency_metric=False)
     refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")

@@ -42,16 +42,37 @@ CARD_PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "imag
 PATTERN_SAMPLES = 1500
 
 
-def linked_data(folders: list[Path], data: Path) -> list[str]:
-    """A folder of links to every MERL file of ``folders`` (names must not repeat)."""
+def linked_data(folders: list[Path], data: Path) -> None:
+    """A folder of links to every material file of ``folders``; a link there already to the same file is kept,
+    anything else under a name it needs (a user's file, a link elsewhere: a name in two folders) is refused."""
     data.mkdir(parents=True, exist_ok=True)
     for folder in folders:
         for path in list_materials(folder):
             link = data / path.name
-            if link.exists() and link.resolve() != path.resolve():
-                raise ValueError(f"{path.name} is in two of the folders {[str(f) for f in folders]}")
-            if not link.exists():
-                link.symlink_to(path.resolve())
+            if link.is_symlink() and link.exists() and link.samefile(path):
+                continue
+            if link.is_symlink() or link.exists():
+                raise ValueError(f"{link} is in the way (not a link to {path}): a name in two of the folders "
+                                 f"{[str(f) for f in folders]}, or a file of its own; move it or choose another --work")
+            link.symlink_to(path.resolve())
+
+
+def held_out_files(work: Path, names) -> list[Path]:
+    """The files in ``WORK/data`` of the held-out materials ``names`` (MERL tables or measurements)."""
+    files = {path.stem: path for path in list_materials(work / "data")}
+    missing = sorted(set(names) - files.keys())
+    if missing:
+        raise FileNotFoundError(f"{work / 'data'} lacks the held-out materials {missing}")
+    return [files[name] for name in sorted(names)]
+
+
+def read_sources(work: Path) -> dict[str, list[str]]:
+    """``WORK/sources.json`` (:func:`source_names` of the training's folders), which :func:`build` writes."""
+    path = work / "sources.json"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} is missing: train_shipped_model.py writes it (since version 9); run it "
+                                "again with --reuse on this WORK to write it without training")
+    return json.loads(path.read_text())
 
 
 def summary(rows: list[dict]) -> dict[str, float]:
@@ -79,18 +100,21 @@ def by_source(rows: list[dict], sources: dict[str, list[str]]) -> dict[str, dict
 
 
 def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
-          progress: bool = True, reuse: bool = False, trained_on: str | None = None) -> dict:
+          progress: bool = True, reuse: bool = False, resume: bool = False, trained_on: str | None = None) -> dict:
     """Trains, evaluates, packs and documents the shipped model; returns the card.
 
     ``reuse``: a finished run in ``work`` (its ``best.pt``) is evaluated, packed and documented
-    again instead of trained anew."""
+    again instead of trained anew. ``resume``: a run stopped midway continues from its ``last.pt``."""
     sources = source_names(folders)
     linked_data(folders, work / "data")
     save_json(work / "sources.json", sources)  # for release/pack_encoder_mean.py's card
     cfg = load_config(config_path, data=str(work / "data"), out=str(work / "run"), seed=seed)
     cfg.progress = progress
-    run = Run(cfg.out) if reuse and (Path(cfg.out) / "best.pt").exists() else train(cfg, overwrite=True)
-    test = [work / "data" / f"{name}.binary" for name in sorted(run.split.test)]
+    if reuse and (Path(cfg.out) / "best.pt").exists():
+        run = Run(cfg.out)
+    else:  # a fresh run replaces an earlier one of this script's in WORK/run
+        run = train(cfg, resume=resume, overwrite=not resume)
+    test = held_out_files(work, run.split.test)
     held_out = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, progress=progress)
     refined = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, refine="latent",
                                   progress=progress)
@@ -211,6 +235,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"), help="the model card (Markdown)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--reuse", action="store_true", help="evaluate, pack and document WORK/run again, untrained")
+    parser.add_argument("--resume", action="store_true", help="continue WORK/run from its last.pt")
     parser.add_argument("--trained-on", help="the machine the run was trained on, for the card (default: this CPU)")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -218,7 +243,7 @@ def main(argv: list[str] | None = None) -> int:
     if not folders:
         parser.error("give --merl, --bank, --data or several")
     card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
-                 progress=not args.quiet, reuse=args.reuse, trained_on=args.trained_on)
+                 progress=not args.quiet, reuse=args.reuse, resume=args.resume, trained_on=args.trained_on)
     print(json.dumps(card["held_out"], indent=2))
     return 0
 

@@ -4,7 +4,11 @@
 # device "auto"), its four device encoders, then the decoder with its own encoder and the four, `best-fit`, packed
 # into the package with its card.
 #
-#   bash release/train_shipped_model.sh [SHARED_DATA] [WORK]        # then: git diff python/frenbrdf/models/pretrained
+#   bash release/train_shipped_model.sh [SHARED_DATA] [WORK] [ARGS]  # then: git diff python/frenbrdf/models/pretrained
+#
+# ARGS go to train_shipped_model.py (e.g. --trained-on "one NVIDIA H200"). A rerun after a failure goes on where it
+# stopped: each finished stage leaves a mark in WORK/done and is not run again, and a training stopped midway
+# continues from its last.pt.
 #
 # Data: the published NBRDF fits of the MERL materials, the RGL fits of every material that has no real measurement
 # in SHARED_DATA/rgl-measured, the measurements themselves (.bsdf), the default bank and 45 procedural families.
@@ -14,29 +18,40 @@ SHARED=${1:-../shared/data}
 WORK=${2:-pretrained-work}
 HERE=$(dirname "$0")
 source "$HERE/link_inputs.sh"
-mkdir -p "$WORK/measured"
+mkdir -p "$WORK/measured" "$WORK/done"
 
-frenbrdf import-nbrdf "$SHARED"/merl-nbrdf/*.h5 "$WORK/merl" --quiet
+stage() {  # stage NAME COMMAND...: runs COMMAND unless stage NAME finished in an earlier run
+    [[ -f "$WORK/done/$1" ]] && return 0
+    "${@:2}"
+    touch "$WORK/done/$1"
+}
+resume_if_started() {  # --resume where the run folder $1 holds a last.pt
+    [[ -f "$1/last.pt" ]] && echo --resume || true
+}
+
+stage merl frenbrdf import-nbrdf "$SHARED"/merl-nbrdf/*.h5 "$WORK/merl" --quiet
 fits=()
 for fit in "$SHARED"/rgl-nbrdf/*.h5; do
     [[ -f "$SHARED/rgl-measured/$(basename "$fit" .h5).bsdf" ]] || fits+=("$fit")
 done
-frenbrdf import-nbrdf "${fits[@]}" "$WORK/rgl-fits" --quiet
+stage rgl-fits frenbrdf import-nbrdf "${fits[@]}" "$WORK/rgl-fits" --quiet
 link_into "$WORK/measured" "$SHARED"/rgl-measured/*.bsdf
-frenbrdf synth "$WORK/bank" --quiet
-frenbrdf synth "$WORK/families" --n 45 --seed 0 --mix families --quiet
+stage bank frenbrdf synth "$WORK/bank" --quiet
+stage families frenbrdf synth "$WORK/families" --n 45 --seed 0 --mix families --quiet
 
 # The decoder, packed alone (WORK/base), trained on a folder of links to the five (WORK/base-work/data).
-python "$HERE/train_shipped_model.py" --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-fits" \
+stage decoder python "$HERE/train_shipped_model.py" --merl "$WORK/merl" --bank "$WORK/bank" --data "$WORK/rgl-fits" \
     --data "$WORK/measured" --data "$WORK/families" --config "$HERE/shipped_model.json" --work "$WORK/base-work" \
-    --dest "$WORK/base" --card "$WORK/base.md" --quiet
+    --dest "$WORK/base" --card "$WORK/base.md" --quiet $(resume_if_started "$WORK/base-work/run") "${@:3}"
 # Its four device encoders (research/results/folds-v8's amendment), two at a time.
-python "$HERE/../research/results/folds-v8/pipeline/encoder_configs.py" "$WORK/base-work/run/config.json" \
-    "$WORK/base" "$WORK/encoder-configs"
+stage encoder-configs python "$HERE/../research/results/folds-v8/pipeline/encoder_configs.py" \
+    "$WORK/base-work/run/config.json" "$WORK/base" "$WORK/encoder-configs"
 KINDS="mixed-mean mixed-attention devices-mean devices-attention"
-for kind in $KINDS; do echo "$kind"; done | xargs -P 2 -L 1 bash -c \
-    'frenbrdf train --data "$0/base-work/data" --config "$0/encoder-configs/$1.json" --seed 0 --out "$0/encoders/$1" --quiet' \
-    "$WORK"
+for kind in $KINDS; do echo "$kind"; done | xargs -P 2 -L 1 bash -c '
+    [[ -f "$0/done/encoder-$1" ]] && exit 0
+    resume=(); [[ -f "$0/encoders/$1/last.pt" ]] && resume=(--resume)
+    frenbrdf train --data "$0/base-work/data" --config "$0/encoder-configs/$1.json" --seed 0 --out "$0/encoders/$1" \
+        --quiet "${resume[@]}" && touch "$0/done/encoder-$1"' "$WORK"
 members=()
 for kind in $KINDS; do members+=("$WORK/encoders/$kind"); done
 python "$HERE/pack_encoder_mean.py" --base "$WORK/base" --members "${members[@]}" --choice best-fit \

@@ -15,6 +15,8 @@ import argparse
 import json
 from pathlib import Path
 
+from frenbrdf.io.atomic import write_text
+
 MIXED = Path(__file__).resolve().parents[2] / "version-5" / "encoder-mixed.json"
 
 
@@ -40,7 +42,7 @@ def main(argv=None) -> int:
     for sampling in ("mixed", "devices"):
         for pooling in ("mean", "attention"):
             config = encoder_config(json.loads(json.dumps(run_config)), args.decoder, sampling, pooling)
-            (args.out / f"{sampling}-{pooling}.json").write_text(json.dumps(config, indent=1) + "\n")
+            write_text(args.out / f"{sampling}-{pooling}.json", json.dumps(config, indent=1) + "\n")
     return 0
 
 
