@@ -241,6 +241,44 @@ def test_a_forged_marker_cannot_make_a_command_delete_outside_its_folder(tmp_pat
     assert victim.read_text() == "keep me"
 
 
+def test_entries_that_appear_while_a_command_runs_stay_the_users(tmp_path):
+    """A long run (begin … finish) records only what it declared: a `.git` or notes made in its folder meanwhile are
+    the user's, so a rerun, even with --overwrite, keeps them."""
+    out = tmp_path / "run"
+    folder = OutputFolder.claim(out, command="train")
+    folder.begin(["last.pt"])
+    (out / "last.pt").write_text("an epoch")
+    (out / ".git").mkdir()
+    (out / ".git" / "HEAD").write_text("ref: refs/heads/main")
+    (out / "notes.md").write_text("mine")
+    folder.finish()
+    assert json.loads((out / MARKER).read_text())["entries"] == ["last.pt"]
+    again = OutputFolder.claim(out, command="train", overwrite=True)
+    assert again.others == {".git", "notes.md"}
+    again.begin(["last.pt"])
+    again.finish()
+    assert (out / ".git" / "HEAD").read_text() == "ref: refs/heads/main" and (out / "notes.md").read_text() == "mine"
+
+
+def test_a_staged_write_refuses_a_name_the_user_took_meanwhile_and_records_only_its_own(tmp_path):
+    out = tmp_path / "report"
+    out.mkdir()
+    folder = OutputFolder.claim(out, command="evaluate")
+    with pytest.raises(ValueError, match="holds report.md, which this command would replace"):
+        with folder.staged() as staging:
+            (staging / "report.md").write_text("the command's")
+            (out / "report.md").write_text("the user's")  # made while the command ran
+    assert (out / "report.md").read_text() == "the user's"
+    folder = OutputFolder.claim(out, command="evaluate", overwrite=True)
+    with folder.staged() as staging:
+        (staging / "results.json").write_text("{}")
+        (out / "notes.md").write_text("mine")
+    assert json.loads((out / MARKER).read_text())["entries"] == ["results.json"]
+    with folder.staged() as staging:  # a second write of the same run replaces its own entry only
+        (staging / "results.json").write_text("[]")
+    assert sorted(p.name for p in out.iterdir()) == [MARKER, "notes.md", "report.md", "results.json"]
+
+
 def test_out_dot_writes_into_the_current_folder(tmp_path, monkeypatch):
     """``--out .`` (the folder itself is never renamed, so no 'Device or resource busy')."""
     inputs = _inputs(tmp_path)

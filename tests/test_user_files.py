@@ -17,6 +17,7 @@ import frenbrdf
 from frenbrdf import cli
 from frenbrdf.configs import to_dict
 from frenbrdf.io.jsonfile import MAX_DEPTH, read_json
+from frenbrdf.io.outputs import MARKER
 from frenbrdf.models import pretrained
 from frenbrdf.training import load_config, train
 
@@ -139,6 +140,21 @@ def test_a_good_last_pt_still_resumes(run, tmp_path):
         (folder / path.name).write_bytes(path.read_bytes())
     cfg = load_config(config, out=str(folder), epochs=2)
     assert [entry["epoch"] for entry in train(cfg, resume=True).history] == [-1, 0, 1]
+
+
+def test_a_resume_refuses_run_files_that_frenbrdf_train_did_not_write(run, tmp_path, capsys):
+    """A folder holding a last.pt and a run's files but no marker of train's: resuming would replace files no run
+    of train wrote (a user's config.json), so it is refused and nothing changes."""
+    source, config = run
+    folder = tmp_path / "copied"
+    folder.mkdir()
+    for path in source.iterdir():
+        if path.name != MARKER:
+            (folder / path.name).write_bytes(path.read_bytes())
+    before = {path.name: path.read_bytes() for path in folder.iterdir()}
+    last = _fails(["train", "--config", config, "--out", folder, "--resume", "--quiet"], capsys)
+    assert "which this command would replace and did not write" in last, last
+    assert {path.name: path.read_bytes() for path in folder.iterdir()} == before
 
 
 def _copy_run(source: Path, folder: Path) -> Path:

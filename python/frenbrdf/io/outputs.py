@@ -210,19 +210,31 @@ class OutputFolder:
         run dies; then an earlier run's entries are removed, but for those in ``keep`` (work a rerun reuses)
         and all of them when ``additive``."""
         names = set(names)
+        self._refresh_others()
         self.check_names(names)
         self.target.mkdir(parents=True, exist_ok=True)
         self._write_marker(self.earlier | names)
         if not self.additive:
             for name in self.earlier - set(keep):
                 _remove(self.target / name)
+        self.earlier = frozenset(names | (self.earlier if self.additive else self.earlier & set(keep)))
         return self.target
 
     def finish(self) -> None:
-        """Records what the folder now holds besides the user's entries as this command's output."""
-        present = {entry.name for entry in self.target.iterdir()} - _staging_entries(self.target)
-        self.earlier = frozenset(present - self.others - {MARKER})
+        """Records which of this run's entries (:meth:`begin`'s names, an earlier run's kept ones) the folder now
+        holds. Only those: an entry that appeared any other way while the command ran (a user's ``.git``, their
+        notes) is the user's, never recorded, so no later run removes it."""
+        self.earlier = frozenset(self.earlier & self._listing())
         self._write_marker(self.earlier)
+
+    def _listing(self) -> set[str]:
+        return {entry.name for entry in self.target.iterdir()} - _staging_entries(self.target) - {MARKER}
+
+    def _refresh_others(self) -> None:
+        """Counts as the user's every entry that appeared since the claim and that no run of this command wrote:
+        a long command finds the folder as the user has left it, not as it was when the command started."""
+        if self.target.is_dir():
+            self.others = frozenset(self.others | (self._listing() - self.earlier))
 
     @contextmanager
     def staged(self) -> Iterator[Path]:
@@ -237,6 +249,7 @@ class OutputFolder:
         try:
             yield staging
             names = {entry.name for entry in staging.iterdir()}
+            self._refresh_others()
             self.check_names(names)
             if new:
                 save_json(staging / MARKER, {"command": self.command, "entries": sorted(names)})
@@ -252,7 +265,8 @@ class OutputFolder:
             if not self.additive:
                 for name in self.earlier - names:
                     _remove(self.target / name)
-            self.finish()
+            self.earlier = frozenset(names | (self.earlier if self.additive else set()))
+            self._write_marker(self.earlier)
         except (OSError, ValueError) as error:  # a message names the output, never the hidden staging folder
             raise_naming(error, staging, self.path)
         finally:

@@ -58,6 +58,7 @@ def check_run_folder(cfg: TrainConfig, *, resume: bool = False, overwrite: bool 
         folder = OutputFolder.claim(cfg.out, command="train", inputs=inputs, overwrite=True)
         if not (folder.target / "last.pt").is_file():
             raise FileNotFoundError(f"{cfg.out} holds no last.pt to resume from")
+        folder.check_names(RUN_FILES)  # a run's files that frenbrdf train did not write (no marker lists them)
         return folder
     folder = OutputFolder.claim(cfg.out, command="train", inputs=inputs, overwrite=overwrite)
     if folder.earlier and not overwrite:
@@ -104,8 +105,8 @@ def train(cfg: TrainConfig, *, resume: bool = False, overwrite: bool = False, da
     data = prepare(cfg, split, files, ranks, data_cache,
                    mapping=source.mapping if source is not None else None)  # bad data fails here
     if ranks.main:
-        if not resume:  # overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's)
-            folder.begin(RUN_FILES)
+        # Overwrite: an earlier run's files go (a best-psnr.pt of it must not look like this run's); resume keeps them.
+        folder.begin(RUN_FILES, keep=RUN_FILES if resume else ())
         save_json(folder.target / "config.json", to_dict(cfg))
         save_json(folder.target / "split.json", split.to_json())
         checkpoints.save_mapping(folder.target, data.mapping.state())
