@@ -448,6 +448,20 @@ def test_a_packed_model_reconstructs_as_its_run(run_dir, model, material, tmp_pa
     assert relative.max() < 2e-4
 
 
+def test_a_packing_that_fails_midway_leaves_the_old_model_whole(run_dir, tmp_path, monkeypatch):
+    packed = tmp_path / "packed"
+    pretrained.pack_pretrained(run_dir, packed, card={"data": "old"})
+    before = {path.name: path.read_bytes() for path in packed.iterdir()}
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(pretrained.np, "savez_compressed", full_disk)  # after model.pt is written
+    with pytest.raises(OSError, match="No space left"):
+        pretrained.pack_pretrained(run_dir, packed, card={"data": "new"}, half=False)
+    assert {path.name: path.read_bytes() for path in packed.iterdir()} == before  # no temporary file left either
+
+
 def test_pack_mapping_round_trips():
     rng = np.random.default_rng(0)
     per_channel = {"reference": np.array([0.1, 0.2, 0.3]), "epsilon": 0.002, "offset": 1.0}

@@ -28,7 +28,7 @@ import numpy as np
 import torch
 
 from ...io import checkpoints
-from ...io.atomic import atomic_path, save_json
+from ...io.atomic import atomic_path
 from ...io.jsonfile import read_json
 from ...io.merl import SHAPE
 from ...io.paths import checked_npz, torch_load
@@ -124,15 +124,18 @@ def pack_checkpoint(checkpoint: dict, mapping: dict, dest: str | os.PathLike | N
     dtype = torch.float16 if half else torch.float32
     packed = {"format": FORMAT, "method": checkpoint["method"], "config": checkpoint["config"],
               "model": {name: value.to(dtype) for name, value in checkpoint["model"].items()}}
-    dest.mkdir(parents=True, exist_ok=True)
-    with atomic_path(dest / MODEL_FILE) as temporary:
-        torch.save(packed, temporary)
     arrays: dict[str, Any] = pack_mapping(mapping)  # Any: numpy's stubs take any ** key for allow_pickle (a bool)
-    with atomic_path(dest / MAPPING_FILE) as temporary:
-        np.savez_compressed(temporary, **arrays)
     config = json.loads(checkpoint["config"])
-    save_json(dest / CARD_FILE, {"version": VERSION, **(card or {}), "format": FORMAT, "method": checkpoint["method"],
-                                 "model": config["model"], "weights": "float16" if half else "float32"})
+    card = {"version": VERSION, **(card or {}), "format": FORMAT, "method": checkpoint["method"],
+            "model": config["model"], "weights": "float16" if half else "float32"}
+    dest.mkdir(parents=True, exist_ok=True)
+    # All three written before any replaces its old file (the blocks' renames run as they end, one after the
+    # other): a failure midway leaves the old model whole, never new weights beside an old mapping.
+    with (atomic_path(dest / MODEL_FILE) as model_file, atomic_path(dest / MAPPING_FILE) as mapping_file,
+          atomic_path(dest / CARD_FILE) as card_file):
+        torch.save(packed, model_file)
+        np.savez_compressed(mapping_file, **arrays)
+        card_file.write_text(json.dumps(card, indent=2) + "\n", encoding="utf-8")
     return {name: (dest / name).stat().st_size for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE)}
 
 
