@@ -356,3 +356,14 @@ def test_a_resume_with_another_method_or_model_names_the_difference_not_a_weight
                    "--quiet"], capsys)  # the preset's model, not the run's
     assert re.search(r"another model\.\w+\.hidden \(", last), last
     assert {path.name: path.read_bytes() for path in folder.iterdir()} == before
+
+
+def test_evaluate_never_writes_into_its_data_folder_and_train_refuses_a_repeated_seed(run, capsys):
+    source, config = run
+    data = load_config(config).data
+    before = sorted(p.name for p in Path(data).iterdir())
+    last = _fails(["evaluate", source, "--data", data, "--out", data, "--overwrite", "--quiet"], capsys)
+    assert f"is the input {data}" in last, last
+    assert sorted(p.name for p in Path(data).iterdir()) == before
+    last = _fails(["train", "--config", config, "--seeds", 0, 1, 0, "--out", Path(source).parent / "seeds"], capsys)
+    assert "--seeds repeats a seed (0 1 0)" in last, last

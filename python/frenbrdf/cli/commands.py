@@ -74,6 +74,8 @@ def train(args: argparse.Namespace) -> int:
         raise ValueError("give --seed or --seeds, not both")
     if args.seeds is not None and not args.out:
         raise ValueError("--seeds needs --out: each seed trains into OUT/seed-S")
+    if args.seeds is not None and len(set(args.seeds)) < len(args.seeds):
+        raise ValueError(f"--seeds repeats a seed ({' '.join(map(str, args.seeds))}): each seed trains one run")
     configs = []  # every seed's config and run folder checked before any trains
     for seed in args.seeds if args.seeds is not None else [args.seed]:
         out = str(Path(args.out) / f"seed-{seed}") if args.seeds is not None else args.out

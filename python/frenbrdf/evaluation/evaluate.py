@@ -276,11 +276,12 @@ def run_label(path: Path, method: str = "") -> str:
     return path.parents[1].name if path.parent.name == method else path.parent.name
 
 
-def check_out(out_dir, run_dirs, *, overwrite: bool = False) -> OutputFolder:
+def check_out(out_dir, run_dirs, *, data=None, overwrite: bool = False) -> OutputFolder:
     """Where an evaluation may write, checked before any work (:class:`frenbrdf.io.outputs.OutputFolder`): a new or
-    empty folder or an earlier evaluation's, not a run folder nor one holding a run; a folder holding other
-    entries only with ``overwrite`` (they are kept)."""
-    out = OutputFolder.claim(out_dir, command="evaluate", inputs=tuple(run_dirs), overwrite=overwrite)
+    empty folder or an earlier evaluation's, not a run folder nor the data folder, nor one holding either; a
+    folder holding other entries only with ``overwrite`` (they are kept)."""
+    inputs = (*run_dirs, *([data] if data is not None else []))
+    out = OutputFolder.claim(out_dir, command="evaluate", inputs=inputs, overwrite=overwrite)
     out.check_names(["evaluation.json", "evaluation.md"])
     return out
 
@@ -302,7 +303,8 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     """
     config = EvaluateConfig() if config is None else config
     start = time.perf_counter()
-    out = out_dir if isinstance(out_dir, OutputFolder) else check_out(out_dir, run_dirs, overwrite=overwrite)
+    out = out_dir if isinstance(out_dir, OutputFolder) else check_out(out_dir, run_dirs, data=data,
+                                                                       overwrite=overwrite)
     loaded = load_runs(run_dirs, data, config.max_materials, all_materials=config.all_materials, materials=materials)
     runs, models, names, files = loaded.runs, loaded.models, loaded.test, loaded.files
     rng = np.random.default_rng(config.seed)
@@ -429,7 +431,7 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
     ``config``: default :class:`EvaluateConfig`.
     """
     config = EvaluateConfig() if config is None else config
-    out = check_out(out_dir, run_dirs, overwrite=overwrite)
+    out = check_out(out_dir, run_dirs, data=data, overwrite=overwrite)
     runs = [Run(path) for path in run_dirs]
     groups: dict[int, list] = {}
     splits: dict[int, tuple] = {}
