@@ -1,19 +1,19 @@
 #!/usr/bin/env bash
 # The trainings of research/results/real-in-data (README.md): for each fold of measured_folds/folds.json, version
 # 8's recipe (folds-v8/config-v8.json) on DATA (version 4's tables less the fits of the 19 measurements) plus the
-# .bsdf measurements of the two other folds plus the procedural banks of FAMILIES, seed SEED (default 0), the three
-# folds at once on one thread each, as WORK/ARM-fF-sSEED (ARM default mf; research/results/diffractive names its
-# arm mfd).
+# .bsdf measurements of the two other folds plus the procedural banks of FAMILIES, as WORK/ARM-fF-sSEED (ARM default
+# mf; research/results/diffractive names its arm mfd). One run per fold in FOLDS (default 0 1 2) and seed in SEEDS
+# (default SEED, default 0), JOBS (default 3) at once on one thread each.
 #
-#   [SEED=0] [ARM=mf] bash research/results/real-in-data/train.sh DATA FAMILIES WORK [MEASURED]
+#   [SEED=0 | SEEDS="0 1 2"] [FOLDS="0 1 2"] [ARM=mf] bash research/results/real-in-data/train.sh DATA FAMILIES WORK [MEASURED]
 set -euo pipefail
 DATA=${1:?DATA folder}; FAMILIES=${2:?FAMILIES bank folder}; WORK=${3:?WORK folder}
 MEASURED=${4:-../shared/data/rgl-measured}
-SEED=${SEED:-0}; ARM=${ARM:-mf}
+SEEDS=${SEEDS:-${SEED:-0}}; FOLDS=${FOLDS:-0 1 2}; ARM=${ARM:-mf}
 HERE=$(dirname "$0")
 source "$HERE/../../../release/link_inputs.sh"
 CONFIG=$HERE/../folds-v8/config-v8.json
-for fold in 0 1 2; do
+for fold in $FOLDS; do
     folder="$WORK/data-$ARM-f$fold"
     mkdir -p "$folder"
     link_into "$folder" "$DATA"/* "$FAMILIES"/*.binary
@@ -21,6 +21,6 @@ for fold in 0 1 2; do
         link_into "$folder" "$MEASURED/$name.bsdf"
     done
 done
-for fold in 0 1 2; do echo "$fold"; done | OMP_NUM_THREADS=1 xargs -P 3 -L 1 bash -c \
-    'frenbrdf train --data "$1/data-$2-f$4" --config "$0" --seed "$3" --out "$1/$2-f$4-s$3" --quiet > "$1/$2-f$4-s$3.log" 2>&1' \
-    "$CONFIG" "$WORK" "$ARM" "$SEED"
+for seed in $SEEDS; do for fold in $FOLDS; do echo "$fold $seed"; done; done | OMP_NUM_THREADS=1 xargs -P "${JOBS:-3}" -L 1 bash -c \
+    'frenbrdf train --data "$1/data-$2-f$3" --config "$0" --seed "$4" --out "$1/$2-f$3-s$4" --quiet > "$1/$2-f$3-s$4.log" 2>&1' \
+    "$CONFIG" "$WORK" "$ARM"
