@@ -28,7 +28,7 @@ import numpy as np
 import torch
 
 from ...io import checkpoints
-from ...io.atomic import atomic_path
+from ...io.atomic import atomic_path, save_json
 from ...io.jsonfile import read_json
 from ...io.merl import SHAPE
 from ...io.paths import checked_npz, torch_load
@@ -135,7 +135,7 @@ def pack_checkpoint(checkpoint: dict, mapping: dict, dest: str | os.PathLike | N
           atomic_path(dest / CARD_FILE) as card_file):
         torch.save(packed, model_file)
         np.savez_compressed(mapping_file, **arrays)
-        card_file.write_text(json.dumps(card, indent=2) + "\n", encoding="utf-8")
+        save_json(card_file, card)
     return {name: (dest / name).stat().st_size for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE)}
 
 
