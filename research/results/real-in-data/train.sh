@@ -3,16 +3,17 @@
 # 8's recipe (folds-v8/config-v8.json) on DATA (version 4's tables less the fits of the 19 measurements) plus the
 # .bsdf measurements of the two other folds plus the procedural banks of FAMILIES, as WORK/ARM-fF-sSEED (ARM default
 # mf; research/results/diffractive names its arm mfd). One run per fold in FOLDS (default 0 1 2) and seed in SEEDS
-# (default SEED, default 0), JOBS (default 3) at once on one thread each.
+# (default SEED, default 0), JOBS (default 3) at once on one thread each. CONFIG replaces version 8's recipe
+# (research/results/latent-size).
 #
-#   [SEED=0 | SEEDS="0 1 2"] [FOLDS="0 1 2"] [ARM=mf] bash research/results/real-in-data/train.sh DATA FAMILIES WORK [MEASURED]
+#   [SEED=0 | SEEDS="0 1 2"] [FOLDS="0 1 2"] [ARM=mf] [CONFIG=FILE] bash research/results/real-in-data/train.sh DATA FAMILIES WORK [MEASURED]
 set -euo pipefail
 DATA=${1:?DATA folder}; FAMILIES=${2:?FAMILIES bank folder}; WORK=${3:?WORK folder}
 MEASURED=${4:-../shared/data/rgl-measured}
 SEEDS=${SEEDS:-${SEED:-0}}; FOLDS=${FOLDS:-0 1 2}; ARM=${ARM:-mf}
 HERE=$(dirname "$0")
 source "$HERE/../../../release/link_inputs.sh"
-CONFIG=$HERE/../folds-v8/config-v8.json
+CONFIG=${CONFIG:-$HERE/../folds-v8/config-v8.json}
 for fold in $FOLDS; do
     folder="$WORK/data-$ARM-f$fold"
     mkdir -p "$folder"
