@@ -1,0 +1,37 @@
+"""latent-size's addendum (README.md): `irid_flake_paint2` read by runs that trained on it (real-in-data's `mf`
+seed-0 runs of folds 0 and 2), encoder, `latent` and `full`, beside the truth; 4,000 random valid bins, draw 0.
+
+    python research/results/latent-size/irid_trained.py WORK research/results/latent-size/irid-trained.jpg
+    (WORK: the folder of the runs, local/rid)
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from frenbrdf.models.autoencoder import load_model
+from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.render.renderer import Scene, material_mask
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+from image_grid import measurement_row, save_image_grid  # noqa: E402
+
+MATERIAL = "irid_flake_paint2_rgb"
+RUNS = ("mf-f0-s0", "mf-f2-s0")
+
+
+def main(work: str, figure: str) -> None:
+    scene = Scene(resolution=128)
+    mask = material_mask(scene)
+    grid = []
+    for run in RUNS:
+        model = load_model(Path(work) / run)
+        columns = [(f"{run} {'encoder' if budget == 'none' else budget}", model, refine_config(budget))
+                   for budget in ("none", "latent", "full")]
+        grid.append((f"trained on it\n{run}", measurement_row(MATERIAL, columns, scene, mask)))
+    save_image_grid(grid, figure)
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:3])
