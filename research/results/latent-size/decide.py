@@ -3,6 +3,8 @@
     python research/results/latent-size/decide.py OUT
         [--mf research/results/real-in-data/out]   (its measured/, seeds/*/ and tables/ readings)
 
+Each arm's figures per material are real-in-data's seeds.py's (the mean over the arm's runs).
+
 OUT holds score_runs.sh's `mf128-fF-s0/compare.json` and score_tables.sh's `tables/compare.json`. Writes
 OUT/decision.json and prints the rule's tests and what is reported beside them.
 """
@@ -10,8 +12,8 @@ OUT/decision.json and prints the rule's tests and what is reported beside them.
 from __future__ import annotations
 
 import argparse
-import collections
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,20 +22,14 @@ from frenbrdf.evaluation.statistics import paired_interval
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 FOLDS = json.loads((STUDIES / "measured_folds" / "folds.json").read_text())
-REAL_IN_DATA = Path(__file__).resolve().parent.parent / "real-in-data" / "out"
+REAL_IN_DATA = Path(__file__).resolve().parent.parent / "real-in-data"
+
+sys.path.insert(0, str(REAL_IN_DATA))
+from seeds import per_material as figures  # noqa: E402  (material → (PSNR, ΔE, runs), the mean over an arm's runs)
 
 
 def rows_of(paths) -> list[dict]:
     return [row for path in paths for row in json.loads(Path(path).read_text())["rows"]]
-
-
-def figures(rows: list[dict], arm: str, budget: str) -> dict[str, tuple[float, float]]:
-    """Material → (PSNR, ΔE), the mean over the arm's runs that read it with this budget."""
-    per = collections.defaultdict(list)
-    for row in rows:
-        if row["model"].split("/")[0] == arm and row["budget"] == budget:
-            per[row["material"]].append((row["psnr"], row["delta_e"]))
-    return {m: tuple(np.mean(values, axis=0).tolist()) for m, values in per.items()}
 
 
 def difference(new: dict, old: dict, names=None) -> dict:
@@ -48,7 +44,7 @@ def mean_of(fig: dict, names) -> list[float]:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("out", type=Path)
-    parser.add_argument("--mf", type=Path, default=REAL_IN_DATA)
+    parser.add_argument("--mf", type=Path, default=REAL_IN_DATA / "out")
     args = parser.parse_args(argv)
     measured = rows_of([args.mf / "measured" / "compare.json", *sorted(args.mf.glob("seeds/*/compare.json")),
                         *sorted(args.out.glob("mf128-f*/compare.json"))])
