@@ -1,11 +1,12 @@
-"""latent-size's rule (README.md): `mf128` (one run a fold) against `mf` (the mean of its fold's three runs).
+"""latent-size's rule (README.md): a candidate arm (one run a fold) against `mf` (the mean of its fold's three runs).
 
-    python research/results/latent-size/decide.py OUT
+    python research/results/latent-size/decide.py OUT [--arm mf128]
         [--mf research/results/real-in-data/out]   (its measured/, seeds/*/ and tables/ readings)
 
+The candidate is `mf128` (latent-size) by default; research/results/decoder-width judges `mfw512` by the same rule.
 Each arm's figures per material are real-in-data's seeds.py's (the mean over the arm's runs).
 
-OUT holds score_runs.sh's `mf128-fF-s0/compare.json` and score_tables.sh's `tables/compare.json`. Writes
+OUT holds score_runs.sh's `ARM-fF-s0/compare.json` and score_tables.sh's `tables/compare.json`. Writes
 OUT/decision.json and prints the rule's tests and what is reported beside them.
 """
 
@@ -44,18 +45,21 @@ def mean_of(fig: dict, names) -> list[float]:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("out", type=Path)
+    parser.add_argument("--arm", default="mf128", help="the candidate arm's name (its runs' labels)")
     parser.add_argument("--mf", type=Path, default=REAL_IN_DATA / "out")
     args = parser.parse_args(argv)
+    arm = args.arm
     measured = rows_of([args.mf / "measured" / "compare.json", *sorted(args.mf.glob("seeds/*/compare.json")),
-                        *sorted(args.out.glob("mf128-f*/compare.json"))])
+                        *sorted(args.out.glob(f"{arm}-f*/compare.json"))])
     tables = rows_of([args.mf / "tables" / "compare.json", args.out / "tables" / "compare.json"])
-    fig = {(arm, budget): figures(measured, arm, budget) for arm in ("mf", "mf128") for budget in ("none", "latent", "full")}
-    if len(fig["mf128", "latent"]) != 19:
-        raise SystemExit(f"mf128 read {len(fig['mf128', 'latent'])} measurements with latent; expected 19")
-    latent = difference(fig["mf128", "latent"], fig["mf", "latent"])
-    folds = [difference(fig["mf128", "latent"], fig["mf", "latent"], names)["mean"] for names in FOLDS["folds"]]
-    encoder = difference(fig["mf128", "none"], fig["mf", "none"])
-    table = difference(figures(tables, "mf128", "latent"), figures(tables, "mf", "latent"))
+    arms = ("mf", arm)
+    fig = {(a, budget): figures(measured, a, budget) for a in arms for budget in ("none", "latent", "full")}
+    if len(fig[arm, "latent"]) != 19:
+        raise SystemExit(f"{arm} read {len(fig[arm, 'latent'])} measurements with latent; expected 19")
+    latent = difference(fig[arm, "latent"], fig["mf", "latent"])
+    folds = [difference(fig[arm, "latent"], fig["mf", "latent"], names)["mean"] for names in FOLDS["folds"]]
+    encoder = difference(fig[arm, "none"], fig["mf", "none"])
+    table = difference(figures(tables, arm, "latent"), figures(tables, "mf", "latent"))
     tests = {
         "a: latent per measurement above 0": latent["low"] > 0,
         "b: each fold's mean above 0": all(f > 0 for f in folds),
@@ -63,15 +67,14 @@ def main(argv: list[str] | None = None) -> None:
         "d: tables' latent not wholly below 0": table["high"] >= 0,
     }
     reported = {
-        f"{arm} {budget}": mean_of(fig[arm, budget], sorted(fig[arm, budget]))
-        for arm in ("mf", "mf128") for budget in ("none", "latent", "full")
+        f"{a} {budget}": mean_of(fig[a, budget], sorted(fig[a, budget])) for a in arms for budget in ("none", "latent", "full")
     }
-    reported |= {f"{arm} {budget} by kind": {kind: mean_of(fig[arm, budget], names) for kind, names in FOLDS["kinds"].items()}
-                 for arm in ("mf", "mf128") for budget in ("none", "latent", "full")}
-    reported["full, mf128 − mf"] = difference(fig["mf128", "full"], fig["mf", "full"])
-    reported["tables' encoder, mf128 − mf"] = difference(figures(tables, "mf128", "none"), figures(tables, "mf", "none"))
-    reported["ΔE > 6"] = {f"{arm} {budget}": {m: round(v[1], 2) for m, v in fig[arm, budget].items() if v[1] > 6}
-                          for arm in ("mf", "mf128") for budget in ("none", "latent", "full")}
+    reported |= {f"{a} {budget} by kind": {kind: mean_of(fig[a, budget], names) for kind, names in FOLDS["kinds"].items()}
+                 for a in arms for budget in ("none", "latent", "full")}
+    reported[f"full, {arm} − mf"] = difference(fig[arm, "full"], fig["mf", "full"])
+    reported[f"tables' encoder, {arm} − mf"] = difference(figures(tables, arm, "none"), figures(tables, "mf", "none"))
+    reported["ΔE > 6"] = {f"{a} {budget}": {m: round(v[1], 2) for m, v in fig[a, budget].items() if v[1] > 6}
+                          for a in arms for budget in ("none", "latent", "full")}
     decision = {"passes": all(tests.values()), "tests": tests, "latent": latent, "fold means": folds,
                 "encoder": encoder, "tables' latent": table, "reported": reported}
     (args.out / "decision.json").write_text(json.dumps(decision, indent=1, ensure_ascii=False) + "\n")
