@@ -1,12 +1,13 @@
 """latent-size's addendum (README.md): `irid_flake_paint2` read by runs that trained on it (real-in-data's `mf`
 seed-0 runs of folds 0 and 2), encoder, `latent` and `full`, beside the truth; 4,000 random valid bins, draw 0.
 
-    python research/results/latent-size/irid_trained.py WORK research/results/latent-size/irid-trained.jpg
-    (WORK: the folder of the runs, local/rid)
+    python research/results/latent-size/irid_trained.py WORK research/results/latent-size/irid-trained.jpg [--arm mf]
+    (WORK: the folder of the runs, local/rid; research/results/decoder-width reads its `mfw512` runs with --arm)
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -18,14 +19,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from image_grid import measurement_row, save_image_grid  # noqa: E402
 
 MATERIAL = "irid_flake_paint2_rgb"
-RUNS = ("mf-f0-s0", "mf-f2-s0")
+FOLDS_TRAINED_ON_IT = (0, 2)
 
 
-def main(work: str, figure: str) -> None:
+def main(work: str, figure: str, arm: str = "mf") -> None:
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
-    for run in RUNS:
+    for run in (f"{arm}-f{fold}-s0" for fold in FOLDS_TRAINED_ON_IT):
         model = load_model(Path(work) / run)
         columns = [(f"{run} {'encoder' if budget == 'none' else budget}", model, refine_config(budget))
                    for budget in ("none", "latent", "full")]
@@ -34,4 +35,9 @@ def main(work: str, figure: str) -> None:
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:3])
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("work")
+    parser.add_argument("figure")
+    parser.add_argument("--arm", default="mf")
+    args = parser.parse_args()
+    main(args.work, args.figure, args.arm)
