@@ -43,6 +43,14 @@ def test_too_few_pairs_weigh_alike_and_k_is_checked():
             coverage_weights(wi, wo, k)
 
 
+def test_every_allowed_k_gives_weights_even_the_smallest_and_largest():
+    # k = 1 once crashed: scipy returns a flat array for a plain k=1.
+    wi, wo = random_bins(1200, 6)
+    for k in (1, 2, MAX_K):
+        weights = coverage_weights(wi, wo, k)
+        assert weights.shape == (1200,) and np.all(np.isfinite(weights)) and weights.mean() == pytest.approx(1.0)
+
+
 def test_refine_config_checks_coverage_k():
     assert RefineConfig(coverage_k=32).coverage_k == 32
     for k in (-1, 1.5, True, "8", MAX_K + 1):

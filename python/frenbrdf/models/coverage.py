@@ -105,7 +105,8 @@ def _kth_distance(tree: cKDTree, points: np.ndarray, k: int) -> np.ndarray:
     """The distance from each point to its k-th nearest in ``tree``, in chunks whose neighbour lists stay within
     :data:`QUERY_VALUES` values (a whole MERL table's 1.1 million pairs at k = 1024 would need 18 GB at once)."""
     rows = max(1, QUERY_VALUES // k)
-    return np.concatenate([tree.query(points[start:start + rows], k=k)[0][:, -1]
+    # k=[k] asks for the k-th neighbour alone, as a column even at k = 1 (a plain k=1 returns a flat array).
+    return np.concatenate([tree.query(points[start:start + rows], k=[k])[0][:, 0]
                            for start in range(0, len(points), rows)])
 
 
