@@ -80,6 +80,16 @@ def test_a_mitsuba_render_above_its_own_limit_is_refused_before_any_work(tmp_pat
         render_material(tmp_path / "missing.binary", resolution=MAX_MITSUBA_RESOLUTION + 1, spp=1)
 
 
+def test_a_mitsuba_render_of_more_samples_than_its_limit_is_refused_before_any_work(tmp_path):
+    from frenbrdf.render.mitsuba.scene import MAX_MITSUBA_RESOLUTION, MAX_MITSUBA_SAMPLES, render_material
+
+    spp = MAX_MITSUBA_SAMPLES // MAX_MITSUBA_RESOLUTION**2  # the most at the largest size
+    with pytest.raises(ValueError, match=f"spp {spp + 1} at {MAX_MITSUBA_RESOLUTION}² asks for .* e.g. spp {spp} "):
+        render_material(tmp_path / "missing.binary", resolution=MAX_MITSUBA_RESOLUTION, spp=spp + 1)
+    with pytest.raises(ValueError, match="spp 65536 at 1024²"):  # the CLI's largest spp
+        render_material(tmp_path / "missing.binary", resolution=1024, spp=1 << 16)
+
+
 # --- spectra: lmax bounded by what the variant's fit costs ---------------------------------------------------------
 
 

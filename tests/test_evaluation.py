@@ -132,6 +132,19 @@ def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
     assert "Evaluation set: the runs' test split, read from" in table
 
 
+@pytest.mark.parametrize("name", ["renders.png", "histograms.png", "interpolation.png", "spectrum.png"])
+def test_a_users_file_under_a_figures_name_is_refused_before_any_work(tiny_runs, tmp_path, monkeypatch, name):
+    from frenbrdf.evaluation import evaluate as evaluation
+
+    out = tmp_path / "eval"
+    out.mkdir()
+    (out / name).write_text("mine")
+    monkeypatch.setattr(evaluation, "_reconstruct_all", lambda *a, **k: pytest.fail("work began"))
+    with pytest.raises(ValueError, match=f"holds {name}, which this command would replace"):
+        evaluate_runs(tiny_runs, out, config=EvaluateConfig(progress=False), overwrite=True)
+    assert (out / name).read_text() == "mine"
+
+
 def test_every_table_reports_colour_difference(tiny_runs, tmp_path):
     config = EvaluateConfig(samples=300, edits=6, resolution=32, edit_resolution=16, progress=False)
     report = evaluate_runs(tiny_runs, tmp_path / "eval", config=config)
@@ -238,6 +251,23 @@ def test_the_render_grid_shows_the_first_materials_and_the_worst_colours():
     assert first == ["m0", "m1", "m2", "m3"]
     assert hardest == ["m7", "m4", "m5", "m8"]  # by mean ΔE over the methods; m0 is shown once, among the first
     assert rendered_materials(names[:5], per_material) == (names[:4], ["m4"])
+
+
+def test_an_evaluation_keeps_the_renders_of_the_materials_it_can_show_and_no_others():
+    from frenbrdf.evaluation.evaluate import _keep_shown_renders
+
+    names = [f"m{i}" for i in range(40)]
+    rng = np.random.default_rng(0)
+    per_material, renders, mean_delta_e = {"a": [], "b": []}, {}, {}
+    for name in names:  # as the reconstruction pass goes, material by material
+        for rows in per_material.values():
+            rows.append({"material": name, "delta_e": float(rng.integers(0, 12))})  # ties: the first found stays
+        renders[name] = {"truth": np.zeros(1)}
+        mean_delta_e[name] = float(np.mean([rows[-1]["delta_e"] for rows in per_material.values()]))
+        _keep_shown_renders(renders, names, mean_delta_e)
+        assert len(renders) <= 8
+    first, hardest = rendered_materials(names, per_material)
+    assert set(renders) == set(first + hardest)
 
 
 def test_evaluate_refuses_runs_of_different_splits(tiny_runs, toy_materials, tmp_path):

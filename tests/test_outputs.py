@@ -279,6 +279,45 @@ def test_a_staged_write_refuses_a_name_the_user_took_meanwhile_and_records_only_
     assert sorted(p.name for p in out.iterdir()) == [MARKER, "notes.md", "report.md", "results.json"]
 
 
+def test_a_folder_the_command_wrote_is_not_replaced_nor_removed_once_the_user_added_to_it(tmp_path):
+    """Inside its own subfolders too a command replaces only what it wrote: a note left in `seed-1/` stops the
+    rerun that would replace that folder (staged) or remove it (begin), before anything changes."""
+    out = tmp_path / "evaluation"
+    with OutputFolder.claim(out, command="evaluate").staged() as staging:
+        (staging / "seed-1").mkdir()
+        (staging / "seed-1" / "evaluation.json").write_text("{}")
+    assert json.loads((out / MARKER).read_text())["contents"] == {"seed-1": ["evaluation.json"]}
+    (out / "seed-1" / "my-notes.txt").write_text("mine")
+    for names in (["seed-1"], ["seed-2"]):  # seed-1 replaced, or removed as the rerun no longer writes it
+        with pytest.raises(ValueError, match=r"seed-1/ holds my-notes.txt, which this command did not write"):
+            with OutputFolder.claim(out, command="evaluate", overwrite=True).staged() as staging:
+                for name in names:
+                    (staging / name).mkdir()
+        assert (out / "seed-1" / "my-notes.txt").read_text() == "mine"
+        assert sorted(p.name for p in out.iterdir()) == [MARKER, "seed-1"]
+    demo = tmp_path / "demo"
+    folder = OutputFolder.claim(demo, command="demo")
+    folder.begin(["runs"])
+    (demo / "runs" / "run-0").mkdir(parents=True)
+    (demo / "runs" / "run-0" / "last.pt").write_text("weights")
+    folder.finish()
+    (demo / "runs" / "run-0" / "notes.md").write_text("mine")
+    with pytest.raises(ValueError, match=r"runs/ holds run-0/notes.md"):
+        OutputFolder.claim(demo, command="demo", overwrite=True).begin(["runs"])
+    assert (demo / "runs" / "run-0" / "notes.md").read_text() == "mine"
+    (demo / "runs" / "run-0" / "notes.md").unlink()  # as the command left it: replaced as before
+    OutputFolder.claim(demo, command="demo").begin(["runs"])
+    assert not (demo / "runs").exists()
+
+
+def test_a_marker_whose_record_of_contents_is_malformed_is_not_ours(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / MARKER).write_text(json.dumps({"command": "evaluate", "entries": ["a"], "contents": {"a": "b"}}))
+    with pytest.raises(ValueError, match="cannot read"):
+        OutputFolder.claim(out, command="evaluate", overwrite=True)
+
+
 def test_out_dot_writes_into_the_current_folder(tmp_path, monkeypatch):
     """``--out .`` (the folder itself is never renamed, so no 'Device or resource busy')."""
     inputs = _inputs(tmp_path)

@@ -49,7 +49,7 @@ from ..io.sampling import as_table
 from ..models.autoencoder import Model
 from ..models.reconstruct import BUDGETS, refine_config
 from ..presets import method_names
-from ..render.figures import rendered_materials, write_figures
+from ..render.figures import FIGURE_FILES, FIRST_SHOWN, WORST_SHOWN, rendered_materials, write_figures
 from ..render.renderer import Scene, material_mask, render_linear, tonemap
 from ..render.scoring import (
     FrequencyMetric as FrequencyMetric,  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
@@ -65,7 +65,9 @@ from .tables import ROWS as ROWS
 from .tables import colour_losses, pattern_suffix, report_markdown, seeds_markdown, summarise, table_rows
 from .tables import markdown_table as markdown_table
 
-#: The largest render sizes an evaluation takes: about 2 GB at these on 100 test materials.
+#: The largest render sizes an evaluation takes. It holds the display renders of the eight materials ``renders.png``
+#: can show (at 1024², with three runs refined, about 1.4 GB) and each material's linear render at the editing size
+#: (1.6 MB a material at 256²).
 MAX_RESOLUTION, MAX_EDIT_RESOLUTION = 1024, 256
 
 
@@ -305,6 +307,7 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     start = time.perf_counter()
     out = out_dir if isinstance(out_dir, OutputFolder) else check_out(out_dir, run_dirs, data=data,
                                                                        overwrite=overwrite)
+    out.check_names([*FIGURE_FILES, "spectrum.png"])  # a user's file under one of these names: refused now, not at the end
     loaded = load_runs(run_dirs, data, config.max_materials, all_materials=config.all_materials, materials=materials)
     runs, models, names, files = loaded.runs, loaded.models, loaded.test, loaded.files
     rng = np.random.default_rng(config.seed)
@@ -351,7 +354,7 @@ class _Reconstructed:
     per_material: dict[str, list[dict]]
     """Each method's metric rows, one per material."""
     renders: dict[str, dict[str, np.ndarray]]
-    """By material: the truth's display image and each method's."""
+    """By material: the truth's display image and each method's; only for the materials ``renders.png`` can show."""
     edit_truth_linear: dict[str, np.ndarray]
     """The truth's linear render at the editing resolution, by material."""
     spectrum: SpectrumSummary
@@ -368,6 +371,7 @@ def _reconstruct_all(models: dict, names: list[str], files: dict, config: Evalua
     scoring = Scoring(scene, mask, FrequencyMetric(), refinement)
     rngs = {pattern: rng if pattern == DEFAULT_PATTERN else pattern_rng(config.seed, pattern)
             for pattern in config.patterns}
+    mean_delta_e: dict[str, float] = {}
     for name in tqdm(names, desc="reconstruction", disable=not config.progress):
         truth = read_measured(files[name])  # a .bsdf renders as measured, not through its table
         table = as_table(truth)
@@ -392,7 +396,18 @@ def _reconstruct_all(models: dict, names: list[str], files: dict, config: Evalua
                 key + pattern_suffix(pattern, config.patterns): value
                 for pattern, one in scored.items() for key, value in one.metrics.items()}})
         done.spectrum.add(table, decoded)
+        mean_delta_e[name] = float(np.mean([rows[-1]["delta_e"] for rows in done.per_material.values()]))
+        _keep_shown_renders(done.renders, names, mean_delta_e)
     return done
+
+
+def _keep_shown_renders(renders: dict, names: list[str], mean_delta_e: dict[str, float]) -> None:
+    """Drops the display images of materials that :func:`rendered_materials` can no longer choose (the first
+    ones and those highest in ΔE so far stay), so an evaluation holds eight materials' renders, not every one's."""
+    first = names[:FIRST_SHOWN]
+    worst = sorted((n for n in mean_delta_e if n not in first), key=lambda n: -mean_delta_e[n])[:WORST_SHOWN]
+    for name in set(renders) - set(first) - set(worst):
+        del renders[name]
 
 
 def _edit_all(models: dict, names: list[str], pairs, done: _Reconstructed, config: EvaluateConfig,
@@ -456,6 +471,7 @@ def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,
                  if config.all_materials else None)
     if len(groups) == 1:
         return evaluate_runs(next(iter(groups.values())), out, data=data, config=config, materials=materials)
+    out.check_names(f"seed-{seed}" for seed in groups)
     with out.staged() as staging:
         return _compare_seeds(runs, groups, staging, data, config, materials)
 

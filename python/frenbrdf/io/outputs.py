@@ -9,7 +9,10 @@ A command writes its folder into
 
 Anything else in the folder is the user's. Without ``overwrite`` a folder holding such entries is
 refused; with ``overwrite`` the command writes beside them, and still never replaces or deletes one:
-``overwrite`` lets a command replace only what a run of the same command wrote. A folder holds one
+``overwrite`` lets a command replace only what a run of the same command wrote. The same holds inside
+the folders a command wrote (``seed-1/``, ``runs/``): the marker lists what each held when the command
+finished, and a folder that has gained anything since is neither replaced nor removed (the command
+stops, naming what it found). A folder holds one
 command's output: another command's (or a marker that cannot be read) is refused even with ``overwrite``.
 An output is never one of the command's inputs, the folder of an input, nor a folder holding one.
 
@@ -35,7 +38,7 @@ import shutil
 import uuid
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .atomic import raise_naming, save_json
@@ -46,6 +49,8 @@ MARKER = ".frenbrdf-output.json"
 STAGING_PREFIX = ".frenbrdf-partial-"
 #: The largest marker read (a marker lists names; a bigger file is not one of ours).
 MARKER_BYTES = 1 << 22
+#: The most paths recorded of one folder the command wrote; a larger one goes unrecorded (replaced as a whole).
+CONTENTS_PATHS = 20_000
 
 
 def _option_error(option: str, out, message: str) -> ValueError:
@@ -98,6 +103,11 @@ def _read_marker(folder: Path) -> dict | None:
     # Plain names only: a forged marker must not make a command delete anything outside its folder.
     if not isinstance(entries, list) or not all(isinstance(e, str) and _plain_name(e) for e in entries):
         return None
+    contents = marker.get("contents", {})
+    if not isinstance(contents, dict) or not all(
+            isinstance(name, str) and isinstance(paths, list) and all(isinstance(p, str) for p in paths)
+            for name, paths in contents.items()):
+        return None
     return marker
 
 
@@ -111,6 +121,20 @@ def _remove(path: Path) -> None:
         shutil.rmtree(path)
     else:
         path.unlink(missing_ok=True)
+
+
+def _is_folder(path: Path) -> bool:
+    return path.is_dir() and not path.is_symlink()
+
+
+def _contents(folder: Path) -> list[str] | None:
+    """Every path under ``folder`` (relative, links not followed), or None past :data:`CONTENTS_PATHS`."""
+    found = []
+    for root, dirs, files in os.walk(folder):
+        found += [os.path.relpath(os.path.join(root, name), folder) for name in dirs + files]
+        if len(found) > CONTENTS_PATHS:
+            return None
+    return sorted(found)
 
 
 @dataclass
@@ -138,6 +162,10 @@ class OutputFolder:
         The user allowed writing beside their entries (and, when ``additive``, replacing an earlier run's entry).
     option
         The option that named the folder, for messages.
+    contents
+        What each folder among ``earlier`` held when the command wrote it (from the marker): a folder that holds
+        more now is not replaced nor removed. A folder without a record (an older marker, a run that died
+        before :meth:`finish`) is the command's as a whole.
     """
 
     path: Path
@@ -148,6 +176,7 @@ class OutputFolder:
     additive: bool
     overwrite: bool
     option: str = "--out"
+    contents: dict[str, list[str]] = field(default_factory=dict)
 
     @classmethod
     def claim(cls, out: str | os.PathLike, *, command: str, inputs: Iterable = (), overwrite: bool = False,
@@ -171,11 +200,13 @@ class OutputFolder:
             raise _option_error(option, out, "exists and is not a folder")
         earlier: frozenset[str] = frozenset()
         others: frozenset[str] = frozenset()
+        contents: dict[str, list[str]] = {}
         if target.is_dir():
             entries = {entry.name for entry in target.iterdir()} - _staging_entries(target)
             marker = _read_marker(target)
             if marker is not None and marker["command"] == command:
                 earlier = frozenset(set(marker["entries"]) & entries)
+                contents = {name: paths for name, paths in marker.get("contents", {}).items() if name in earlier}
                 entries -= earlier | {MARKER}
             others = frozenset(entries)
             if MARKER in others:  # one marker a folder: another command's output is never shared, even when asked
@@ -191,7 +222,7 @@ class OutputFolder:
             if not parent.is_dir():
                 raise _option_error(option, out, f"{parent} is not a folder")
             _check_writable(parent, option)
-        return cls(path, target, command, earlier, others, additive, overwrite, option)
+        return cls(path, target, command, earlier, others, additive, overwrite, option, contents)
 
     def check_names(self, names: Iterable[str]) -> None:
         """Refuses, before any work, names this run would write that are the user's entries, or (``additive``
@@ -212,11 +243,14 @@ class OutputFolder:
         names = set(names)
         self._refresh_others()
         self.check_names(names)
+        removed = set() if self.additive else self.earlier - set(keep)
+        self._check_unchanged(removed | (names & self.earlier) - set(keep))
         self.target.mkdir(parents=True, exist_ok=True)
+        # What this run may change goes unrecorded until finish() records it again.
+        self.contents = {}
         self._write_marker(self.earlier | names)
-        if not self.additive:
-            for name in self.earlier - set(keep):
-                _remove(self.target / name)
+        for name in removed:
+            _remove(self.target / name)
         self.earlier = frozenset(names | (self.earlier if self.additive else self.earlier & set(keep)))
         return self.target
 
@@ -225,6 +259,7 @@ class OutputFolder:
         holds. Only those: an entry that appeared any other way while the command ran (a user's ``.git``, their
         notes) is the user's, never recorded, so no later run removes it."""
         self.earlier = frozenset(self.earlier & self._listing())
+        self._record_contents(self.earlier)
         self._write_marker(self.earlier)
 
     def _listing(self) -> set[str]:
@@ -252,28 +287,57 @@ class OutputFolder:
             self._refresh_others()
             self.check_names(names)
             if new:
-                save_json(staging / MARKER, {"command": self.command, "entries": sorted(names)})
-                os.replace(staging, self.target)
+                self.contents = {name: paths for name in names
+                                 if _is_folder(staging / name) and (paths := _contents(staging / name)) is not None}
                 self.earlier = frozenset(names)
+                save_json(staging / MARKER, self._marker(self.earlier))
+                os.replace(staging, self.target)
                 return
+            removed = set() if self.additive else self.earlier - names
+            self._check_unchanged(removed | (names & self.earlier))
             self._write_marker(self.earlier | names)
             for name in names:
                 destination = self.target / name
-                if destination.is_dir() and not destination.is_symlink():
+                if _is_folder(destination):
                     os.replace(destination, staging / f".old-{name}")  # a folder cannot be renamed over
                 os.replace(staging / name, destination)
-            if not self.additive:
-                for name in self.earlier - names:
-                    _remove(self.target / name)
+            for name in removed:
+                _remove(self.target / name)
             self.earlier = frozenset(names | (self.earlier if self.additive else set()))
+            self._record_contents(names)
             self._write_marker(self.earlier)
         except (OSError, ValueError) as error:  # a message names the output, never the hidden staging folder
             raise_naming(error, staging, self.path)
         finally:
             shutil.rmtree(staging, ignore_errors=True)
 
+    def _check_unchanged(self, names: Iterable[str]) -> None:
+        """Refuses, before anything is replaced or removed, to touch a folder among ``names`` that holds a path
+        it did not hold when this command wrote it."""
+        for name in sorted(names):
+            recorded = self.contents.get(name)
+            if recorded is None or not _is_folder(self.target / name):
+                continue
+            now = _contents(self.target / name)
+            added = sorted(set(now) - set(recorded)) if now is not None else ["more than the command wrote"]
+            if added:
+                raise _option_error(self.option, self.path, f"{name}/ holds {', '.join(added[:3])}, which this command "
+                                    "did not write; move it out, or choose another folder")
+
+    def _record_contents(self, names: Iterable[str]) -> None:
+        for name in names:
+            if _is_folder(self.target / name) and (paths := _contents(self.target / name)) is not None:
+                self.contents[name] = paths
+            else:
+                self.contents.pop(name, None)
+
+    def _marker(self, entries: Iterable[str]) -> dict:
+        entries = sorted(entries)
+        contents = {name: self.contents[name] for name in entries if name in self.contents}
+        return {"command": self.command, "entries": entries} | ({"contents": contents} if contents else {})
+
     def _write_marker(self, entries: Iterable[str]) -> None:
-        save_json(self.target / MARKER, {"command": self.command, "entries": sorted(entries)})
+        save_json(self.target / MARKER, self._marker(entries))
 
 
 def _staging_entries(folder: Path) -> set[str]:

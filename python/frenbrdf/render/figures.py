@@ -19,8 +19,14 @@ from .renderer import Scene, render_linear, save_figure, tonemap
 HISTOGRAM_METRICS = (("rmse", "RMSE"), ("psnr", "PSNR"), ("ssim", "SSIM"), ("delta_e", "ΔE"))
 
 
-def rendered_materials(names: list[str], per_material: dict[str, list[dict]], first: int = 4,
-                       worst: int = 4) -> tuple[list[str], list[str]]:
+#: What :func:`write_figures` writes (``interpolation.png`` only where there was a pair to edit).
+FIGURE_FILES = ("histograms.png", "renders.png", "interpolation.png")
+#: ``renders.png`` shows the first this many materials and this many of the rest, those highest in ΔE.
+FIRST_SHOWN, WORST_SHOWN = 4, 4
+
+
+def rendered_materials(names: list[str], per_material: dict[str, list[dict]], first: int = FIRST_SHOWN,
+                       worst: int = WORST_SHOWN) -> tuple[list[str], list[str]]:
     """The materials of ``renders.png``: the first ``first`` names, and the ``worst`` others with the
     highest ΔE averaged over the methods (highest first), so the hard cases are always in the picture."""
     mean_delta_e = {name: np.mean([row["delta_e"] for rows in per_material.values() for row in rows

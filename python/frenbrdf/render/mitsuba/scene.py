@@ -16,6 +16,9 @@ from .variants import _import_mitsuba
 #: about 55 bytes a pixel whatever the samples per pixel (measured peak of ``frenbrdf render --mitsuba``: 1.7 GB at
 #: 4096², so about 4.5 GB at 8192²; 64 samples per pixel take some 10 minutes per 2048² on two cores).
 MAX_MITSUBA_RESOLUTION = 4096
+#: The most samples of one Mitsuba render (samples per pixel × pixels): 16 times those 10 minutes, some hours on two
+#: cores (256 samples a pixel at 4096², 4096 at 1024²).
+MAX_MITSUBA_SAMPLES = 1 << 32
 
 
 def environment_bitmap(width: int = 128) -> np.ndarray:
@@ -76,6 +79,10 @@ def _check_size(resolution: int, spp: int) -> None:
     if not 1 <= resolution <= MAX_MITSUBA_RESOLUTION or spp < 1:
         raise ValueError(f"resolution must be in 1 … {MAX_MITSUBA_RESOLUTION} (MAX_MITSUBA_RESOLUTION: a Mitsuba render "
                          f"takes about 55 bytes a pixel) and spp ≥ 1, got {resolution} and {spp}")
+    if spp * resolution**2 > MAX_MITSUBA_SAMPLES:
+        raise ValueError(f"spp {spp} at {resolution}² asks for {spp * resolution**2:,} samples; a Mitsuba render takes "
+                         f"at most {MAX_MITSUBA_SAMPLES:,} (MAX_MITSUBA_SAMPLES: some hours on two cores), e.g. "
+                         f"spp {MAX_MITSUBA_SAMPLES // resolution**2} at this resolution")
 
 
 def render_material(material, out_path: str | os.PathLike | None = None, spp: int = 64, resolution: int = 256,
