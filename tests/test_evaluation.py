@@ -145,6 +145,14 @@ def test_a_users_file_under_a_figures_name_is_refused_before_any_work(tiny_runs,
     assert (out / name).read_text() == "mine"
 
 
+def test_without_data_the_runs_own_data_folder_is_an_input_never_written(tiny_runs):
+    data = Run(tiny_runs[0]).data
+    before = sorted(p.name for p in data.iterdir())
+    with pytest.raises(ValueError, match="is the input"):
+        evaluate_runs(tiny_runs, data, config=EvaluateConfig(progress=False), overwrite=True)
+    assert sorted(p.name for p in data.iterdir()) == before
+
+
 def test_every_table_reports_colour_difference(tiny_runs, tmp_path):
     config = EvaluateConfig(samples=300, edits=6, resolution=32, edit_resolution=16, progress=False)
     report = evaluate_runs(tiny_runs, tmp_path / "eval", config=config)

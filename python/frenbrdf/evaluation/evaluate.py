@@ -282,10 +282,22 @@ def check_out(out_dir, run_dirs, *, data=None, overwrite: bool = False) -> Outpu
     """Where an evaluation may write, checked before any work (:class:`frenbrdf.io.outputs.OutputFolder`): a new or
     empty folder or an earlier evaluation's, not a run folder nor the data folder, nor one holding either; a
     folder holding other entries only with ``overwrite`` (they are kept)."""
-    inputs = (*run_dirs, *([data] if data is not None else []))
+    inputs = (*run_dirs, *([data] if data is not None else _trained_on(run_dirs)))
     out = OutputFolder.claim(out_dir, command="evaluate", inputs=inputs, overwrite=overwrite)
     out.check_names(["evaluation.json", "evaluation.md"])
     return out
+
+
+def _trained_on(run_dirs) -> list[Path]:
+    """The data folders the runs name (read without --data): inputs too. A folder that is not a readable run adds
+    none here; loading it later says what is wrong with it."""
+    folders = []
+    for path in run_dirs:
+        try:
+            folders.append(Run(path).data)
+        except (OSError, ValueError):
+            continue
+    return folders
 
 
 def pattern_rng(seed: int, pattern: str) -> np.random.Generator:
