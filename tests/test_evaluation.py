@@ -110,6 +110,16 @@ def tiny_runs(toy_materials, tmp_path_factory):
     return runs
 
 
+def test_edit_pairs_are_those_of_the_listed_combinations_without_listing_them():
+    import itertools
+
+    for n, most in [(2, 1), (5, 3), (9, 20), (40, 7), (200, 50), (9, 100), (6, 0)]:
+        listed = list(itertools.combinations(range(n), 2))
+        if len(listed) > most:
+            listed = [listed[i] for i in sorted(np.random.default_rng(n).choice(len(listed), size=most, replace=False))]
+        assert edit_pairs(n, most, np.random.default_rng(n)) == listed
+
+
 def test_evaluate_writes_tables_and_figures(tiny_runs, tmp_path):
     config = EvaluateConfig(samples=300, edits=12, resolution=32, edit_resolution=16, progress=False)
     report = evaluate_runs(tiny_runs, tmp_path / "eval", config=config)

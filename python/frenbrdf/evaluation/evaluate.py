@@ -121,11 +121,17 @@ class EvaluateConfig:
 
 
 def edit_pairs(n_materials: int, most: int, rng: np.random.Generator) -> list[tuple[int, int]]:
-    """Unordered pairs of distinct materials, each at most once: all of them, or ``most`` drawn at random."""
-    pairs = list(itertools.combinations(range(n_materials), 2))
-    if len(pairs) > most:
-        pairs = [pairs[i] for i in sorted(rng.choice(len(pairs), size=most, replace=False))]
-    return pairs
+    """Unordered pairs of distinct materials, each at most once: all of them, or ``most`` drawn at random (the
+    ``k``-th pair in ``itertools.combinations``' order for each index ``k`` drawn, found without listing them all)."""
+    total = n_materials * (n_materials - 1) // 2
+    if total <= most:
+        return list(itertools.combinations(range(n_materials), 2))
+    chosen = np.sort(rng.choice(total, size=most, replace=False))
+    rows = np.arange(n_materials)
+    starts = rows * n_materials - rows * (rows + 1) // 2  # the index of the pair (a, a + 1), for each a
+    first = np.searchsorted(starts, chosen, side="right") - 1
+    second = first + 1 + (chosen - starts[first])
+    return [(int(a), int(b)) for a, b in zip(first, second, strict=True)]
 
 
 @dataclass
