@@ -72,6 +72,17 @@ def test_an_encoder_trained_for_a_frozen_decoder_keeps_that_decoder_and_mapping(
     assert new.config.encoder.pooled == (16,)
 
 
+@pytest.mark.parametrize("option", ["decoder_from", "init_from"])
+def test_the_run_a_training_starts_from_is_an_input_never_its_output(toy_materials, tmp_path, option):
+    source = train(tiny("frenbrdf", toy_materials, tmp_path / "source", epochs=1))
+    before = {p.name: p.read_bytes() for p in source.path.iterdir()}
+    for given in (source.path, source.path / "best.pt"):  # the run, or one of its checkpoints
+        cfg = tiny("frenbrdf", toy_materials, source.path, epochs=1, **{option: str(given)})
+        with pytest.raises(ValueError, match="is the input"):
+            train(cfg, overwrite=True)
+    assert {p.name: p.read_bytes() for p in source.path.iterdir()} == before
+
+
 def test_a_decoder_of_another_shape_is_refused_before_training(toy_materials, tmp_path):
     source = train(tiny("nbrdf", toy_materials, tmp_path / "source", epochs=1))
     cfg = tiny("nbrdf", toy_materials, tmp_path / "refit", decoder_from=str(source.path))

@@ -48,12 +48,13 @@ def check_run_folder(cfg: TrainConfig, *, resume: bool = False, overwrite: bool 
     """Where :func:`train` may write, checked before any work (the output rule of :mod:`frenbrdf.io.outputs`):
     without ``resume`` a new or empty folder; an earlier run's folder, or one holding other entries, only with
     ``overwrite`` (the earlier run's files are then removed before training, the user's entries kept); with
-    ``resume`` a folder holding ``last.pt``. Never the data folder, nor a folder holding it."""
+    ``resume`` a folder holding ``last.pt``. Never an input: the data folder, the run or checkpoint of
+    ``decoder_from`` / ``init_from``, nor a folder holding one."""
     if not cfg.out:
         raise ValueError("config.out (the run folder) is empty")
     if not cfg.data:
         raise ValueError("config.data (the folder of MERL files) is empty")
-    inputs = (cfg.data,)
+    inputs = (cfg.data, *(source for source in (cfg.decoder_from, cfg.init_from) if source and source != "pretrained"))
     if resume:  # the run's own files are written again; nothing else in the folder is touched
         folder = OutputFolder.claim(cfg.out, command="train", inputs=inputs, overwrite=True)
         if not (folder.target / "last.pt").is_file():
