@@ -103,6 +103,7 @@ def main(argv=None) -> int:
     parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR))
     parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"))
     args = parser.parse_args(argv)
+    pretrained.check_pack_destination(args.dest, inputs=[args.base, *args.members])  # before any work
     checkpoint, mapping, card = assemble(args.base, args.members, base_encoder=not args.without_base_encoder,
                                       choice=args.choice)
     work = Path(args.work)

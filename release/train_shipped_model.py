@@ -239,6 +239,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trained-on", help="the machine the run was trained on, for the card (default: this CPU)")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
+    pretrained.check_pack_destination(args.dest, inputs=[args.work])  # before any work
     folders = [Path(f) for f in (args.merl, args.bank, *args.data) if f]
     if not folders:
         parser.error("give --merl, --bank, --data or several")

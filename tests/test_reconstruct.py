@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -484,6 +485,22 @@ def test_missing_or_foreign_packed_files_are_named(run_dir, tmp_path):
     (tmp_path / "packed" / "model.pt").write_bytes(b"garbage")
     with pytest.raises(ValueError, match=r"model\.pt: not a readable packed model"):
         frenbrdf.Model.pretrained(tmp_path / "packed")
+
+
+def test_packing_never_replaces_files_that_are_not_a_packed_models(run_dir, tmp_path):
+    before = (Path(run_dir) / "mapping.npz").read_bytes()
+    with pytest.raises(ValueError, match=r"holds mapping\.npz, not a packed model's files"):
+        pretrained.pack_pretrained(run_dir, run_dir)  # a run folder: its mapping.npz stays
+    assert (Path(run_dir) / "mapping.npz").read_bytes() == before
+    notes = tmp_path / "notes"
+    notes.mkdir()
+    (notes / "card.json").write_text('{"mine": true}')
+    with pytest.raises(ValueError, match=r"holds card\.json, not a packed model's files"):
+        pretrained.pack_pretrained(run_dir, notes)
+    assert (notes / "card.json").read_text() == '{"mine": true}'
+    pretrained.pack_pretrained(run_dir, tmp_path / "packed")
+    with pytest.raises(ValueError, match="is the input"):  # what a model is assembled from is never its destination
+        pretrained.check_pack_destination(tmp_path / "packed", inputs=[tmp_path / "packed"])
 
 
 @pytest.mark.slow

@@ -116,11 +116,33 @@ def pack_pretrained(run_dir: str | os.PathLike, dest: str | os.PathLike | None =
     return pack_checkpoint(checkpoint, mapping, dest, card=card, half=half)
 
 
+def check_pack_destination(dest: str | os.PathLike | None, inputs=()) -> Path:
+    """Where a model may be packed, checked before any work: not one of ``inputs`` (the runs or packed models it
+    is made from), their folder, nor one holding them; and a folder holding none of the three file names, or a
+    packed model (:func:`load_packed` reads it) that the new one replaces. A training run's ``mapping.npz`` or a
+    user's ``card.json`` is never replaced."""
+    from ...io.outputs import check_not_input
+
+    dest = Path(dest) if dest is not None else PACKAGE_DIR
+    check_not_input(dest.resolve(), inputs, option="dest", out=dest)
+    if dest.exists() and not dest.is_dir():
+        raise ValueError(f"dest {dest} exists and is not a folder")
+    present = [name for name in (MODEL_FILE, MAPPING_FILE, CARD_FILE) if (dest / name).exists()]
+    if present:
+        try:
+            load_packed(dest)
+        except (OSError, ValueError) as error:
+            raise ValueError(f"dest {dest} holds {', '.join(present)}, not a packed model's files ({error}); pack "
+                             "into an empty folder or an earlier packed model's") from None
+    return dest
+
+
 def pack_checkpoint(checkpoint: dict, mapping: dict, dest: str | os.PathLike | None = None, *,
                     card: dict | None = None, half: bool = True) -> dict[str, int]:
     """Packs a checkpoint (``method``, ``config``, ``model``) and its mapping's state: :func:`pack_pretrained`
-    without a run folder (e.g. a model assembled from others, ``release/pack_encoder_mean.py``)."""
-    dest = Path(dest) if dest is not None else PACKAGE_DIR
+    without a run folder (e.g. a model assembled from others, ``release/pack_encoder_mean.py``). ``dest`` is
+    checked by :func:`check_pack_destination` first."""
+    dest = check_pack_destination(dest)
     dtype = torch.float16 if half else torch.float32
     packed = {"format": FORMAT, "method": checkpoint["method"], "config": checkpoint["config"],
               "model": {name: value.to(dtype) for name, value in checkpoint["model"].items()}}
