@@ -17,6 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from frenbrdf.io.atomic import atomic_path
 from frenbrdf.render.viewer import view
 from frenbrdf.render.viewer.browser import Browser
 
@@ -29,7 +30,8 @@ def measure(browser: Browser, path: Path, query: str = "", screenshot: Path | No
         raise RuntimeError(f"{path}: {error}")
     converge = page.evaluate("window.frenbrdfView.secondsToConverge")
     if screenshot:
-        screenshot.write_bytes(page.screenshot())
+        with atomic_path(screenshot) as temporary:  # whole or not at all; the folder made if missing
+            temporary.write_bytes(page.screenshot())
     fps = page.evaluate("window.frenbrdfView.measure(30)")
     return {"page": path.name, "query": query, "kib": round(path.stat().st_size / 1024), "converge_s": round(converge, 1),
             "fps_key_light": round(fps, 1), "console_errors": page.console_errors()}
