@@ -272,7 +272,7 @@ def test_the_render_grid_shows_the_first_materials_and_the_worst_colours():
 
 
 def test_an_evaluation_keeps_the_renders_of_the_materials_it_can_show_and_no_others():
-    from frenbrdf.evaluation.evaluate import _keep_shown_renders
+    from frenbrdf.render.figures import drop_unshown_renders
 
     names = [f"m{i}" for i in range(40)]
     rng = np.random.default_rng(0)
@@ -282,7 +282,7 @@ def test_an_evaluation_keeps_the_renders_of_the_materials_it_can_show_and_no_oth
             rows.append({"material": name, "delta_e": float(rng.integers(0, 12))})  # ties: the first found stays
         renders[name] = {"truth": np.zeros(1)}
         mean_delta_e[name] = float(np.mean([rows[-1]["delta_e"] for rows in per_material.values()]))
-        _keep_shown_renders(renders, names, mean_delta_e)
+        drop_unshown_renders(renders, names, mean_delta_e)
         assert len(renders) <= 8
     first, hardest = rendered_materials(names, per_material)
     assert set(renders) == set(first + hardest)

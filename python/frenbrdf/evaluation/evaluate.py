@@ -29,7 +29,6 @@ material of a folder that no run trained or validated on: an out-of-distribution
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import os
 import time
 import zlib
@@ -49,15 +48,17 @@ from ..io.sampling import as_table
 from ..models.autoencoder import Model
 from ..models.reconstruct import BUDGETS, refine_config
 from ..presets import method_names
-from ..render.figures import FIGURE_FILES, FIRST_SHOWN, WORST_SHOWN, rendered_materials, write_figures
+from ..render.figures import FIGURE_FILES, drop_unshown_renders, rendered_materials, write_figures
 from ..render.renderer import Scene, material_mask, render_linear, tonemap
 from ..render.scoring import (
     FrequencyMetric as FrequencyMetric,  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
 )
-from ..render.scoring import Scoring, edit_metrics, highlight_mask
+from ..render.scoring import Scoring, highlight_mask
 from ..render.scoring import image_metrics as image_metrics
 from ..render.scoring import reconstruction_rows as reconstruction_rows
 from ..training.run import Run
+from .editing import edit_pairs as edit_pairs  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
+from .editing import edit_rows
 from .spectrum import SpectrumSummary
 from .statistics import REFERENCE, compare_seeds
 from .tables import PAPER as PAPER  # re-exported: frenbrdf.evaluation.evaluate keeps its public names
@@ -118,20 +119,6 @@ class EvaluateConfig:
                 raise ValueError(f"{name} must be a whole number in 8 … {most}, got {value!r}")
         if isinstance(self.edits, bool) or not isinstance(self.edits, int) or self.edits < 0:
             raise ValueError(f"edits must be a whole number ≥ 0 (0: no editing table), got {self.edits!r}")
-
-
-def edit_pairs(n_materials: int, most: int, rng: np.random.Generator) -> list[tuple[int, int]]:
-    """Unordered pairs of distinct materials, each at most once: all of them, or ``most`` drawn at random (the
-    ``k``-th pair in ``itertools.combinations``' order for each index ``k`` drawn, found without listing them all)."""
-    total = n_materials * (n_materials - 1) // 2
-    if total <= most:
-        return list(itertools.combinations(range(n_materials), 2))
-    chosen = np.sort(rng.choice(total, size=most, replace=False))
-    rows = np.arange(n_materials)
-    starts = rows * n_materials - rows * (rows + 1) // 2  # the index of the pair (a, a + 1), for each a
-    first = np.searchsorted(starts, chosen, side="right") - 1
-    second = first + 1 + (chosen - starts[first])
-    return [(int(a), int(b)) for a, b in zip(first, second, strict=True)]
 
 
 @dataclass
@@ -337,7 +324,8 @@ def evaluate_runs(run_dirs, out_dir, *, data: str | None = None, config: Evaluat
     done = _reconstruct_all(models, names, files, config, rng, scene, edit_scene, refinement)
     latents, per_material, renders, spectrum = done.latents, done.per_material, done.renders, done.spectrum
     pairs = edit_pairs(len(names), max(1, config.edits // len(config.weights)) if config.edits else 0, rng)
-    edits = _edit_all(models, names, pairs, done, config, edit_scene)
+    edits = edit_rows(models, names, pairs, done.latents, done.edit_truth_linear, config.weights, edit_scene,
+                      progress=config.progress)
 
     first, hardest = rendered_materials(names, per_material)
     report = {"data": str(loaded.data), "runs": [str(r) for r in runs], "test_materials": names,
@@ -415,39 +403,8 @@ def _reconstruct_all(models: dict, names: list[str], files: dict, config: Evalua
                 for pattern, one in scored.items() for key, value in one.metrics.items()}})
         done.spectrum.add(table, decoded)
         mean_delta_e[name] = float(np.mean([rows[-1]["delta_e"] for rows in done.per_material.values()]))
-        _keep_shown_renders(done.renders, names, mean_delta_e)
+        drop_unshown_renders(done.renders, names, mean_delta_e)
     return done
-
-
-def _keep_shown_renders(renders: dict, names: list[str], mean_delta_e: dict[str, float]) -> None:
-    """Drops the display images of materials that :func:`rendered_materials` can no longer choose (the first
-    ones and those highest in ΔE so far stay), so an evaluation holds eight materials' renders, not every one's."""
-    first = names[:FIRST_SHOWN]
-    worst = sorted((n for n in mean_delta_e if n not in first), key=lambda n: -mean_delta_e[n])[:WORST_SHOWN]
-    for name in set(renders) - set(first) - set(worst):
-        del renders[name]
-
-
-def _edit_all(models: dict, names: list[str], pairs, done: _Reconstructed, config: EvaluateConfig,
-              edit_scene: Scene) -> dict[str, list[dict]]:
-    """Each method's editing rows: every pair at every weight t, from each kind of latent (encoder, refined)."""
-    edit_mask = material_mask(edit_scene)
-    edits: dict[str, list[dict]] = {m: [] for m in models}
-    with tqdm(total=len(pairs) * len(config.weights) * len(models), desc="editing",
-              disable=not config.progress) as bar:
-        for a, b in pairs:
-            name_a, name_b = names[a], names[b]
-            for t in config.weights:
-                for method, model in models.items():
-                    row = {"a": name_a, "b": name_b, "t": t}
-                    for prefix, by_method in done.latents.items():
-                        metrics = edit_metrics(model, by_method[method][name_a], by_method[method][name_b],
-                                               done.edit_truth_linear[name_a], done.edit_truth_linear[name_b], t,
-                                               edit_scene, edit_mask)
-                        row.update({prefix + key: value for key, value in metrics.items()})
-                    edits[method].append(row)
-                    bar.update()
-    return edits
 
 
 def evaluate_seeds(run_dirs, out_dir, *, data: str | None = None,

@@ -34,6 +34,14 @@ def rendered_materials(names: list[str], per_material: dict[str, list[dict]], fi
     return names[:first], sorted(mean_delta_e, key=lambda name: -mean_delta_e[name])[:worst]
 
 
+def drop_unshown_renders(renders: dict, names: list[str], mean_delta_e: dict[str, float]) -> None:
+    """Drops, as an evaluation goes, the display images of materials that :func:`rendered_materials` can no longer
+    choose (the first ones and those highest in mean ΔE so far stay): it holds eight materials' renders, not all."""
+    first = names[:FIRST_SHOWN]
+    worst = sorted((n for n in mean_delta_e if n not in first), key=lambda n: -mean_delta_e[n])[:WORST_SHOWN]
+    for name in set(renders) - set(first) - set(worst):
+        del renders[name]
+
 def write_figures(out: Path, shown: list[str], renders: dict, per_material: dict, models: dict, latents: dict,
                   edit_pair: tuple[str, str] | None, edit_truth_linear: dict, weights, edit_resolution: int) -> None:
     """Writes the three figures into ``out``.
