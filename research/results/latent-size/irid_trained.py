@@ -22,16 +22,22 @@ MATERIAL = "irid_flake_paint2_rgb"
 FOLDS_TRAINED_ON_IT = (0, 2)
 
 
-def main(work: str, figure: str, arm: str = "mf") -> None:
+def save_irid_rows(models: dict[str, str | Path], figure: str) -> None:
+    """One row per model (label → run folder or checkpoint): truth, encoder, `latent`, `full`."""
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
-    for run in (f"{arm}-f{fold}-s0" for fold in FOLDS_TRAINED_ON_IT):
-        model = load_model(Path(work) / run)
-        columns = [(f"{run} {'encoder' if budget == 'none' else budget}", model, refine_config(budget))
+    for label, path in models.items():
+        model = load_model(path)
+        columns = [(f"{label} {'encoder' if budget == 'none' else budget}", model, refine_config(budget))
                    for budget in ("none", "latent", "full")]
-        grid.append((f"trained on it\n{run}", measurement_row(MATERIAL, columns, scene, mask)))
+        grid.append((f"trained on it\n{label}", measurement_row(MATERIAL, columns, scene, mask)))
     save_image_grid(grid, figure)
+
+
+def main(work: str, figure: str, arm: str = "mf") -> None:
+    runs = [f"{arm}-f{fold}-s0" for fold in FOLDS_TRAINED_ON_IT]
+    save_irid_rows({run: Path(work) / run for run in runs}, figure)
 
 
 if __name__ == "__main__":
