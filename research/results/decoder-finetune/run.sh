@@ -11,12 +11,12 @@ HERE=$(dirname "$0")
 STUDIES=$HERE/../../studies
 mkdir -p "$OUT"
 for fold in 0 1 2; do echo "$fold"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c '
-    fold=$1; trained_on=()
+    work=$1; ft=$2; out=$3; fold=$4; trained_on=()
     for m in $(python "$0/measured_folds/folds.py" others "$fold"); do trained_on+=("base/f$fold=$m" "ft/f$fold=$m"); done
-    python "$0/compare_models.py" --models "$2/mfw512-f$fold-s0" "$3/ft-f$fold" --labels "base/f$fold" "ft/f$fold" \
+    python "$0/compare_models.py" --models "$work/mfw512-f$fold-s0" "$ft/ft-f$fold" --labels "base/f$fold" "ft/f$fold" \
         --trained-on "${trained_on[@]}" --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full \
         --samples 4000 --resolution 128 --group $(python "$0/measured_folds/folds.py" groups) \
-        --out "$4/f$fold" > "$4/f$fold.log" 2>&1' "$STUDIES" "$WORK" "$FT" "$OUT"
+        --out "$out/f$fold" > "$out/f$fold.log" 2>&1' "$STUDIES" "$WORK" "$FT" "$OUT"
 models=(); labels=()
 for arm in base ft; do for fold in 0 1 2; do
     [[ $arm == base ]] && models+=("$WORK/mfw512-f$fold-s0") || models+=("$FT/ft-f$fold")
