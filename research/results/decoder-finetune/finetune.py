@@ -5,7 +5,8 @@ The run's training materials (its split and data folder, read as training reads 
 starts at the run's encoder's z of 2,000 of its random bins and is optimised with the decoder's weights (Adam, two
 rates) on L_rec plus the run's weight and latent penalties, 2,000 query bins a material a step, batches of the
 run's size, no augmentation and no L_fre. The encoder is not trained. Written as a run folder (the source's
-config, split and mapping, its ``best.pt`` with the decoder replaced), so every script that reads runs reads it.
+config, split and mapping, its ``best.pt`` with the decoder replaced), so every script that reads runs reads it,
+with ``finetune.json`` (the training loss by epoch) and ``latents.npz`` (each training material's latent at the end).
 
     python research/results/decoder-finetune/finetune.py RUN OUT [--epochs 300] [--decoder-lr 1e-4] [--latent-lr 1e-2]
 """
@@ -19,6 +20,7 @@ import shutil
 import time
 from pathlib import Path
 
+import numpy as np
 import torch
 from tqdm.auto import tqdm
 
@@ -80,6 +82,8 @@ def finetune(run: Path, out: Path, epochs: int, decoder_lr: float, latent_lr: fl
     for name in ("config.json", "split.json", "mapping.npz"):
         shutil.copy2(run / name, out / name)
     save(out / "best.pt", checkpoint)
+    names = list(split.train)  # the bank's first n_train materials, in split order
+    np.savez(out / "latents.npz", names=np.array(names), latents=latents.detach().numpy())
     record = {"source": str(run), "epochs": epochs, "decoder_lr": decoder_lr, "latent_lr": latent_lr, "seed": seed,
               "seconds": time.perf_counter() - start, "history": history}
     save_json(out / "finetune.json", record)
