@@ -141,6 +141,16 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
     return 0
 
 
+def fit_decoder(args: argparse.Namespace) -> int:
+    from ..training.decoder_fit import DecoderFitConfig, fit_decoder
+
+    config = DecoderFitConfig(epochs=args.epochs, decoder_lr=args.decoder_lr, latent_lr=args.latent_lr, seed=args.seed)
+    out = fit_decoder(args.source, args.out, config, overwrite=args.overwrite, progress=not args.quiet)
+    print(f"fitted the decoder of {args.source} -> {out} (its encoders no longer fit it: train them again with "
+          f"`frenbrdf train --decoder-from {out}`)")
+    return 0
+
+
 def evaluate(args: argparse.Namespace) -> int:
     from ..evaluation.evaluate import EvaluateConfig, evaluate_seeds, report_markdown, seeds_markdown
 

@@ -47,6 +47,7 @@ resolution = whole(8, limit(".render.renderer", "MAX_RESOLUTION"))
 evaluate_resolution = whole(8, limit(".evaluation.evaluate", "MAX_RESOLUTION"))
 edit_resolution = whole(8, limit(".material.edit", "MAX_RESOLUTION"))
 nbrdf_width = whole(1, limit(".models.nbrdf", "MAX_WIDTH"))
+fit_epochs = whole(1, limit(".training.decoder_fit", "MAX_EPOCHS"))
 lmax = whole(1, limit(".models.losses", "MAX_LMAX"))
 coverage_k = whole(0, limit(".models.coverage", "MAX_K"))
 
@@ -70,6 +71,17 @@ def unit_interval(text: str) -> float:
         value = math.nan
     if not 0 <= value <= 1:
         raise argparse.ArgumentTypeError(f"expected a number in 0 … 1, got {text!r}")
+    return value
+
+
+def rate(text: str) -> float:
+    """An argparse type: a learning rate in (0, 1] (larger Adam steps overflow)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0 < value <= 1:
+        raise argparse.ArgumentTypeError(f"expected a learning rate in (0, 1], got {text!r}")
     return value
 
 

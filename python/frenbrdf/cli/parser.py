@@ -116,6 +116,23 @@ def _fit_nbrdf(subparsers) -> None:
     fit.set_defaults(run=commands.fit_nbrdf)
 
 
+def _fit_decoder(subparsers) -> None:
+    fit = subparsers.add_parser("fit-decoder", help="fit a trained run's decoder further, each training material's "
+                                "latent free: `latent` then reaches more of every material (train its encoders "
+                                "again with `train --decoder-from OUT`)")
+    fit.add_argument("source", metavar="RUN", help="a training run folder (`frenbrdf train --out`); its data folder must hold its "
+                     "materials still")
+    fit.add_argument("--out", required=True, help="the fitted run folder: a new or empty one")
+    fit.add_argument("--epochs", type=options.fit_epochs, default=300, help="passes over the training materials "
+                     "(default 300)")
+    fit.add_argument("--decoder-lr", type=options.rate, default=1e-4, help="Adam rate of the decoder (default 1e-4)")
+    fit.add_argument("--latent-lr", type=options.rate, default=1e-3, help="Adam rate of the latents (default 1e-3)")
+    fit.add_argument("--seed", type=options.seed, default=0)
+    fit.add_argument("--overwrite", action="store_true", help="replace an earlier fit-decoder's output in --out")
+    fit.add_argument("--quiet", action="store_true", help="no progress bar")
+    fit.set_defaults(run=commands.fit_decoder)
+
+
 def _evaluate(subparsers) -> None:
     evaluate = subparsers.add_parser("evaluate", help="reconstruction and editing tables and figures for runs")
     evaluate.add_argument("runs", nargs="+", help="run folders: one per method, of one seed or of several "
@@ -324,4 +341,4 @@ def _demo(subparsers) -> None:
 
 
 #: Every command, in the order ``--help`` lists them.
-COMMANDS = (_info, _synth, _import_nbrdf, _train, _fit_nbrdf, _evaluate, _render, _select, _reconstruct, _edit, _convert, _view, _spectrum, _demo)
+COMMANDS = (_info, _synth, _import_nbrdf, _train, _fit_nbrdf, _fit_decoder, _evaluate, _render, _select, _reconstruct, _edit, _convert, _view, _spectrum, _demo)
