@@ -120,8 +120,8 @@ def _fit_decoder(subparsers) -> None:
     fit = subparsers.add_parser("fit-decoder", help="fit a trained run's decoder further, each training material's "
                                 "latent free: `latent` then reaches more of every material (train its encoders "
                                 "again with `train --decoder-from OUT`)")
-    fit.add_argument("source", metavar="RUN", help="a training run folder (`frenbrdf train --out`); its data folder must hold its "
-                     "materials still")
+    fit.add_argument("source", metavar="RUN", help="a training run folder (`frenbrdf train --out`); its data "
+                     "folder must hold its materials still")
     fit.add_argument("--out", required=True, help="the fitted run folder: a new or empty one")
     fit.add_argument("--epochs", type=options.fit_epochs, default=300, help="passes over the training materials "
                      "(default 300)")
