@@ -52,12 +52,17 @@ lmax = whole(1, limit(".models.losses", "MAX_LMAX"))
 coverage_k = whole(0, limit(".models.coverage", "MAX_K"))
 
 
+def _number(text: str) -> float:
+    """``float(text)``, or NaN where it is not a number (so every range check below refuses it)."""
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
 def decibels(text: str) -> float:
     """An argparse type: a finite number of dB > 0 (NaN and inf are numbers to ``float()``)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
+    value = _number(text)
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"expected a finite number of dB > 0, got {text!r}")
     return value
@@ -65,10 +70,7 @@ def decibels(text: str) -> float:
 
 def unit_interval(text: str) -> float:
     """An argparse type: a number in [0, 1] (an edit's position t; NaN and inf are numbers to ``float()``)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
+    value = _number(text)
     if not 0 <= value <= 1:
         raise argparse.ArgumentTypeError(f"expected a number in 0 … 1, got {text!r}")
     return value
@@ -76,10 +78,7 @@ def unit_interval(text: str) -> float:
 
 def rate(text: str) -> float:
     """An argparse type: a learning rate in (0, 1] (larger Adam steps overflow)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
+    value = _number(text)
     if not 0 < value <= 1:
         raise argparse.ArgumentTypeError(f"expected a learning rate in (0, 1], got {text!r}")
     return value

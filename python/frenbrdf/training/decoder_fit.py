@@ -28,15 +28,16 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..data.folders import list_materials
+from ..data.folders import list_materials, mapped_bank, read_valid_table
 from ..exceptions import TrainingDiverged
 from ..io import checkpoints
 from ..io.atomic import save_json
 from ..io.outputs import OutputFolder
+from ..models.autoencoder import Model
 from ..models.losses import latent_penalty, reconstruction_loss, weight_penalty
 from ..models.nbrdf import nbrdf_forward
 from .config import TrainConfig
-from .prepared import prepare
+from .prepared import check_bank_memory
 from .run import Run
 
 #: What :func:`fit_decoder` writes into its folder.
@@ -99,11 +100,11 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
         raise ValueError(f"--out {out} already holds a fit-decoder output; replace it with --overwrite "
                          "(overwrite=True), or choose another folder")
     folder.check_names(FIT_FILES)
-    model = source.model()
-    # Only the mapped bank is needed: no frequency truth, no gain albedos.
-    reading = dataclasses.replace(cfg, method="nbrdf", loss=dataclasses.replace(cfg.loss, eta=0.0),
-                                  augment=dataclasses.replace(cfg.augment, gain=0.0, hue_turn=0.0))
-    bank = prepare(reading, dataclasses.replace(split, val=()), files, mapping=model.mapping).bank
+    checkpoint = checkpoints.load(run / "best.pt")
+    model = Model.from_checkpoint(checkpoint, checkpoints.load_mapping(run / "best.pt", checkpoint), source=str(run))
+    # Only the training materials' mapped bank is needed (no frequency truth, no gain albedos), read one at a time.
+    check_bank_memory(len(split.train))
+    bank = mapped_bank(split.train, (read_valid_table(files[name]) for name in split.train), model.mapping)
     network = model.network.train()
     network.encoder.requires_grad_(False)
     generator = torch.Generator().manual_seed(config.seed)
@@ -111,8 +112,7 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     latents, history = _fit(network.decoder, network.encoder, bank, len(split.train), cfg, config, generator,
                             progress)
     # The source's checkpoint with the new weights; its optimiser's state belonged to the old decoder.
-    checkpoint = {key: value for key, value in checkpoints.load(run / "best.pt").items() if key != "optimizer"}
-    checkpoint["model"] = network.state_dict()
+    checkpoint = {key: value for key, value in checkpoint.items() if key != "optimizer"} | {"model": network.state_dict()}
     with folder.staged() as staging:
         for name in RUN_INPUTS[:-1] + ("history.json",):  # the source's record, so the folder reads as a run
             if (run / name).is_file():
