@@ -144,10 +144,15 @@ def fit_nbrdf(args: argparse.Namespace) -> int:
 def fit_decoder(args: argparse.Namespace) -> int:
     from ..training.decoder_fit import DecoderFitConfig, fit_decoder
 
-    config = DecoderFitConfig(epochs=args.epochs, decoder_lr=args.decoder_lr, latent_lr=args.latent_lr, seed=args.seed)
+    config = DecoderFitConfig(epochs=args.epochs, decoder_lr=args.decoder_lr, latent_lr=args.latent_lr, seed=args.seed,
+                              encoder_weight=args.encoder_weight)
     out = fit_decoder(args.source, args.out, config, overwrite=args.overwrite, progress=not args.quiet)
-    print(f"fitted the decoder of {args.source} -> {out} (its encoders no longer fit it: train them again with "
-          f"`frenbrdf train --decoder-from {out}`)")
+    if config.encoder_weight > 0:
+        print(f"fitted the decoder and encoder of {args.source} -> {out} (other encoders of the decoder: train "
+              f"them again with `frenbrdf train --decoder-from {out}`)")
+    else:
+        print(f"fitted the decoder of {args.source} -> {out} (its encoders no longer fit it: train them again with "
+              f"`frenbrdf train --decoder-from {out}`)")
     return 0
 
 

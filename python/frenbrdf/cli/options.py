@@ -84,6 +84,14 @@ def rate(text: str) -> float:
     return value
 
 
+def loss_weight(text: str) -> float:
+    """An argparse type: a loss term's weight in [0, 100]."""
+    value = _number(text)
+    if not 0 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"expected a weight in 0 … 100, got {text!r}")
+    return value
+
+
 def sample_count(text: str) -> int | None:
     from ..io.samples import MIN_SAMPLES
 

@@ -39,6 +39,7 @@ from ..models.nbrdf import nbrdf_forward
 from .config import TrainConfig
 from .prepared import check_bank_memory
 from .run import Run
+from .step import loss_terms
 
 #: What :func:`fit_decoder` writes into its folder.
 FIT_FILES = ("config.json", "split.json", "mapping.npz", "history.json", "best.pt", "decoder-fit.json", "latents.npz")
@@ -61,6 +62,11 @@ class DecoderFitConfig:
     """Adam rate of the materials' latents (1e-2 threw the training loss from 0.06 to 0.33 in one epoch)."""
     seed: int = 0
     """Seeds the initial latents' samples, the order of the materials and the query bins."""
+    encoder_weight: float = 0.0
+    """0: the encoder stays as it is (its z no longer fits the new decoder). Above 0: the encoder trains too, at
+    ``decoder_lr``, and the loss adds this weight times the training loss (L_rec and penalties) of the decoding of
+    its z from a fresh context of the run's ``context_samples`` random bins, so the decoder stays one the encoder
+    can find its way in."""
 
     def __post_init__(self):
         problems = []
@@ -70,6 +76,8 @@ class DecoderFitConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and 0 < value <= 1):
                 problems.append(f"{name} must lie in (0, 1], got {value}")
+        if not (math.isfinite(self.encoder_weight) and 0 <= self.encoder_weight <= 100):
+            problems.append(f"encoder_weight must lie in [0, 100], got {self.encoder_weight}")
         if int(self.seed) < 0:
             problems.append(f"seed must be ≥ 0, got {self.seed}")
         if problems:
@@ -106,11 +114,10 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     check_bank_memory(len(split.train))
     bank = mapped_bank(split.train, (read_valid_table(files[name]) for name in split.train), model.mapping)
     network = model.network.train()
-    network.encoder.requires_grad_(False)
+    network.encoder.requires_grad_(config.encoder_weight > 0)
     generator = torch.Generator().manual_seed(config.seed)
     start = time.perf_counter()
-    latents, history = _fit(network.decoder, network.encoder, bank, len(split.train), cfg, config, generator,
-                            progress)
+    latents, history = _fit(network, bank, len(split.train), cfg, config, generator, progress)
     # The source's checkpoint with the new weights; its optimiser's state belonged to the old decoder.
     checkpoint = {key: value for key, value in checkpoint.items() if key != "optimizer"} | {"model": network.state_dict()}
     with folder.staged() as staging:
@@ -124,19 +131,23 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     return folder.path
 
 
-def _fit(decoder, encoder, bank, materials: int, cfg: TrainConfig, config: DecoderFitConfig,
-         generator: torch.Generator, progress: bool) -> tuple[np.ndarray, list[dict]]:
-    """The joint fit of the decoder's weights and one latent a material; returns the latents and the loss by epoch."""
+def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConfig, generator: torch.Generator,
+         progress: bool) -> tuple[np.ndarray, list[dict]]:
+    """The joint fit of the decoder's weights and one latent a material (and of the encoder with
+    ``config.encoder_weight``); returns the latents and the loss by epoch."""
+    decoder, encoder = network.decoder, network.encoder
     with torch.no_grad():  # each material's start: the encoder's z of a context drawn as training draws one
         latents = torch.cat([encoder(bank.sample(list(range(i, min(i + 8, materials))), cfg.context_samples,
                                                  generator).encoder_input()) for i in range(0, materials, 8)])
     latents.requires_grad_(True)
-    optimizer = torch.optim.Adam([{"params": decoder.parameters(), "lr": config.decoder_lr},
-                                  {"params": [latents], "lr": config.latent_lr}])
+    groups = [{"params": decoder.parameters(), "lr": config.decoder_lr}, {"params": [latents], "lr": config.latent_lr}]
+    if config.encoder_weight > 0:
+        groups.append({"params": encoder.parameters(), "lr": config.decoder_lr})
+    optimizer = torch.optim.Adam(groups)
     size, loss = min(cfg.batch_materials, materials), cfg.loss
     steps, history = materials // size, []
     for epoch in tqdm(range(config.epochs), desc="fit decoder", disable=not progress):
-        order, total = torch.randperm(materials, generator=generator).tolist(), 0.0
+        order, totals = torch.randperm(materials, generator=generator).tolist(), {"train_rec": 0.0}
         for step in range(steps):
             batch = order[step * size:(step + 1) * size]
             query = bank.sample(batch, cfg.query_samples, generator)
@@ -145,6 +156,11 @@ def _fit(decoder, encoder, bank, materials: int, cfg: TrainConfig, config: Decod
             rec = reconstruction_loss(nbrdf_forward(params, query.coords), query.values, query.cos_in, loss.kind)
             value = (rec + loss.lambda_weights * weight_penalty(params, loss.weight_penalty)
                      + loss.lambda_latent * latent_penalty(z))
+            if config.encoder_weight > 0:  # the same query read through the encoder's z, the loss training uses
+                encoded = loss_terms(network, None, loss, bank.sample(batch, cfg.context_samples, generator), query,
+                                     None)
+                value = value + config.encoder_weight * encoded.total
+                totals["train_rec_encoder"] = totals.get("train_rec_encoder", 0.0) + encoded.logged["rec"] / steps
             if not torch.isfinite(value):
                 raise TrainingDiverged(f"fit-decoder: the loss became {float(value)} at epoch {epoch}, step {step}; "
                                        f"nothing was written (lower decoder_lr {config.decoder_lr:g} or latent_lr "
@@ -152,6 +168,6 @@ def _fit(decoder, encoder, bank, materials: int, cfg: TrainConfig, config: Decod
             optimizer.zero_grad()
             value.backward()
             optimizer.step()
-            total += float(rec.detach()) / steps
-        history.append({"epoch": epoch, "train_rec": total})
+            totals["train_rec"] += float(rec.detach()) / steps
+        history.append({"epoch": epoch, **totals})
     return latents.detach().numpy(), history

@@ -2,7 +2,8 @@
 paired per material).
 
     python research/results/decoder-finetune/decide.py OUT [--arm ft]   (OUT: run.sh's fF/ and tables/ readings;
-                                                                      --arm refit: the amendment's runs)
+                                                                      --arm refit: the amendment's runs;
+                                                                      --arm joint --encoder-rule: the second's)
 
 Writes OUT/decision.json and prints the rule's tests and what is reported beside them.
 """
@@ -24,6 +25,8 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("out", type=Path)
     parser.add_argument("--arm", default="ft", help="the candidate's label in the readings")
+    parser.add_argument("--encoder-rule", action="store_true",
+                        help="the second amendment's rule: also (d) and (e), the encoder not wholly below 0")
     args = parser.parse_args(argv)
     arm = args.arm
     measured = rows_of(sorted(args.out.glob("f*/compare.json")))
@@ -40,6 +43,9 @@ def main(argv: list[str] | None = None) -> None:
         "b: each fold's mean above 0": all(f > 0 for f in folds),
         "c: tables' latent not wholly below 0": table["latent"]["high"] >= 0,
     }
+    if args.encoder_rule:
+        tests["d: encoder per measurement not wholly below 0"] = change["none"]["high"] >= 0
+        tests["e: tables' encoder not wholly below 0"] = table["none"]["high"] >= 0
     arms = ("base", arm)
     reported = {f"{a} {budget}": mean_of(fig[a, budget], sorted(fig[a, budget])) for a in arms for budget in BUDGETS}
     reported |= {f"{a} {budget} by kind": {kind: mean_of(fig[a, budget], names) for kind, names in FOLDS["kinds"].items()}

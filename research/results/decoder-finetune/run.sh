@@ -4,7 +4,8 @@
 # 128²), one process a fold, two at a time; then all six on the 40 held-out tables of DATA (encoder, `latent`).
 #
 #   [ARM=ft] bash research/results/decoder-finetune/run.sh WORK FT DATA OUT
-# ARM=refit reads the amendment's runs FT/refit-fF (the fine-tuned decoders with their encoders trained again).
+# ARM=refit reads the amendment's runs FT/refit-fF (the fine-tuned decoders with their encoders trained again);
+# ARM=joint the second amendment's FT/joint-fF (the encoder fitted with the decoder).
 set -euo pipefail
 WORK=${1:?WORK folder of the base runs}; FT=${2:?folder of the fine-tuned runs}; DATA=${3:?DATA: the 197 tables}
 OUT=${4:?OUT folder}
