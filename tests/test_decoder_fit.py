@@ -115,7 +115,7 @@ def test_bad_settings_are_refused_by_name(bad):
 
 
 def test_a_diverging_fit_writes_nothing(source_run, tmp_path, monkeypatch):
-    monkeypatch.setattr("frenbrdf.training.decoder_fit.reconstruction_loss",
+    monkeypatch.setattr("frenbrdf.training.step.reconstruction_loss",
                         lambda *args, **kwargs: torch.tensor(float("nan"), requires_grad=True))
     with pytest.raises(TrainingDiverged, match="decoder_lr"):
         fit_decoder(source_run, tmp_path / "out", DecoderFitConfig(epochs=1))

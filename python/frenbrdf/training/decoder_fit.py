@@ -34,12 +34,10 @@ from ..io import checkpoints
 from ..io.atomic import save_json
 from ..io.outputs import OutputFolder
 from ..models.autoencoder import Model
-from ..models.losses import latent_penalty, reconstruction_loss, weight_penalty
-from ..models.nbrdf import nbrdf_forward
 from .config import TrainConfig
 from .prepared import check_bank_memory
 from .run import Run
-from .step import loss_terms
+from .step import decoding_terms, loss_terms
 
 #: What :func:`fit_decoder` writes into its folder.
 FIT_FILES = ("config.json", "split.json", "mapping.npz", "history.json", "best.pt", "decoder-fit.json", "latents.npz")
@@ -152,10 +150,9 @@ def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConf
             batch = order[step * size:(step + 1) * size]
             query = bank.sample(batch, cfg.query_samples, generator)
             z = latents[batch]
-            params = decoder(z)
-            rec = reconstruction_loss(nbrdf_forward(params, query.coords), query.values, query.cos_in, loss.kind)
-            value = (rec + loss.lambda_weights * weight_penalty(params, loss.weight_penalty)
-                     + loss.lambda_latent * latent_penalty(z))
+            terms = decoding_terms(z, decoder(z), query, loss)
+            rec = terms["rec"]
+            value = rec + terms["w"] + terms["z"]
             if config.encoder_weight > 0:  # the same query read through the encoder's z, the loss training uses
                 encoded = loss_terms(network, None, loss, bank.sample(batch, cfg.context_samples, generator), query,
                                      None)

@@ -33,6 +33,16 @@ class LossTerms:
         return bad or ([] if torch.isfinite(self.total) else ["total"])
 
 
+def decoding_terms(z: torch.Tensor, params: list[torch.Tensor], query, loss: LossConfig) -> dict[str, torch.Tensor]:
+    """L_rec of the NBRDFs ``params`` decoded from ``z`` on ``query``, and the weight and latent penalties (weighted):
+    the loss of a decoding, whether z came from the encoder or is free (:mod:`.decoder_fit`)."""
+    return {
+        "rec": reconstruction_loss(nbrdf_forward(params, query.coords), query.values, query.cos_in, loss.kind),
+        "w": loss.lambda_weights * weight_penalty(params, loss.weight_penalty),
+        "z": loss.lambda_latent * latent_penalty(z),
+    }
+
+
 def loss_terms(network, frequency: FrequencyLoss | None, loss: LossConfig, context, query,
                true_coefficients: torch.Tensor | None, truth_mask: torch.Tensor | None = None) -> LossTerms:
     """L = L_rec + λ1 · weights + λ2 · latents + η · L_fre (L_fre only with ``frequency`` and the truth).
@@ -41,11 +51,7 @@ def loss_terms(network, frequency: FrequencyLoss | None, loss: LossConfig, conte
     batches); with none known the step has no L_fre term.
     """
     z, params = network(context.encoder_input())
-    terms = {
-        "rec": reconstruction_loss(nbrdf_forward(params, query.coords), query.values, query.cos_in, loss.kind),
-        "w": loss.lambda_weights * weight_penalty(params, loss.weight_penalty),
-        "z": loss.lambda_latent * latent_penalty(z),
-    }
+    terms = decoding_terms(z, params, query, loss)
     if frequency is not None and true_coefficients is not None:
         if truth_mask is None:
             terms["fre"] = frequency(params, true_coefficients)
