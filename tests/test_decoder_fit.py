@@ -61,6 +61,13 @@ def test_with_an_encoder_weight_the_encoder_fits_along_and_its_decoding_improves
     assert any(name.startswith("encoder.") for name in moved) and any(name.startswith("decoder.") for name in moved)
 
 
+def test_with_the_encoder_rate_zero_the_encoder_is_kept_and_read(source_run, tmp_path):
+    out = fit_decoder(source_run, tmp_path / "anchored", DecoderFitConfig(epochs=2, encoder_weight=1.0, encoder_lr=0.0))
+    assert "train_rec_encoder" in json.loads((out / "decoder-fit.json").read_text())["history"][0]
+    before, after = state(source_run), state(out)
+    assert all(torch.equal(value, before[name]) for name, value in after.items() if name.startswith("encoder."))
+
+
 def test_the_same_seed_fits_the_same_decoder(source_run, tmp_path):
     config = DecoderFitConfig(epochs=2, seed=3)
     first, second = (fit_decoder(source_run, tmp_path / name, config) for name in ("a", "b"))
@@ -108,7 +115,8 @@ def test_a_folder_that_is_no_trained_run_or_lost_its_data_is_refused_by_name(sou
 
 @pytest.mark.parametrize("bad", [dict(epochs=0), dict(decoder_lr=float("nan")), dict(latent_lr=0.0),
                                  dict(decoder_lr=2.0), dict(seed=-1), dict(encoder_weight=-1.0),
-                                 dict(encoder_weight=float("nan")), dict(encoder_weight=1e3)])
+                                 dict(encoder_weight=float("nan")), dict(encoder_weight=1e3), dict(encoder_lr=-1e-4),
+                                 dict(encoder_lr=float("inf"))])
 def test_bad_settings_are_refused_by_name(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         DecoderFitConfig(**bad)
@@ -126,7 +134,8 @@ def test_the_command_line(source_run, tmp_path, capsys):
     out = tmp_path / "fitted"
     assert cli.main(["fit-decoder", str(source_run), "--out", str(out), "--epochs", "1", "--quiet"]) == 0
     assert "--decoder-from" in capsys.readouterr().out and (out / "best.pt").is_file()
-    for option, value in (("--decoder-lr", "nan"), ("--latent-lr", "0"), ("--epochs", "0"), ("--encoder-weight", "-1")):
+    for option, value in (("--decoder-lr", "nan"), ("--latent-lr", "0"), ("--epochs", "0"), ("--encoder-weight", "-1"),
+                          ("--encoder-lr", "-1")):
         with pytest.raises(SystemExit):
             cli.main(["fit-decoder", str(source_run), "--out", str(tmp_path / "x"), option, value])
         assert option in capsys.readouterr().err

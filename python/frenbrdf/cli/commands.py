@@ -145,9 +145,9 @@ def fit_decoder(args: argparse.Namespace) -> int:
     from ..training.decoder_fit import DecoderFitConfig, fit_decoder
 
     config = DecoderFitConfig(epochs=args.epochs, decoder_lr=args.decoder_lr, latent_lr=args.latent_lr, seed=args.seed,
-                              encoder_weight=args.encoder_weight)
+                              encoder_weight=args.encoder_weight, encoder_lr=args.encoder_lr)
     out = fit_decoder(args.source, args.out, config, overwrite=args.overwrite, progress=not args.quiet)
-    if config.encoder_weight > 0:
+    if config.trains_encoder:
         print(f"fitted the decoder and encoder of {args.source} -> {out} (other encoders of the decoder: train "
               f"them again with `frenbrdf train --decoder-from {out}`)")
     else:

@@ -84,6 +84,14 @@ def rate(text: str) -> float:
     return value
 
 
+def rate_or_zero(text: str) -> float:
+    """An argparse type: a learning rate in [0, 1], 0 keeping the parameters as they are."""
+    value = _number(text)
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"expected a learning rate in [0, 1] (0: kept as is), got {text!r}")
+    return value
+
+
 def loss_weight(text: str) -> float:
     """An argparse type: a loss term's weight in [0, 100]."""
     value = _number(text)

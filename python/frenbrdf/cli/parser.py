@@ -127,9 +127,11 @@ def _fit_decoder(subparsers) -> None:
                      "(default 300)")
     fit.add_argument("--decoder-lr", type=options.rate, default=1e-4, help="Adam rate of the decoder (default 1e-4)")
     fit.add_argument("--latent-lr", type=options.rate, default=1e-3, help="Adam rate of the latents (default 1e-3)")
-    fit.add_argument("--encoder-weight", type=options.loss_weight, default=0.0, help="0 (default): the encoder "
-                     "stays as it was; above 0: it trains too, at the decoder's rate, its decoding's loss weighted "
-                     "by this, so it still finds its way in the new decoder")
+    fit.add_argument("--encoder-weight", type=options.loss_weight, default=0.0, help="0 (default): the encoder's "
+                     "z plays no part; above 0: the loss adds the decoding of its z, weighted by this, so the decoder "
+                     "stays one the encoder can read")
+    fit.add_argument("--encoder-lr", type=options.rate_or_zero, default=1e-4, help="with --encoder-weight: Adam "
+                     "rate of the encoder (default 1e-4); 0 keeps it as it is")
     fit.add_argument("--seed", type=options.seed, default=0)
     fit.add_argument("--overwrite", action="store_true", help="replace an earlier fit-decoder's output in --out")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")

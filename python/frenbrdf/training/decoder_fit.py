@@ -61,10 +61,16 @@ class DecoderFitConfig:
     seed: int = 0
     """Seeds the initial latents' samples, the order of the materials and the query bins."""
     encoder_weight: float = 0.0
-    """0: the encoder stays as it is (its z no longer fits the new decoder). Above 0: the encoder trains too, at
-    ``decoder_lr``, and the loss adds this weight times the training loss (L_rec and penalties) of the decoding of
-    its z from a fresh context of the run's ``context_samples`` random bins, so the decoder stays one the encoder
-    can find its way in."""
+    """0: the encoder's z plays no part (it no longer fits the new decoder). Above 0: the loss adds this weight
+    times the training loss (L_rec and penalties) of the decoding of the encoder's z from a fresh context of the
+    run's ``context_samples`` random bins, on the same query, so the decoder stays one the encoder can read."""
+    encoder_lr: float = 1e-4
+    """With ``encoder_weight`` above 0: the encoder's Adam rate; 0 keeps the encoder as it is (the decoder then
+    keeps fitting the z it gives)."""
+
+    @property
+    def trains_encoder(self) -> bool:
+        return self.encoder_weight > 0 and self.encoder_lr > 0
 
     def __post_init__(self):
         problems = []
@@ -76,6 +82,8 @@ class DecoderFitConfig:
                 problems.append(f"{name} must lie in (0, 1], got {value}")
         if not (math.isfinite(self.encoder_weight) and 0 <= self.encoder_weight <= 100):
             problems.append(f"encoder_weight must lie in [0, 100], got {self.encoder_weight}")
+        if not (math.isfinite(self.encoder_lr) and 0 <= self.encoder_lr <= 1):
+            problems.append(f"encoder_lr must lie in [0, 1], got {self.encoder_lr}")
         if int(self.seed) < 0:
             problems.append(f"seed must be ≥ 0, got {self.seed}")
         if problems:
@@ -112,7 +120,7 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     check_bank_memory(len(split.train))
     bank = mapped_bank(split.train, (read_valid_table(files[name]) for name in split.train), model.mapping)
     network = model.network.train()
-    network.encoder.requires_grad_(config.encoder_weight > 0)
+    network.encoder.requires_grad_(config.trains_encoder)
     generator = torch.Generator().manual_seed(config.seed)
     start = time.perf_counter()
     latents, history = _fit(network, bank, len(split.train), cfg, config, generator, progress)
@@ -139,8 +147,8 @@ def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConf
                                                  generator).encoder_input()) for i in range(0, materials, 8)])
     latents.requires_grad_(True)
     groups = [{"params": decoder.parameters(), "lr": config.decoder_lr}, {"params": [latents], "lr": config.latent_lr}]
-    if config.encoder_weight > 0:
-        groups.append({"params": encoder.parameters(), "lr": config.decoder_lr})
+    if config.trains_encoder:
+        groups.append({"params": encoder.parameters(), "lr": config.encoder_lr})
     optimizer = torch.optim.Adam(groups)
     size, loss = min(cfg.batch_materials, materials), cfg.loss
     steps, history = materials // size, []
