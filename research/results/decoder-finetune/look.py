@@ -1,5 +1,5 @@
 """decoder-finetune's renders (README.md): measurements read by a fold's base run and its fine-tuned copy (with
-``--arm refit`` the copy with its encoder trained again, with ``--arm joint`` the copy fitted with its encoder), each
+``--arm refit`` the copy with its encoder trained again, with ``--arm joint`` the copy fitted with its encoder, with ``--arm anchor`` the fit that kept its encoder), each
 budget's reconstruction beside the truth; 4,000 random valid bins, draw 0.
 
     python research/results/decoder-finetune/look.py WORK FT FIGURE MATERIAL:FOLD... [--arm ft] [--budgets latent full]
@@ -19,7 +19,7 @@ from frenbrdf.render.renderer import Scene, material_mask
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from image_grid import measurement_row, save_image_grid  # noqa: E402
 
-LABELS = {"ft": "fine-tuned", "refit": "refit", "joint": "joint fit"}
+LABELS = {"ft": "fine-tuned", "refit": "refit", "joint": "joint fit", "anchor": "anchored fit"}
 
 
 def main(work: str, ft: str, figure: str, readings: list[str], arm: str, budgets: list[str]) -> None:
