@@ -147,12 +147,13 @@ def fit_decoder(args: argparse.Namespace) -> int:
     config = DecoderFitConfig(epochs=args.epochs, decoder_lr=args.decoder_lr, latent_lr=args.latent_lr, seed=args.seed,
                               encoder_weight=args.encoder_weight, encoder_lr=args.encoder_lr)
     out = fit_decoder(args.source, args.out, config, overwrite=args.overwrite, progress=not args.quiet)
-    if config.trains_encoder:
-        print(f"fitted the decoder and encoder of {args.source} -> {out} (other encoders of the decoder: train "
-              f"them again with `frenbrdf train --decoder-from {out}`)")
-    else:
+    if config.encoder_weight == 0:
         print(f"fitted the decoder of {args.source} -> {out} (its encoders no longer fit it: train them again with "
               f"`frenbrdf train --decoder-from {out}`)")
+    else:
+        fitted = "decoder and its encoder" if config.trains_encoder else "decoder to its encoder's z"
+        print(f"fitted the {fitted} of {args.source} -> {out} (other encoders of the decoder: train them again "
+              f"with `frenbrdf train --decoder-from {out}`)")
     return 0
 
 

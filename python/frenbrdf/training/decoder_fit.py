@@ -5,8 +5,7 @@ fitting the very materials it trained on at several times the per-material fit's
 losses end equal, an under-fit. :func:`fit_decoder` takes such a run's training materials, starts each one's latent
 at the encoder's z of the run's ``context_samples`` random bins, and fits those latents and the decoder's weights together (two
 Adam rates) on L_rec plus the run's weight and latent penalties; no augmentation, no L_fre, and by default the
-encoder untouched.
-`latent` refinement then reaches more of every material, unseen ones too
+encoder untouched. `latent` refinement then reaches more of every material, unseen ones too
 (research/results/decoder-finetune: +0.27 dB on 19 real measurements outside training, +1.85 dB on 40 held-out
 tables, `full` +1.09 dB). The encoder's z no longer fits the new decoder: train its encoders again with
 ``frenbrdf train --decoder-from OUT`` before using it from the encoder alone (done so for the study, the encoder
@@ -14,9 +13,9 @@ read 0.9 dB below the run's own and `latent` +0.20 dB, within noise: the fit is 
 ``encoder_weight`` keeps the decoding of the encoder's z in the loss, the encoder training along (``encoder_lr``) or
 kept (``encoder_lr=0``); the study found both cost the encoder alone 0.9–1.7 dB on held-out tables all the same.
 
-The result is a run folder (the source's config, split and mapping, its ``best.pt`` with the new decoder and, where it trained, encoder), so
-everything that reads runs reads it, with ``decoder-fit.json`` (settings and the loss by epoch) and
-``latents.npz`` (each training material's latent at the end).
+The result is a run folder (the source's config, split and mapping, its ``best.pt`` with the new decoder and,
+where it trained, encoder), so everything that reads runs reads it, with ``decoder-fit.json`` (settings and the
+loss by epoch) and ``latents.npz`` (each training material's latent at the end).
 """
 
 from __future__ import annotations
