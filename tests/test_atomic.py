@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -36,3 +37,43 @@ def test_csv_columns_are_the_union_of_the_rows_keys(tmp_path):
     assert (tmp_path / "note.md").read_text(encoding="utf-8") == "é"
     with pytest.raises(ValueError, match="no rows"):
         save_csv(tmp_path / "empty.csv", [])
+
+
+@pytest.fixture
+def disk_log(monkeypatch):
+    """Every fsync (the path it flushed) and rename, in order (Linux names a descriptor's path in /proc)."""
+    events, fsync, replace = [], os.fsync, os.replace
+
+    def logged_fsync(descriptor):
+        events.append(("fsync", os.readlink(f"/proc/self/fd/{descriptor}")))
+        return fsync(descriptor)
+
+    def logged_replace(source, target):
+        events.append(("replace", str(source)))
+        return replace(source, target)
+
+    monkeypatch.setattr(os, "fsync", logged_fsync)
+    monkeypatch.setattr(os, "replace", logged_replace)
+    return events
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="names a descriptor's path through Linux's /proc")
+def test_a_file_reaches_the_disk_before_its_rename_and_the_rename_before_the_return(tmp_path, disk_log):
+    save_json(tmp_path / "out.json", {"a": 1})
+    (kind, temporary), (_, renamed), (_, folder) = disk_log
+    assert (kind, renamed, folder) == ("fsync", temporary, str(tmp_path))
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="names a descriptor's path through Linux's /proc")
+def test_a_staged_folder_reaches_the_disk_whole_before_it_is_put_in_place(tmp_path, disk_log):
+    from frenbrdf.io.outputs import OutputFolder
+
+    folder = OutputFolder.claim(tmp_path / "out", command="test")
+    with folder.staged() as staging:
+        (staging / "sub").mkdir()
+        (staging / "sub" / "a.txt").write_text("a")
+        (staging / "b.txt").write_text("b")
+    flushed_before = {Path(path).name for kind, path in disk_log[:-2] if kind == "fsync"}
+    assert {"a.txt", "b.txt", "sub"} <= flushed_before
+    assert disk_log[-2][0] == "replace" and disk_log[-1] == ("fsync", str(tmp_path))
+    assert (tmp_path / "out" / "sub" / "a.txt").read_text() == "a"

@@ -3,7 +3,9 @@
 A writer writes to a temporary file beside the target (same folder, so the rename stays
 on one file system; same suffix, so writers that infer the format from it still work),
 then renames it over the target. On failure the temporary file is removed and the
-target, if it existed, is left as it was.
+target, if it existed, is left as it was. The file reaches the disk before the rename, and the
+rename before the call returns (:func:`sync`), so a power cut leaves the old file or the new one,
+never an empty one in its place.
 """
 
 from __future__ import annotations
@@ -34,11 +36,40 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
         yield temporary
+        sync(temporary)
         os.replace(temporary, path)
+        sync_entries(path.parent)
     except BaseException as error:
         with contextlib.suppress(OSError):  # e.g. a name too long to create is too long to remove
             temporary.unlink(missing_ok=True)
         raise_naming(error, temporary, path)
+
+
+def sync(path: Path) -> None:
+    """Flushes the file ``path``, or every file and folder under the folder ``path``, to the disk (``fsync``):
+    what a rename is about to put in place must be there before the rename is."""
+    if path.is_dir():
+        for folder, _, files in os.walk(path):
+            for name in files:
+                _fsync(Path(folder) / name)
+            sync_entries(Path(folder))
+    elif path.is_file():
+        _fsync(path)
+
+
+def sync_entries(folder: Path) -> None:
+    """Flushes ``folder``'s entries (the names a rename changed) to the disk, where the system can (not on
+    Windows: a folder cannot be opened there; the rename is durable by itself)."""
+    with contextlib.suppress(OSError):
+        _fsync(folder)
+
+
+def _fsync(path: Path) -> None:
+    descriptor = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(descriptor)
+    finally:
+        os.close(descriptor)
 
 
 def raise_naming(error: BaseException, hidden: Path, shown: Path) -> None:

@@ -41,7 +41,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .atomic import raise_naming, save_json
+from .atomic import raise_naming, save_json, sync, sync_entries
 
 #: The hidden file that marks a folder as a command's output and lists what it wrote.
 MARKER = ".frenbrdf-output.json"
@@ -291,16 +291,20 @@ class OutputFolder:
                                  if _is_folder(staging / name) and (paths := _contents(staging / name)) is not None}
                 self.earlier = frozenset(names)
                 save_json(staging / MARKER, self._marker(self.earlier))
+                sync(staging)
                 os.replace(staging, self.target)
+                sync_entries(self.target.parent)
                 return
             removed = set() if self.additive else self.earlier - names
             self._check_unchanged(removed | (names & self.earlier))
             self._write_marker(self.earlier | names)
+            sync(staging)
             for name in names:
                 destination = self.target / name
                 if _is_folder(destination):
                     os.replace(destination, staging / f".old-{name}")  # a folder cannot be renamed over
                 os.replace(staging / name, destination)
+            sync_entries(self.target)
             for name in removed:
                 _remove(self.target / name)
             self.earlier = frozenset(names | (self.earlier if self.additive else set()))
