@@ -68,36 +68,23 @@ def decibels(text: str) -> float:
     return value
 
 
-def unit_interval(text: str) -> float:
-    """An argparse type: a number in [0, 1] (an edit's position t; NaN and inf are numbers to ``float()``)."""
-    value = _number(text)
-    if not 0 <= value <= 1:
-        raise argparse.ArgumentTypeError(f"expected a number in 0 … 1, got {text!r}")
-    return value
+def between(low: float, high: float, expected: str, *, low_excluded: bool = False):
+    """An argparse type: a number in [low, high] (``low_excluded``: in (low, high]); the message says
+    ``expected``. NaN and inf are numbers to ``float()``: both fall outside every range."""
+    def parse(text: str) -> float:
+        value = _number(text)
+        if not ((low < value if low_excluded else low <= value) and value <= high):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+
+    return parse
 
 
-def rate(text: str) -> float:
-    """An argparse type: a learning rate in (0, 1] (larger Adam steps overflow)."""
-    value = _number(text)
-    if not 0 < value <= 1:
-        raise argparse.ArgumentTypeError(f"expected a learning rate in (0, 1], got {text!r}")
-    return value
-
-
-def rate_or_zero(text: str) -> float:
-    """An argparse type: a learning rate in [0, 1], 0 keeping the parameters as they are."""
-    value = _number(text)
-    if not 0 <= value <= 1:
-        raise argparse.ArgumentTypeError(f"expected a learning rate in [0, 1] (0: kept as is), got {text!r}")
-    return value
-
-
-def loss_weight(text: str) -> float:
-    """An argparse type: a loss term's weight in [0, 100]."""
-    value = _number(text)
-    if not 0 <= value <= 100:
-        raise argparse.ArgumentTypeError(f"expected a weight in 0 … 100, got {text!r}")
-    return value
+# The checked argparse types of the bounded number options.
+unit_interval = between(0, 1, "a number in 0 … 1")  # an edit's position t
+rate = between(0, 1, "a learning rate in (0, 1]", low_excluded=True)  # larger Adam steps overflow
+rate_or_zero = between(0, 1, "a learning rate in [0, 1] (0: kept as is)")
+loss_weight = between(0, 100, "a weight in 0 … 100")
 
 
 def sample_count(text: str) -> int | None:
