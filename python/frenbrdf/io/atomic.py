@@ -51,7 +51,8 @@ def sync(path: Path) -> None:
     if path.is_dir():
         for folder, _, files in os.walk(path):
             for name in files:
-                _fsync(Path(folder) / name)
+                if not (Path(folder) / name).is_symlink():  # what was written here, not what a link names
+                    _fsync(Path(folder) / name)
             sync_entries(Path(folder))
     elif path.is_file():
         _fsync(path)
