@@ -14,6 +14,7 @@ import frenbrdf
 from frenbrdf import cli
 from frenbrdf.exceptions import TrainingDiverged
 from frenbrdf.training import train
+from frenbrdf.training.augment import TABLE, BatchDrawer
 from frenbrdf.training.decoder_fit import DecoderFitConfig, fit_decoder
 
 from .conftest import tiny
@@ -68,6 +69,34 @@ def test_with_the_encoder_rate_zero_the_encoder_is_kept_and_read(source_run, tmp
     assert all(torch.equal(value, before[name]) for name, value in after.items() if name.startswith("encoder."))
 
 
+def test_with_encoder_augment_the_encoder_term_reads_the_runs_augmented_materials(toy_materials, source_run,
+                                                                                  tmp_path, monkeypatch):
+    augmented = train(tiny("nbrdf", toy_materials, tmp_path / "augmented-run", epochs=1,
+                           augment={"mix": 0.4, "gain": 0.4, "hue_turn": 0.5, "preset": "custom"})).path
+    drawn = []
+    original = BatchDrawer.draw
+
+    def draw(self, batch, generator):
+        result = original(self, batch, generator)
+        drawn.append(result.roles)
+        return result
+
+    monkeypatch.setattr(BatchDrawer, "draw", draw)
+    config = DecoderFitConfig(epochs=3, encoder_weight=1.0, encoder_lr=0.0, encoder_augment=True)
+    out = fit_decoder(augmented, tmp_path / "fitted", config)
+    history = json.loads((out / "decoder-fit.json").read_text())["history"]
+    assert len(history) == 3 and all(np.isfinite(entry["train_rec_encoder"]) for entry in history)
+    roles = np.concatenate(drawn)
+    n_train = len(json.loads((augmented / "split.json").read_text())["train"])
+    assert len(drawn) == 3 * (n_train // 2) and (roles != TABLE).any()  # one draw a step (batches of 2)
+    before, after = state(augmented), state(out)
+    assert all(torch.equal(value, before[name]) for name, value in after.items() if name.startswith("encoder."))
+    # A run that trained on its tables as they are has nothing to draw them through: refused before any work.
+    with pytest.raises(ValueError, match="trained without augmentations"):
+        fit_decoder(source_run, tmp_path / "refused", config)
+    assert not (tmp_path / "refused").exists()
+
+
 def test_the_same_seed_fits_the_same_decoder(source_run, tmp_path):
     config = DecoderFitConfig(epochs=2, seed=3)
     first, second = (fit_decoder(source_run, tmp_path / name, config) for name in ("a", "b"))
@@ -116,7 +145,7 @@ def test_a_folder_that_is_no_trained_run_or_lost_its_data_is_refused_by_name(sou
 @pytest.mark.parametrize("bad", [dict(epochs=0), dict(decoder_lr=float("nan")), dict(latent_lr=0.0),
                                  dict(decoder_lr=2.0), dict(seed=-1), dict(encoder_weight=-1.0),
                                  dict(encoder_weight=float("nan")), dict(encoder_weight=1e3), dict(encoder_lr=-1e-4),
-                                 dict(encoder_lr=float("inf"))])
+                                 dict(encoder_lr=float("inf")), dict(encoder_augment=True)])
 def test_bad_settings_are_refused_by_name(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         DecoderFitConfig(**bad)
@@ -139,3 +168,7 @@ def test_the_command_line(source_run, tmp_path, capsys):
         with pytest.raises(SystemExit):
             cli.main(["fit-decoder", str(source_run), "--out", str(tmp_path / "x"), option, value])
         assert option in capsys.readouterr().err
+    # --encoder-augment without --encoder-weight has nothing to act on: refused by name, nothing written.
+    with pytest.raises(SystemExit):
+        cli.main(["fit-decoder", str(source_run), "--out", str(tmp_path / "y"), "--encoder-augment"])
+    assert "encoder_augment needs encoder_weight" in capsys.readouterr().err and not (tmp_path / "y").exists()

@@ -145,7 +145,8 @@ def fit_decoder(args: argparse.Namespace) -> int:
     from ..training.decoder_fit import DecoderFitConfig, fit_decoder
 
     config = DecoderFitConfig(epochs=args.epochs, decoder_lr=args.decoder_lr, latent_lr=args.latent_lr, seed=args.seed,
-                              encoder_weight=args.encoder_weight, encoder_lr=args.encoder_lr)
+                              encoder_weight=args.encoder_weight, encoder_lr=args.encoder_lr,
+                              encoder_augment=args.encoder_augment)
     out = fit_decoder(args.source, args.out, config, overwrite=args.overwrite, progress=not args.quiet)
     if config.encoder_weight == 0:
         print(f"fitted the decoder of {args.source} -> {out} (its encoders no longer fit it: train them again with "

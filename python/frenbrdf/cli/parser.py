@@ -132,6 +132,9 @@ def _fit_decoder(subparsers) -> None:
                      "stays one the encoder can read")
     fit.add_argument("--encoder-lr", type=options.rate_or_zero, default=1e-4, help="with --encoder-weight: Adam "
                      "rate of the encoder (default 1e-4); 0 keeps it as it is")
+    fit.add_argument("--encoder-augment", action="store_true", help="with --encoder-weight: the encoder's "
+                     "materials drawn as the run's training drew them (its mixes, gains, hue turns, procedural "
+                     "materials, sampling patterns)")
     fit.add_argument("--seed", type=options.seed, default=0)
     fit.add_argument("--overwrite", action="store_true", help="replace an earlier fit-decoder's output in --out")
     fit.add_argument("--quiet", action="store_true", help="no progress bar")

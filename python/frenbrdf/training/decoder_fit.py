@@ -12,6 +12,7 @@ tables, `full` +1.09 dB). The encoder's z no longer fits the new decoder: train 
 read 0.9 dB below the run's own and `latent` +0.20 dB, within noise: the fit is not in the shipped model).
 ``encoder_weight`` keeps the decoding of the encoder's z in the loss, the encoder training along (``encoder_lr``) or
 kept (``encoder_lr=0``); the study found both cost the encoder alone 0.9–1.7 dB on held-out tables all the same.
+``encoder_augment`` draws that term's materials as the run's training drew them (mixes, gains, hue turns).
 
 The result is a run folder (the source's config, split and mapping, its ``best.pt`` with the new decoder and,
 where it trained, encoder), so everything that reads runs reads it, with ``decoder-fit.json`` (settings and the
@@ -30,14 +31,15 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from ..data.folders import list_materials, mapped_bank, read_valid_table
+from ..data.folders import Split, list_materials, mapped_bank, max_directional_albedo, read_valid_table
 from ..exceptions import TrainingDiverged
 from ..io import checkpoints
 from ..io.atomic import save_json
 from ..io.outputs import OutputFolder
 from ..models.autoencoder import Model
+from .augment import BatchDrawer
 from .config import TrainConfig
-from .prepared import check_bank_memory
+from .prepared import PreparedData, check_bank_memory
 from .run import Run
 from .step import decoding_terms, loss_terms
 
@@ -69,6 +71,11 @@ class DecoderFitConfig:
     encoder_lr: float = 1e-4
     """With ``encoder_weight`` above 0: the encoder's Adam rate; 0 keeps the encoder as it is (the decoder then
     keeps fitting the z it gives)."""
+    encoder_augment: bool = False
+    """With ``encoder_weight`` above 0: draw the encoder term's materials as the run's training drew them (its
+    mixes, gains, hue turns, procedural materials and sampling patterns, :class:`~.augment.BatchDrawer`), so that
+    the decoder keeps decoding the z of materials between and beyond the training ones; the free latents' term stays
+    on the training materials as they are."""
 
     @property
     def trains_encoder(self) -> bool:
@@ -86,6 +93,8 @@ class DecoderFitConfig:
             problems.append(f"encoder_weight must lie in [0, 100], got {self.encoder_weight}")
         if not (math.isfinite(self.encoder_lr) and 0 <= self.encoder_lr <= 1):
             problems.append(f"encoder_lr must lie in [0, 1], got {self.encoder_lr}")
+        if self.encoder_augment and self.encoder_weight == 0:
+            problems.append("encoder_augment needs encoder_weight above 0 (it changes the encoder term's materials)")
         if int(self.seed) < 0:
             problems.append(f"seed must be ≥ 0, got {self.seed}")
         if problems:
@@ -111,6 +120,9 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     files = {path.stem: path for path in list_materials(cfg.data)}
     if missing := sorted(set(split.train) - set(files)):
         raise ValueError(f"the run's training materials {missing[:5]} are not in its data folder {cfg.data}")
+    if config.encoder_augment and not cfg.augment.active and cfg.sampling.paper:
+        raise ValueError(f"encoder_augment: {run} trained without augmentations or sampling patterns (its config's "
+                         "`augment` and `sampling`), so its training drew nothing but the tables as they are")
     folder = OutputFolder.claim(out, command="fit-decoder", inputs=(run, cfg.data), overwrite=overwrite)
     if folder.earlier and not overwrite:  # as `train` does: a fit is long work, replaced only when asked
         raise ValueError(f"--out {out} already holds a fit-decoder output; replace it with --overwrite "
@@ -118,14 +130,15 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     folder.check_names(FIT_FILES)
     checkpoint = checkpoints.load(run / "best.pt")
     model = Model.from_checkpoint(checkpoint, checkpoints.load_mapping(run / "best.pt", checkpoint), source=str(run))
-    # Only the training materials' mapped bank is needed (no frequency truth, no gain albedos), read one at a time.
+    # Only the training materials' mapped bank is needed (no frequency truth), read one at a time.
     check_bank_memory(len(split.train))
     bank = mapped_bank(split.train, (read_valid_table(files[name]) for name in split.train), model.mapping)
+    drawer = _augmented_drawer(cfg, split, bank, model.mapping) if config.encoder_augment else None
     network = model.network.train()
     network.encoder.requires_grad_(config.trains_encoder)
     generator = torch.Generator().manual_seed(config.seed)
     start = time.perf_counter()
-    latents, history = _fit(network, bank, len(split.train), cfg, config, generator, progress)
+    latents, history = _fit(network, bank, len(split.train), cfg, config, generator, progress, drawer)
     # The source's checkpoint with the new weights; its optimiser's state belonged to the old decoder.
     checkpoint = {key: value for key, value in checkpoint.items() if key != "optimizer"} | {"model": network.state_dict()}
     with folder.staged() as staging:
@@ -139,10 +152,18 @@ def fit_decoder(run: str | Path, out: str | Path, config: DecoderFitConfig | Non
     return folder.path
 
 
+def _augmented_drawer(cfg: TrainConfig, split: Split, bank, mapping) -> BatchDrawer:
+    """The run's own batch drawer over its training materials (no L_fre truth), for ``encoder_augment``."""
+    training = dataclasses.replace(split, val=(), test=())  # the bank holds the training materials only
+    albedo = max_directional_albedo(bank, mapping, range(len(training.train))) if cfg.augment.gain > 0 else None
+    return BatchDrawer(cfg, PreparedData(training, mapping, bank, None, albedo), with_truth=False)
+
+
 def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConfig, generator: torch.Generator,
-         progress: bool) -> tuple[np.ndarray, list[dict]]:
+         progress: bool, drawer: BatchDrawer | None = None) -> tuple[np.ndarray, list[dict]]:
     """The joint fit of the decoder's weights and one latent a material (and of the encoder with
-    ``config.encoder_weight``); returns the latents and the loss by epoch."""
+    ``config.encoder_weight``, its materials drawn by ``drawer`` where given); returns the latents and the loss by
+    epoch."""
     decoder, encoder = network.decoder, network.encoder
     with torch.no_grad():  # each material's start: the encoder's z of a context drawn as training draws one
         latents = torch.cat([encoder(bank.sample(list(range(i, min(i + 8, materials))), cfg.context_samples,
@@ -163,9 +184,13 @@ def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConf
             terms = decoding_terms(z, decoder(z), query, loss)
             rec = terms["rec"]
             value = rec + terms["w"] + terms["z"]
-            if config.encoder_weight > 0:  # the same query read through the encoder's z, the loss training uses
-                encoded = loss_terms(network, None, loss, bank.sample(batch, cfg.context_samples, generator), query,
-                                     None)
+            if config.encoder_weight > 0:  # the loss training uses, of the encoder's z: on the same query, or
+                if drawer is None:         # on the materials the run's training would have drawn in their place
+                    context, encoder_query = bank.sample(batch, cfg.context_samples, generator), query
+                else:
+                    drawn = drawer.draw(batch, generator)
+                    context, encoder_query = drawn.context, drawn.query
+                encoded = loss_terms(network, None, loss, context, encoder_query, None)
                 value = value + config.encoder_weight * encoded.total
                 totals["train_rec_encoder"] = totals.get("train_rec_encoder", 0.0) + encoded.logged["rec"] / steps
             if not torch.isfinite(value):

@@ -5,12 +5,13 @@
 #
 #   [ARM=ft] bash research/results/decoder-finetune/run.sh WORK FT DATA OUT
 # ARM=refit reads the amendment's runs FT/refit-fF (the fine-tuned decoders with their encoders trained again);
-# ARM=joint the second amendment's FT/joint-fF (the encoder fitted with the decoder).
+# ARM=joint the second amendment's FT/joint-fF (the encoder fitted with the decoder). DRAW=1 reads other random bins
+# (the fourth amendment's judging draw; default 0).
 set -euo pipefail
 WORK=${1:?WORK folder of the base runs}; FT=${2:?folder of the fine-tuned runs}; DATA=${3:?DATA: the 197 tables}
 OUT=${4:?OUT folder}
 HERE=$(dirname "$0")
-export ARM=${ARM:-ft}
+export ARM=${ARM:-ft} DRAW=${DRAW:-0}
 STUDIES=$HERE/../../studies
 mkdir -p "$OUT"
 for fold in 0 1 2; do echo "$fold"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bash -c '
@@ -18,7 +19,7 @@ for fold in 0 1 2; do echo "$fold"; done | OMP_NUM_THREADS=1 xargs -P 2 -L 1 bas
     for m in $(python "$0/measured_folds/folds.py" others "$fold"); do trained_on+=("base/f$fold=$m" "$ARM/f$fold=$m"); done
     python "$0/compare_models.py" --models "$work/mfw512-f$fold-s0" "$ft/$ARM-f$fold" --labels "base/f$fold" "$ARM/f$fold" \
         --trained-on "${trained_on[@]}" --measurements ../shared/data/rgl-measured/*.bsdf --budgets none latent full \
-        --samples 4000 --resolution 128 --group $(python "$0/measured_folds/folds.py" groups) \
+        --samples 4000 --draws $DRAW --resolution 128 --group $(python "$0/measured_folds/folds.py" groups) \
         --out "$out/f$fold" > "$out/f$fold.log" 2>&1' "$STUDIES" "$WORK" "$FT" "$OUT"
 models=(); labels=()
 for arm in base "$ARM"; do for fold in 0 1 2; do
@@ -26,5 +27,5 @@ for arm in base "$ARM"; do for fold in 0 1 2; do
     labels+=("$arm/f$fold")
 done; done
 OMP_NUM_THREADS=2 python "$STUDIES/compare_models.py" --models "${models[@]}" --labels "${labels[@]}" \
-    --held-out "$HERE/../folds-v8/config-v8.json" "$DATA" --budgets none latent --samples 4000 --resolution 128 \
+    --held-out "$HERE/../folds-v8/config-v8.json" "$DATA" --budgets none latent --samples 4000 --draws $DRAW --resolution 128 \
     --out "$OUT/tables" > "$OUT/tables.log" 2>&1
