@@ -46,22 +46,22 @@ def reconstruction_row(truth: Any, drawn: Any, columns: list[tuple[str, Any, Any
 
 
 def material_row(path: Path, columns: list[tuple[str, Any, Any]], scene: Any, mask: np.ndarray,
-                 pattern: str = "merl-bins", count: int = 4000) -> list[tuple[str, np.ndarray]]:
+                 pattern: str = "merl-bins", count: int = 4000, draw: int = 0) -> list[tuple[str, np.ndarray]]:
     """:func:`reconstruction_row` of the material at ``path`` (a table or a ``.bsdf`` measurement) from ``count``
-    samples of ``pattern``, draw 0, as compare_models.py draws them."""
+    samples of ``pattern``, draw ``draw``, as compare_models.py draws them."""
     from compare_models import condition_rng
 
     from frenbrdf.io import read_material
     from frenbrdf.io.patterns import pattern_samples
 
     truth = read_material(path)
-    drawn = pattern_samples(truth, pattern, count, condition_rng(0, pattern))
+    drawn = pattern_samples(truth, pattern, count, condition_rng(draw, pattern))
     return reconstruction_row(truth, drawn, columns, scene, mask)
 
 
 def measurement_row(material: str, columns: list[tuple[str, Any, Any]], scene: Any, mask: np.ndarray,
                     pattern: str = "merl-bins", count: int = 4000,
-                    measured: Path = Path("../shared/data/rgl-measured")) -> list[tuple[str, np.ndarray]]:
+                    measured: Path = Path("../shared/data/rgl-measured"), draw: int = 0) -> list[tuple[str, np.ndarray]]:
     """:func:`material_row` of the RGL measurement ``material`` (its ``.bsdf`` in ``measured``): the studies'
     readings of the 19."""
-    return material_row(measured / f"{material}.bsdf", columns, scene, mask, pattern, count)
+    return material_row(measured / f"{material}.bsdf", columns, scene, mask, pattern, count, draw)

@@ -49,6 +49,9 @@ FIT_FILES = ("config.json", "split.json", "mapping.npz", "history.json", "best.p
 RUN_INPUTS = ("config.json", "split.json", "mapping.npz", "best.pt")
 #: The most epochs a fit takes (a day of a CPU core at ~200 materials).
 MAX_EPOCHS = 100_000
+#: Each number setting's range (low, high, whether low itself is excluded); larger Adam steps overflow.
+RANGES = {"decoder_lr": (0, 1, True), "latent_lr": (0, 1, True), "encoder_weight": (0, 100, False),
+          "encoder_lr": (0, 1, False)}
 
 
 @dataclass
@@ -85,14 +88,10 @@ class DecoderFitConfig:
         problems = []
         if not 1 <= int(self.epochs) <= MAX_EPOCHS:
             problems.append(f"epochs must lie in 1 … {MAX_EPOCHS}, got {self.epochs}")
-        for name in ("decoder_lr", "latent_lr"):
+        for name, (low, high, low_excluded) in RANGES.items():
             value = getattr(self, name)
-            if not (math.isfinite(value) and 0 < value <= 1):
-                problems.append(f"{name} must lie in (0, 1], got {value}")
-        if not (math.isfinite(self.encoder_weight) and 0 <= self.encoder_weight <= 100):
-            problems.append(f"encoder_weight must lie in [0, 100], got {self.encoder_weight}")
-        if not (math.isfinite(self.encoder_lr) and 0 <= self.encoder_lr <= 1):
-            problems.append(f"encoder_lr must lie in [0, 1], got {self.encoder_lr}")
+            if not (math.isfinite(value) and (low < value if low_excluded else low <= value) and value <= high):
+                problems.append(f"{name} must lie in {'(' if low_excluded else '['}{low}, {high}], got {value}")
         if self.encoder_augment and self.encoder_weight == 0:
             problems.append("encoder_augment needs encoder_weight above 0 (it changes the encoder term's materials)")
         if int(self.seed) < 0:

@@ -3,7 +3,9 @@ paired per material).
 
     python research/results/decoder-finetune/decide.py OUT [--arm ft]   (OUT: run.sh's fF/ and tables/ readings;
                                                                       --arm refit: the amendment's runs;
-                                                                      --arm joint --encoder-rule: the second's)
+                                                                      --arm joint --encoder-rule: the second's;
+                                                                      --arm anchor, --arm augment: the third's
+                                                                      and fourth's, with --encoder-rule)
 
 Writes OUT/decision.json and prints the rule's tests and what is reported beside them.
 """
