@@ -6,6 +6,9 @@ paired per material).
                                                                       --arm joint --encoder-rule: the second's;
                                                                       --arm anchor, --arm augment: the third's
                                                                       and fourth's, with --encoder-rule)
+    python research/results/decoder-finetune/decide.py OUT OUT2 ... --to DIR [--arm ...]
+        (readings of fits from other seeds against the same base, on the same draw: each material's figure the
+        mean over them; writes DIR/decision.json)
 
 Writes OUT/decision.json and prints the rule's tests and what is reported beside them.
 """
@@ -25,14 +28,15 @@ BUDGETS = ("none", "latent", "full")
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("out", type=Path)
+    parser.add_argument("out", type=Path, nargs="+", help="run.sh's readings: one, or one a fit seed")
+    parser.add_argument("--to", type=Path, help="where decision.json goes (default: the first OUT)")
     parser.add_argument("--arm", default="ft", help="the candidate's label in the readings")
     parser.add_argument("--encoder-rule", action="store_true",
                         help="the second amendment's rule: also (d) and (e), the encoder not wholly below 0")
     args = parser.parse_args(argv)
     arm = args.arm
-    measured = rows_of(sorted(args.out.glob("f*/compare.json")))
-    tables = rows_of([args.out / "tables" / "compare.json"])
+    measured = rows_of([path for out in args.out for path in sorted(out.glob("f*/compare.json"))])
+    tables = rows_of([out / "tables" / "compare.json" for out in args.out])
     fig = {(a, budget): figures(measured, a, budget) for a in ("base", arm) for budget in BUDGETS}
     if any(len(fig[key]) != 19 for key in fig):
         raise SystemExit(f"expected 19 measurements a reading, got { {k: len(v) for k, v in fig.items()} }")
@@ -58,7 +62,9 @@ def main(argv: list[str] | None = None) -> None:
                           for a in arms for budget in BUDGETS}
     decision = {"passes": all(tests.values()), "tests": tests, "change": change, "fold means": folds,
                 "tables": table, "reported": reported}
-    (args.out / "decision.json").write_text(json.dumps(decision, indent=1, ensure_ascii=False) + "\n")
+    to = args.to or args.out[0]
+    to.mkdir(parents=True, exist_ok=True)
+    (to / "decision.json").write_text(json.dumps(decision, indent=1, ensure_ascii=False) + "\n")
     for name, passed in tests.items():
         print(f"{'pass' if passed else 'FAIL'}  {name}")
     for budget, c in change.items():
