@@ -13,7 +13,7 @@ import torch
 import frenbrdf
 from frenbrdf import cli
 from frenbrdf.exceptions import TrainingDiverged
-from frenbrdf.training import train
+from frenbrdf.training import decoder_fit, train
 from frenbrdf.training.augment import TABLE, BatchDrawer
 from frenbrdf.training.decoder_fit import DecoderFitConfig, fit_decoder
 
@@ -73,22 +73,30 @@ def test_with_encoder_augment_the_encoder_term_reads_the_runs_augmented_material
                                                                                   tmp_path, monkeypatch):
     augmented = train(tiny("nbrdf", toy_materials, tmp_path / "augmented-run", epochs=1,
                            augment={"mix": 0.4, "gain": 0.4, "hue_turn": 0.5, "preset": "custom"})).path
-    drawn = []
-    original = BatchDrawer.draw
+    drawn, read = [], []
+    original_draw, original_terms = BatchDrawer.draw, decoder_fit.loss_terms
 
     def draw(self, batch, generator):
-        result = original(self, batch, generator)
-        drawn.append(result.roles)
+        result = original_draw(self, batch, generator)
+        drawn.append(result)
         return result
 
+    def terms(network, frequency, loss, context, query, *args):
+        read.append((context, query))
+        return original_terms(network, frequency, loss, context, query, *args)
+
     monkeypatch.setattr(BatchDrawer, "draw", draw)
+    monkeypatch.setattr(decoder_fit, "loss_terms", terms)
     config = DecoderFitConfig(epochs=3, encoder_weight=1.0, encoder_lr=0.0, encoder_augment=True)
     out = fit_decoder(augmented, tmp_path / "fitted", config)
     history = json.loads((out / "decoder-fit.json").read_text())["history"]
     assert len(history) == 3 and all(np.isfinite(entry["train_rec_encoder"]) for entry in history)
-    roles = np.concatenate(drawn)
     n_train = len(json.loads((augmented / "split.json").read_text())["train"])
-    assert len(drawn) == 3 * (n_train // 2) and (roles != TABLE).any()  # one draw a step (batches of 2)
+    assert len(drawn) == 3 * (n_train // 2)  # one draw a step (batches of 2), some of it augmented
+    assert any((batch.roles != TABLE).any() for batch in drawn)
+    # The encoder term reads exactly what was drawn, context and query.
+    assert len(read) == len(drawn)
+    assert all(c is batch.context and q is batch.query for (c, q), batch in zip(read, drawn, strict=True))
     before, after = state(augmented), state(out)
     assert all(torch.equal(value, before[name]) for name, value in after.items() if name.startswith("encoder."))
     # A run that trained on its tables as they are has nothing to draw them through: refused before any work.
