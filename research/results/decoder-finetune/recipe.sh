@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # decoder-finetune's fifth amendment (README.md): the augmented kept-encoder fit on the shipped recipe's fold runs.
-# Each stage is skipped where its output is already there, so the script continues where an earlier call stopped.
+# Each stage is skipped where its output is complete, so the script continues where an earlier call stopped.
 #   1. the shipped recipe (folds-v8/config-v8.json) trained per fold, seed 0, as real-in-data's `mf` runs:
 #      WORK/mf-fF-s0 (three at once, one thread each; about 70 minutes on a 2-core CPU);
 #   2. each fitted from seeds 0 and 1: FT/augment-fF and FT/s1/augment-fF (three at once; about 18 minutes a seed);
@@ -12,11 +12,18 @@ set -euo pipefail
 DATA=${1:?DATA: the 197 tables}; FAMILIES=${2:?FAMILIES bank}; WORK=${3:?WORK folder}; FT=${4:?FT folder}
 OUT=${5:?OUT folder}
 HERE=$(dirname "$0")
-todo=""
-for fold in 0 1 2; do [[ -f $WORK/mf-f$fold-s0/best.pt ]] || todo+="$fold "; done
-if [[ -n $todo ]]; then
-    FOLDS=$todo ARM=mf CONFIG=$HERE/../folds-v8/config-v8.json bash "$HERE/../real-in-data/train.sh" "$DATA" "$FAMILIES" "$WORK"
-fi
+# A training has finished when its log names its best epoch; one stopped midway (its last.pt there) continues.
+fresh=""; stopped=""
+for fold in 0 1 2; do
+    grep -qs "best epoch" "$WORK/mf-f$fold-s0.log" && continue
+    if [[ -f $WORK/mf-f$fold-s0/last.pt ]]; then stopped+="$fold "; else fresh+="$fold "; fi
+done
+for folds in "$fresh" "$stopped"; do
+    [[ -n $folds ]] || continue
+    resume=""; [[ $folds == "$stopped" ]] && resume=1
+    FOLDS=$folds RESUME=$resume ARM=mf CONFIG=$HERE/../folds-v8/config-v8.json \
+        bash "$HERE/../real-in-data/train.sh" "$DATA" "$FAMILIES" "$WORK"
+done
 for seed in 0 1; do
     dest=$FT; [[ $seed == 0 ]] || dest=$FT/s$seed
     mkdir -p "$dest"

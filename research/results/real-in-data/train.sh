@@ -4,7 +4,7 @@
 # .bsdf measurements of the two other folds plus the procedural banks of FAMILIES, as WORK/ARM-fF-sSEED (ARM default
 # mf; research/results/diffractive names its arm mfd). One run per fold in FOLDS (default 0 1 2) and seed in SEEDS
 # (default SEED, default 0), JOBS (default 3) at once on one thread each. CONFIG replaces version 8's recipe
-# (research/results/latent-size).
+# (research/results/latent-size). RESUME=1 continues runs stopped midway from their last.pt.
 #
 #   [SEED=0 | SEEDS="0 1 2"] [FOLDS="0 1 2"] [ARM=mf] [CONFIG=FILE] bash research/results/real-in-data/train.sh DATA FAMILIES WORK [MEASURED]
 set -euo pipefail
@@ -23,5 +23,5 @@ for fold in $FOLDS; do
     done
 done
 for seed in $SEEDS; do for fold in $FOLDS; do echo "$fold $seed"; done; done | OMP_NUM_THREADS=1 xargs -P "${JOBS:-3}" -L 1 bash -c \
-    'frenbrdf train --data "$1/data-$2-f$3" --config "$0" --seed "$4" --out "$1/$2-f$3-s$4" --quiet > "$1/$2-f$3-s$4.log" 2>&1' \
+    'frenbrdf train --data "$1/data-$2-f$3" --config "$0" --seed "$4" --out "$1/$2-f$3-s$4" ${RESUME:+--resume} --quiet > "$1/$2-f$3-s$4.log" 2>&1' \
     "$CONFIG" "$WORK" "$ARM"
