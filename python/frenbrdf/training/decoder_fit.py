@@ -185,12 +185,8 @@ def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConf
             terms = decoding_terms(z, decoder(z), query, loss)
             rec = terms["rec"]
             value = rec + terms["w"] + terms["z"]
-            if config.encoder_weight > 0:  # the loss training uses, of the encoder's z: on the same query, or
-                if drawer is None:         # on the materials the run's training would have drawn in their place
-                    context, encoder_query = bank.sample(batch, cfg.context_samples, generator), query
-                else:
-                    drawn = drawer.draw(batch, generator)
-                    context, encoder_query = drawn.context, drawn.query
+            if config.encoder_weight > 0:  # the loss training uses, of the encoder's z
+                context, encoder_query = _encoder_samples(bank, batch, query, cfg, drawer, generator)
                 encoded = loss_terms(network, None, loss, context, encoder_query, None)
                 value = value + config.encoder_weight * encoded.total
                 totals["train_rec_encoder"] = totals.get("train_rec_encoder", 0.0) + encoded.logged["rec"] / steps
@@ -204,3 +200,13 @@ def _fit(network, bank, materials: int, cfg: TrainConfig, config: DecoderFitConf
             totals["train_rec"] += float(rec.detach()) / steps
         history.append({"epoch": epoch, **totals})
     return latents.detach().numpy(), history
+
+
+def _encoder_samples(bank, batch: list[int], query, cfg: TrainConfig, drawer: BatchDrawer | None,
+                     generator: torch.Generator):
+    """The encoder term's context and query: fresh random bins of each material, read on the free latents' query;
+    with ``drawer``, the batch the run's training would have drawn in its place."""
+    if drawer is None:
+        return bank.sample(batch, cfg.context_samples, generator), query
+    drawn = drawer.draw(batch, generator)
+    return drawn.context, drawn.query

@@ -18,12 +18,12 @@ for fold in 0 1 2; do
     grep -qs "best epoch" "$WORK/mf-f$fold-s0.log" && continue
     if [[ -f $WORK/mf-f$fold-s0/last.pt ]]; then stopped+="$fold "; else fresh+="$fold "; fi
 done
-for folds in "$fresh" "$stopped"; do
-    [[ -n $folds ]] || continue
-    resume=""; [[ $folds == "$stopped" ]] && resume=1
-    FOLDS=$folds RESUME=$resume ARM=mf CONFIG=$HERE/../folds-v8/config-v8.json \
+train() {  # FOLDS, and RESUME=1 to continue them
+    FOLDS=$1 RESUME=$2 ARM=mf CONFIG=$HERE/../folds-v8/config-v8.json \
         bash "$HERE/../real-in-data/train.sh" "$DATA" "$FAMILIES" "$WORK"
-done
+}
+[[ -z $fresh ]] || train "$fresh" ""
+[[ -z $stopped ]] || train "$stopped" 1
 for seed in 0 1; do
     dest=$FT; [[ $seed == 0 ]] || dest=$FT/s$seed
     mkdir -p "$dest"
