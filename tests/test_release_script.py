@@ -10,6 +10,7 @@ import shutil
 import stat
 import subprocess
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -110,3 +111,28 @@ def test_the_linked_data_folder_keeps_its_links_and_refuses_a_users_file(tmp_pat
     with pytest.raises(ValueError, match="felt.binary is in the way"):
         shipped.linked_data([source], data)
     assert (data / "felt.binary").read_bytes() == b"a user's own table"
+
+
+def test_the_fit_stage_fits_once_with_the_studys_settings_and_the_card_says_so(tmp_path, monkeypatch):
+    shipped = script_module("train_shipped_model")
+    fits = []
+
+    def fit_decoder(run, out, config, progress=False):  # a stand-in: the real fit is tested in test_decoder_fit
+        fits.append((run, config))
+        out.mkdir(parents=True)
+        (out / "best.pt").write_bytes(b"")
+        return out
+
+    monkeypatch.setattr(shipped, "fit_decoder", fit_decoder)
+    monkeypatch.setattr(shipped, "Run", lambda path: SimpleNamespace(path=Path(path)))
+    trained = SimpleNamespace(path=tmp_path / "run")
+    for _ in range(2):  # a rerun reads the finished fit again
+        fitted = shipped.fit_stage(trained, tmp_path, seed=3)
+        assert fitted.path == tmp_path / "fit"
+    assert len(fits) == 1 and fits[0][0] == tmp_path / "run"
+    config = fits[0][1]
+    assert (config.encoder_weight, config.encoder_lr, config.encoder_augment, config.seed) == (1.0, 0.0, True, 3)
+    record = {"epochs": 300, "decoder_lr": 1e-4, "latent_lr": 1e-3, "encoder_weight": 1.0, "seed": 3, "seconds": 61.2}
+    assert "for 300 epochs (decoder rate 0.0001, latents 0.001, the encoder's z weighted 1" in \
+        shipped.fit_text({"decoder_fit": record})
+    assert shipped.fit_text({}) == ""  # cards before version 10

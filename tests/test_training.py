@@ -284,6 +284,19 @@ def test_a_plateau_halves_the_learning_rate_and_a_resume_keeps_it(toy_materials,
         tiny("nbrdf", toy_materials, tmp_path / "bad", lr_plateau=-1)
 
 
+def test_resuming_a_run_that_patience_stopped_trains_no_further(toy_materials, tmp_path):
+    # No epoch improves on the first: patience 2 stops the run after epoch 2 of 10.
+    cfg = tiny("nbrdf", toy_materials, tmp_path / "run", epochs=10, lr=1e-30, patience=2)
+    run = train(cfg)
+    assert run.history[-1]["epoch"] == 2
+    saved = {name: (run.path / name).read_bytes() for name in ("last.pt", "best.pt", "history.json")}
+    resumed = train(cfg, resume=True)
+    assert resumed.history[-1]["epoch"] == 2
+    assert {name: (run.path / name).read_bytes() for name in saved} == saved
+    cfg.patience = 4  # a longer patience: the run goes on
+    assert train(cfg, resume=True).history[-1]["epoch"] == 4
+
+
 def test_dropout_and_weight_decay_change_nothing_when_off(toy_materials, tmp_path):
     from frenbrdf.models.autoencoder import AutoEncoder
     from frenbrdf.training.loop import make_optimizer

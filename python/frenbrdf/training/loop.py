@@ -170,6 +170,8 @@ class Trainer:
         validation materials read and rendered once (each ``render_every`` epochs then costs only the model's own
         renders), or None without ``render_every``."""
         cfg = self.cfg
+        if self.first_epoch and self.stopped_early(self.first_epoch - 1):
+            return  # a resumed run that patience had already stopped: nothing to add (a rerun of a script is safe)
         if not self.history:  # the untrained model's validation loss: the baseline every epoch improves on
             initial = self.validate()
             self.history.append({"epoch": -1, **{f"val_{k}": v for k, v in initial.items()}})
@@ -249,7 +251,11 @@ class Trainer:
         if self.cfg.lr_plateau and since_best and since_best % self.cfg.lr_plateau == 0:
             for group in self.optimizer.param_groups:
                 group["lr"] *= 0.5
-        return bool(self.cfg.patience and since_best >= self.cfg.patience)
+        return self.stopped_early(epoch)
+
+    def stopped_early(self, epoch: int) -> bool:
+        """Whether ``patience`` epochs had passed without a better selection score by the end of ``epoch``."""
+        return bool(self.cfg.patience and epoch - self.bests[self.cfg.select]["epoch"] >= self.cfg.patience)
 
     def state(self, epoch: int) -> dict:
         """What a checkpoint holds after ``epoch`` (:mod:`frenbrdf.io.checkpoints`)."""

@@ -6,11 +6,13 @@
 # the 40 tables through issue 47's six patterns at 300, 1,500 and 4,000 samples, encoder (and `latent` at 1,500).
 # Two processes, one thread each (the patterns in two halves).
 #
-#   bash research/results/version-9/evaluate.sh V8 V9 DATA OUT      (DATA: the 197 tables, local/fv8/data)
+# LABELS names the two in the reports (default "v8 v9"; version 10 reads version 9 and its candidate as "v9 v10").
+#
+#   [LABELS="v9 v10"] bash research/results/version-9/evaluate.sh V8 V9 DATA OUT   (DATA: the 197 tables, local/fv8/data)
 set -euo pipefail
 V8=${1:?V8 packed folder}; V9=${2:?V9 packed folder}; DATA=${3:?DATA folder}; OUT=${4:?OUT folder}
 HERE=$(dirname "$0")
-COMPARE="python $HERE/../../studies/compare_models.py --models $V8 $V9 --labels v8 v9 --resolution 128"
+COMPARE="python $HERE/../../studies/compare_models.py --models $V8 $V9 --labels ${LABELS:-v8 v9} --resolution 128"
 FOLDS="python $HERE/../../studies/measured_folds/folds.py"
 HELD_OUT=(--held-out "$HERE/../folds-v8/config-v8.json" "$DATA")
 mkdir -p "$OUT"
