@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +49,8 @@ def reconstruction_row(truth: Any, drawn: Any, columns: list[tuple[str, Any, Any
 def material_row(path: Path, columns: list[tuple[str, Any, Any]], scene: Any, mask: np.ndarray,
                  pattern: str = "merl-bins", count: int = 4000, draw: int = 0) -> list[tuple[str, np.ndarray]]:
     """:func:`reconstruction_row` of the material at ``path`` (a table or a ``.bsdf`` measurement) from ``count``
-    samples of ``pattern``, draw ``draw``, as compare_models.py draws them."""
+    samples of ``pattern``, draw ``draw``, as compare_models.py draws and refines them (the refinement seeded by
+    the draw: ``full``'s result on one material moves by several dB from one seed to another)."""
     from compare_models import condition_rng
 
     from frenbrdf.io import read_material
@@ -56,7 +58,8 @@ def material_row(path: Path, columns: list[tuple[str, Any, Any]], scene: Any, ma
 
     truth = read_material(path)
     drawn = pattern_samples(truth, pattern, count, condition_rng(draw, pattern))
-    return reconstruction_row(truth, drawn, columns, scene, mask)
+    seeded = [(title, model, dataclasses.replace(config, seed=draw)) for title, model, config in columns]
+    return reconstruction_row(truth, drawn, seeded, scene, mask)
 
 
 def measurement_row(material: str, columns: list[tuple[str, Any, Any]], scene: Any, mask: np.ndarray,

@@ -14,7 +14,8 @@ read 0.9 dB below the run's own and `latent` +0.20 dB, within noise: the fit is 
 kept (``encoder_lr=0``); the study found both cost the encoder alone 0.9–1.7 dB on held-out tables all the same.
 ``encoder_augment`` draws that term's materials as the run's training drew them (mixes, gains, hue turns): with the
 encoder kept, the one way found to keep its reading (held-out tables +0.04 dB, two seeds) while `latent` gains
-(+1.4 dB on the tables, +0.25 dB on the measurements, within the fit's noise).
+(+1.4 dB on the tables, +0.25 dB on the measurements, within the fit's noise; on the shipped recipe's runs +1.1 and
++0.10: not shipped).
 
 The result is a run folder (the source's config, split and mapping, its ``best.pt`` with the new decoder and,
 where it trained, encoder), so everything that reads runs reads it, with ``decoder-fit.json`` (settings and the

@@ -3,8 +3,9 @@
 budget's reconstruction beside the truth; 4,000 random valid bins, draw 0 (``--draw``: another).
 
     python research/results/decoder-finetune/look.py WORK FT FIGURE MATERIAL:FOLD... [--arm ft] [--budgets latent full]
-        [--draw 0]
-    (WORK: the base runs mfw512-fF-s0; FT: the runs ARM-fF; FOLD: the run that reads MATERIAL)
+        [--draw 0] [--base mfw512]
+    (WORK: the base runs BASE-fF-s0, BASE mf for the fifth amendment's; FT: the runs ARM-fF; FOLD: the run that
+    reads MATERIAL)
 """
 
 from __future__ import annotations
@@ -23,13 +24,14 @@ from image_grid import measurement_row, save_image_grid  # noqa: E402
 LABELS = {"ft": "fine-tuned", "refit": "refit", "joint": "joint fit", "anchor": "anchored fit", "augment": "augmented fit"}
 
 
-def main(work: str, ft: str, figure: str, readings: list[str], arm: str, budgets: list[str], draw: int = 0) -> None:
+def main(work: str, ft: str, figure: str, readings: list[str], arm: str, budgets: list[str], draw: int = 0,
+         base: str = "mfw512") -> None:
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
     for reading in readings:
         material, fold = reading.rsplit(":", 1)
-        models = (("base", load_model(Path(work) / f"mfw512-f{fold}-s0")),
+        models = (("base", load_model(Path(work) / f"{base}-f{fold}-s0")),
                   (LABELS[arm], load_model(Path(ft) / f"{arm}-f{fold}")))
         columns = [(f"{label} {'encoder' if budget == 'none' else budget}", model, refine_config(budget))
                    for label, model in models for budget in budgets]
@@ -46,5 +48,6 @@ if __name__ == "__main__":
     parser.add_argument("--arm", choices=tuple(LABELS), default="ft")
     parser.add_argument("--budgets", nargs="+", choices=("none", "latent", "full"), default=["latent", "full"])
     parser.add_argument("--draw", type=int, default=0, help="which draw of random bins (run.sh's DRAW)")
+    parser.add_argument("--base", default="mfw512", help="the base runs' arm (run.sh's BASE)")
     args = parser.parse_args()
-    main(args.work, args.ft, args.figure, args.readings, args.arm, args.budgets, args.draw)
+    main(args.work, args.ft, args.figure, args.readings, args.arm, args.budgets, args.draw, args.base)
