@@ -18,8 +18,8 @@ Named budgets (:data:`BUDGETS`): ``"none"`` (stage 0), ``"latent"`` (0 + 1), ``"
 (0 + 1 + 2). Each stage is deterministic from :attr:`RefineConfig.seed` on one machine with one thread count,
 unless its wall-clock budget (:attr:`RefineConfig.seconds`) stops it first. Another thread count changes the
 arithmetic at the level of bits, and ``full``'s weight stage can end elsewhere: on 19 real measurements its render
-PSNR moved by 1.0 dB on average (at most 5.2 dB, at grazing angles) between one thread and two, the mean over them
-by 0.2 dB (research/results/full-threads).
+PSNR moved by 1.0 dB on average (at most 5.2 dB, at grazing angles) between one thread and two at a constant rate,
+the mean over them by 0.2 dB (research/results/full-threads); its falling rate moves them less.
 
 Samples come as arrays or from a file (:func:`frenbrdf.io.read_samples`): CSV or NPZ rows
 ``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b`` — unit directions in the local shading frame
