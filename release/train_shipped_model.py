@@ -6,8 +6,7 @@
 
 Trains one model (``frenbrdf train`` with ``--config``: any TrainConfig keys over the
 method's preset; ``data``, ``out`` and ``seed`` are set here) on the MERL files and the
-bank together (a folder of links to both), with ``--fit-decoder`` fits its decoder further
-(:func:`fit_stage`), evaluates its held-out test split
+bank together (a folder of links to both), evaluates its held-out test split
 (:func:`frenbrdf.render.scoring.reconstruction_rows`: render RMSE/PSNR/SSIM/ΔE over the lit
 material pixels, encoder only), packs it (:func:`frenbrdf.models.pretrained.pack_pretrained`:
 float16 weights, compact f_ref), measures what float16 costs (the same test split through
@@ -30,7 +29,7 @@ from frenbrdf.data.folders import list_materials
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.models import pretrained
 from frenbrdf.render.scoring import reconstruction_rows
-from frenbrdf.training import DecoderFitConfig, fit_decoder, load_config, train
+from frenbrdf.training import load_config, train
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/ (`import common`), also when loaded by path
 from common import run_metadata  # noqa: E402
@@ -41,10 +40,6 @@ METRICS = ("rmse", "psnr", "ssim", "delta_e")
 #: each): the devices of research/results/sampling-patterns.
 CARD_PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 PATTERN_SAMPLES = 1500
-#: The decoder fit of ``--fit-decoder`` (besides its seed, the training's): the encoder's z kept in the loss with
-#: the encoder kept and its materials drawn as training drew them, the one make-up of
-#: research/results/decoder-finetune that keeps the encoder's reading while `latent` gains.
-FIT = {"encoder_weight": 1.0, "encoder_lr": 0.0, "encoder_augment": True}
 
 
 def linked_data(folders: list[Path], data: Path) -> None:
@@ -80,15 +75,6 @@ def read_sources(work: Path) -> dict[str, list[str]]:
     return json.loads(path.read_text())
 
 
-def fit_stage(run: Run, work: Path, *, seed: int = 0, progress: bool = False) -> Run:
-    """``run``'s decoder fitted further (:data:`FIT`) as ``WORK/fit``; a finished fit there (its ``best.pt``, which
-    :func:`frenbrdf.training.fit_decoder` writes last) is read again instead."""
-    out = work / "fit"
-    if not (out / "best.pt").is_file():
-        fit_decoder(run.path, out, DecoderFitConfig(seed=seed, **FIT), progress=progress)
-    return Run(out)
-
-
 def summary(rows: list[dict]) -> dict[str, float]:
     return {key: float(np.mean([row[key] for row in rows])) for key in METRICS}
 
@@ -114,14 +100,11 @@ def by_source(rows: list[dict], sources: dict[str, list[str]]) -> dict[str, dict
 
 
 def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_path: Path, *, seed: int = 0,
-          progress: bool = True, reuse: bool = False, resume: bool = False, trained_on: str | None = None,
-          fit: bool = False) -> dict:
+          progress: bool = True, reuse: bool = False, resume: bool = False, trained_on: str | None = None) -> dict:
     """Trains, evaluates, packs and documents the shipped model; returns the card.
 
     ``reuse``: a finished run in ``work`` (its ``best.pt``) is evaluated, packed and documented
-    again instead of trained anew. ``resume``: a run stopped midway continues from its ``last.pt``.
-    ``fit``: the run's decoder is fitted further (:func:`fit_stage`) and the fitted run is what is measured and
-    packed."""
+    again instead of trained anew. ``resume``: a run stopped midway continues from its ``last.pt``."""
     sources = source_names(folders)
     linked_data(folders, work / "data")
     save_json(work / "sources.json", sources)  # for release/pack_encoder_mean.py's card
@@ -131,8 +114,6 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
         run = Run(cfg.out)
     else:  # a fresh run replaces an earlier one of this script's in WORK/run
         run = train(cfg, resume=resume, overwrite=not resume)
-    if fit:
-        run = fit_stage(run, work, seed=seed, progress=progress)
     test = held_out_files(work, run.split.test)
     held_out = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, progress=progress)
     refined = reconstruction_rows(run.model(), test, seed=seed, frequency_metric=False, refine="latent",
@@ -144,7 +125,6 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
             # Training time without the validation renders, as the run logged it (a reused run's own).
             "training_seconds": round(run.history[-1].get("seconds", run.seconds or 0.0), 1),
             "trained_on": trained_on or run_metadata()["cpu"],
-            **({"decoder_fit": decoder_fit_record(run.path)} if fit else {}),
             "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, sources),
             "held_out_refined_by_source": by_source(refined, sources),
             "held_out_by_pattern": by_pattern(run.model(), test, seed=seed, progress=progress)}
@@ -156,12 +136,6 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
     sizes = pretrained.pack_pretrained(run.path, dest, card=card)  # the card now says what packing cost
     write_text(card_path, card_markdown({**card, "bytes": sizes}))
     return card
-
-
-def decoder_fit_record(fitted: Path) -> dict:
-    """The card's record of the decoder fit: its settings and seconds from ``decoder-fit.json``, not its loss."""
-    record = json.loads((fitted / "decoder-fit.json").read_text())
-    return {key: value for key, value in record.items() if key not in ("source", "history")}
 
 
 def card_markdown(card: dict) -> str:
@@ -178,7 +152,7 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
   {card['materials']['validation']} validation and {card['materials']['test']} held-out test materials
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
-  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{fit_text(card)}{encoders_text(card)}
+  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}
 - **Regenerate**: `bash release/train_shipped_model.sh` (the data, the decoder's training, its device encoders and
   packing: [release/README.md](../release/README.md)). These files
   were packed by `{card['command']}`.
@@ -217,17 +191,6 @@ The same held-out materials read through the sampling patterns of real devices (
 |---|---|---|
 {rows}
 """
-
-
-def fit_text(card: dict) -> str:
-    """The card's line on the decoder fit (``--fit-decoder``; cards before version 10 have none)."""
-    if "decoder_fit" not in card:
-        return ""
-    fit = card["decoder_fit"]
-    return (f"\n- **Decoder fit**: then `frenbrdf fit-decoder` for {fit['epochs']} epochs (decoder rate "
-            f"{fit['decoder_lr']:g}, latents {fit['latent_lr']:g}, the encoder's z weighted {fit['encoder_weight']:g} "
-            f"with the encoder kept and its materials drawn as training drew them, seed {fit['seed']}), "
-            f"{fit['seconds']:.0f} s; why: [decoder-finetune](../research/results/decoder-finetune/README.md).")
 
 
 def encoders_text(card: dict) -> str:
@@ -273,8 +236,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--reuse", action="store_true", help="evaluate, pack and document WORK/run again, untrained")
     parser.add_argument("--resume", action="store_true", help="continue WORK/run from its last.pt")
-    parser.add_argument("--fit-decoder", action="store_true", help="fit the trained decoder further (FIT) in "
-                        "WORK/fit and pack that")
     parser.add_argument("--trained-on", help="the machine the run was trained on, for the card (default: this CPU)")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -283,8 +244,7 @@ def main(argv: list[str] | None = None) -> int:
     if not folders:
         parser.error("give --merl, --bank, --data or several")
     card = build(args.config, folders, Path(args.work), Path(args.dest), Path(args.card), seed=args.seed,
-                 progress=not args.quiet, reuse=args.reuse, resume=args.resume, trained_on=args.trained_on,
-                 fit=args.fit_decoder)
+                 progress=not args.quiet, reuse=args.reuse, resume=args.resume, trained_on=args.trained_on)
     print(json.dumps(card["held_out"], indent=2))
     return 0
 

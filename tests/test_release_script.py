@@ -5,21 +5,15 @@ as well as tables and replaces no file of a user's in its work folder."""
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import stat
 import subprocess
 from pathlib import Path
-from types import SimpleNamespace
 
-import numpy as np
 import pytest
-import torch
 
-import frenbrdf
-
-from .conftest import script_module, toy_table
+from .conftest import script_module
 
 SCRIPT = Path(__file__).resolve().parents[1] / "release" / "train_shipped_model.sh"
 pytestmark = pytest.mark.skipif(shutil.which("bash") is None, reason="the release script needs bash")
@@ -116,58 +110,3 @@ def test_the_linked_data_folder_keeps_its_links_and_refuses_a_users_file(tmp_pat
     with pytest.raises(ValueError, match="felt.binary is in the way"):
         shipped.linked_data([source], data)
     assert (data / "felt.binary").read_bytes() == b"a user's own table"
-
-
-def test_the_fit_stage_fits_once_with_the_studys_settings_and_the_card_says_so(tmp_path, monkeypatch):
-    shipped = script_module("train_shipped_model")
-    fits = []
-
-    def fit_decoder(run, out, config, progress=False):  # a stand-in: the real fit is tested in test_decoder_fit
-        fits.append((run, config))
-        out.mkdir(parents=True)
-        (out / "best.pt").write_bytes(b"")
-        return out
-
-    monkeypatch.setattr(shipped, "fit_decoder", fit_decoder)
-    monkeypatch.setattr(shipped, "Run", lambda path: SimpleNamespace(path=Path(path)))
-    trained = SimpleNamespace(path=tmp_path / "run")
-    for _ in range(2):  # a rerun reads the finished fit again
-        fitted = shipped.fit_stage(trained, tmp_path, seed=3)
-        assert fitted.path == tmp_path / "fit"
-    assert len(fits) == 1 and fits[0][0] == tmp_path / "run"
-    config = fits[0][1]
-    assert (config.encoder_weight, config.encoder_lr, config.encoder_augment, config.seed) == (1.0, 0.0, True, 3)
-    record = {"epochs": 300, "decoder_lr": 1e-4, "latent_lr": 1e-3, "encoder_weight": 1.0, "seed": 3, "seconds": 61.2}
-    assert "for 300 epochs (decoder rate 0.0001, latents 0.001, the encoder's z weighted 1" in \
-        shipped.fit_text({"decoder_fit": record})
-    assert shipped.fit_text({}) == ""  # cards before version 10
-
-
-def test_a_fitted_decoder_is_what_is_packed(tmp_path, monkeypatch):
-    """train_shipped_model.py --fit-decoder end to end on eight toy tables (a tiny recipe, a short fit)."""
-    shipped = script_module("train_shipped_model")
-    monkeypatch.setitem(shipped.FIT, "epochs", 3)
-    tables = tmp_path / "tables"
-    tables.mkdir()
-    rng = np.random.default_rng(7)
-    for i in range(8):
-        frenbrdf.write_merl(tables / f"toy-{i}.binary", toy_table(rng))
-    config = {"epochs": 2, "batch_materials": 2, "context_samples": 256, "query_samples": 512, "render_every": 0,
-              "holdout": ["toy-0"], "augment": {"preset": "default"},
-              "model": {"nbrdf": {"hidden": [16, 16]}, "encoder": {"hidden": [32, 32], "latent": 8},
-                        "decoder": {"hidden": [32]}}, "loss": {"frequency": {"lmax": 11, "slices": [0, 30, 60]}}}
-    (tmp_path / "config.json").write_text(json.dumps(config))
-    work, dest = tmp_path / "work", tmp_path / "dest"
-    shipped.main(["--merl", str(tables), "--config", str(tmp_path / "config.json"), "--work", str(work),
-                  "--dest", str(dest), "--card", str(tmp_path / "card.md"), "--quiet", "--fit-decoder"])
-    card = json.loads((dest / "card.json").read_text())
-    assert card["decoder_fit"]["epochs"] == 3 and card["decoder_fit"]["encoder_augment"] is True
-    assert "**Decoder fit**: then `frenbrdf fit-decoder` for 3 epochs" in (tmp_path / "card.md").read_text()
-    packed = frenbrdf.Model.pretrained(dest).network.decoder.state_dict()
-    fitted, trained = (torch.load(work / folder / "best.pt", weights_only=False)["model"] for folder in ("fit", "run"))
-
-    def as_packed(run):  # the package keeps float16 weights
-        return {name: run[f"decoder.{name}"].half().float() for name in packed}
-
-    assert all(torch.equal(packed[name], value) for name, value in as_packed(fitted).items())
-    assert not all(torch.equal(packed[name], value) for name, value in as_packed(trained).items())

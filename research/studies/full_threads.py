@@ -2,7 +2,11 @@
 measurement from the same samples and the same refinement seed, once in a process with one thread and once with
 two, and the two renders are scored against the measurement's.
 
-    python research/studies/full_threads.py ../shared/data/rgl-measured/*.bsdf --out research/results/full-threads
+    python research/studies/full_threads.py ../shared/data/rgl-measured/*.bsdf --out research/results/full-threads \
+        [--budget full]
+
+``--budget``: compare_models.py's budget syntax (``full@schedule=constant,weight_lr=0.003`` is `full` before
+2026-11-30).
 
 Each setting runs in a process of its own (``OMP_NUM_THREADS``, which PyTorch reads at start-up); writes
 ``OUT/threads-N.json`` (PSNR by material) and ``OUT/summary.json`` (the differences) and prints them.
@@ -24,18 +28,17 @@ from frenbrdf.io.atomic import save_json
 THREADS = (1, 2)
 
 
-def read_one_setting(paths: list[str], out: Path, samples: int) -> None:
-    """In this process (its thread count fixed at start-up): `full` on each measurement, 4,000 random bins of
+def read_one_setting(paths: list[str], out: Path, samples: int, budget: str) -> None:
+    """In this process (its thread count fixed at start-up): ``budget`` on each measurement, 4,000 random bins of
     draw 0 as compare_models.py draws them, refinement seed 0, render PSNR at 128²."""
     import torch
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from compare_models import condition_rng
+    from compare_models import budget_config, condition_rng
 
     from frenbrdf import Model
     from frenbrdf.io import read_material
     from frenbrdf.io.patterns import pattern_samples
-    from frenbrdf.models.reconstruct import refine_config
     from frenbrdf.render.renderer import Scene, material_mask, render_linear, tonemap
     from frenbrdf.render.scoring import image_metrics, refined_reconstruction
 
@@ -45,7 +48,7 @@ def read_one_setting(paths: list[str], out: Path, samples: int) -> None:
     for path in paths:
         truth = read_material(path)
         drawn = pattern_samples(truth, "merl-bins", samples, condition_rng(0, "merl-bins"))
-        _, image, _ = refined_reconstruction(model, drawn, scene, refine_config("full"))
+        _, image, _ = refined_reconstruction(model, drawn, scene, budget_config(budget))
         psnr[Path(path).stem] = image_metrics(tonemap(render_linear(truth, scene)), image, mask)["psnr"]
     save_json(out / f"threads-{torch.get_num_threads()}.json", psnr)
 
@@ -55,15 +58,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("measurements", nargs="+")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--samples", type=int, default=4000)
+    parser.add_argument("--budget", default="full")
     parser.add_argument("--one-setting", action="store_true", help=argparse.SUPPRESS)  # the child processes
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     if args.one_setting:
-        read_one_setting(args.measurements, args.out, args.samples)
+        read_one_setting(args.measurements, args.out, args.samples, args.budget)
         return 0
     for threads in THREADS:
         subprocess.run([sys.executable, __file__, *args.measurements, "--out", str(args.out), "--samples",
-                        str(args.samples), "--one-setting"], check=True,
+                        str(args.samples), "--budget", args.budget, "--one-setting"], check=True,
                        env={**os.environ, "OMP_NUM_THREADS": str(threads)})
     one, two = (json.loads((args.out / f"threads-{n}.json").read_text()) for n in THREADS)
     change = {name: two[name] - one[name] for name in sorted(one)}

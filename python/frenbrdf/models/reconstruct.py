@@ -19,7 +19,7 @@ Named budgets (:data:`BUDGETS`): ``"none"`` (stage 0), ``"latent"`` (0 + 1), ``"
 unless its wall-clock budget (:attr:`RefineConfig.seconds`) stops it first. Another thread count changes the
 arithmetic at the level of bits, and ``full``'s weight stage can end elsewhere: on 19 real measurements its render
 PSNR moved by 1.0 dB on average (at most 5.2 dB, at grazing angles) between one thread and two at a constant rate,
-the mean over them by 0.2 dB (research/results/full-threads); its falling rate moves them less.
+and by 1.1 dB (at most 3.7) at the falling rate, the mean over them by 0.2–0.5 dB (research/results/full-threads).
 
 Samples come as arrays or from a file (:func:`frenbrdf.io.read_samples`): CSV or NPZ rows
 ``wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b`` — unit directions in the local shading frame
@@ -165,7 +165,7 @@ class RefineConfig:
 
 #: The named budgets of ``refine=``: ``latent`` optimises z only (the result stays in the latent space, so it can
 #: be edited), ``full`` then fits the NBRDF's own weights, widened to 64 units, at a rate falling from 1e-2 to 0
-#: (research/results/full-schedule: +0.96 dB on 19 measurements and steadier across thread counts than a constant
+#: (research/results/full-schedule: +0.96 dB on 19 measurements, +2.61 on 40 tables, than a constant
 #: 3e-3). Each setting was chosen by a rule fixed before measuring; the measurements are in research/README.md
 #: ("Test-time refinement").
 BUDGETS = {

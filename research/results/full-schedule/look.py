@@ -12,13 +12,15 @@ import sys
 from pathlib import Path
 
 from frenbrdf.models.autoencoder import load_model
-from frenbrdf.models.reconstruct import refine_config
+from frenbrdf.models.reconstruct import RefineConfig
 from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from image_grid import measurement_row, save_image_grid  # noqa: E402
 
-CANDIDATE = dataclasses.replace(refine_config("full"), schedule="cosine", weight_lr=1e-2)
+#: `full` before and after this study's decision.
+CONSTANT = RefineConfig(latent_steps=100, weight_steps=1500, weight_lr=3e-3, width=64)
+CANDIDATE = dataclasses.replace(CONSTANT, schedule="cosine", weight_lr=1e-2)
 
 
 def main(work: str, figure: str, readings: list[str]) -> None:
@@ -28,7 +30,7 @@ def main(work: str, figure: str, readings: list[str]) -> None:
     for reading in readings:
         material, fold = reading.rsplit(":", 1)
         model = load_model(Path(work) / f"mf-f{fold}-s0")
-        columns = [("full (constant 3e-3)", model, refine_config("full")), ("cosine from 1e-2", model, CANDIDATE)]
+        columns = [("full (constant 3e-3)", model, CONSTANT), ("cosine from 1e-2", model, CANDIDATE)]
         grid.append((f"{material}\nfold {fold}", measurement_row(material, columns, scene, mask, draw=3)))
     save_image_grid(grid, figure)
 

@@ -9,7 +9,8 @@ set -euo pipefail
 WORK=${1:?WORK folder of the fold runs}; DATA=${2:?DATA: the 197 tables}; OUT=${3:?OUT folder}
 HERE=$(dirname "$0")
 STUDIES=$HERE/../../studies
-BUDGETS=(full "full@schedule=cosine,weight_lr=0.01")
+# Both named explicitly: `full` itself became the candidate after the decision.
+BUDGETS=("full@schedule=constant,weight_lr=0.003" "full@schedule=cosine,weight_lr=0.01")
 read_all() {  # THREADS: the fold runs' readings, then the tables'
     local threads=$1 out=$OUT/t$1
     mkdir -p "$out"
