@@ -1,0 +1,237 @@
+"""A second look for the encoder: a network that reads what the first guess got wrong (issue 47; a prototype).
+
+    python research/studies/second_look.py train CONFIG DATA --out DIR [--minutes 30] [--seed 0]
+    python research/studies/second_look.py score DIR MATERIALS... [--patterns ...] [--count 1500] [--draws 0]
+
+Through a device the shipped encoders stay 2–6 dB below their random-bin figure, and no choice among them closes
+it (research/results/encoder-choice: even the best of the five for each material stays 2.2–5.5 dB below), while
+`latent`, which reads the samples' errors step by step, comes within about 1 dB through uniform pairs. This
+prototype asks whether one learned step does part of that: the shipped model's own `best-fit` guess z₁, decoded at
+the samples, gives each sample a prediction ŷ; a set network reads every sample with its prediction and error
+(y, its coordinates, ŷ, y − ŷ, cos θ_i) and, with z₁, gives a correction Δz (its last layer starts at zero: the
+untrained second look is the first). z = z₁ + Δz; the decoder and the encoders stay frozen. Trained on the shipped
+recipe's data and patterns (CONFIG: a run config such as research/results/folds-v8/config-v8.json, read with the
+`mixed` pattern mixture of version 5's device encoders, counts 300–4,000), without L_fre (η = 0: a prototype),
+for a fixed time, keeping the weights of the best validation loss (the validation tables read through the
+mixture, as the device encoders were chosen).
+
+``score`` renders the first and the second look for each material and pattern (128², version 9's scene) and writes
+``DIR/score-*/rows.json`` and a summary: PSNR / ΔE of each, and the difference per material.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch import nn
+from tqdm import tqdm
+
+from frenbrdf import Model
+from frenbrdf.configs import from_dict
+from frenbrdf.data.folders import SampleBatch, list_materials, split_materials
+from frenbrdf.evaluation.statistics import paired_interval
+from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.io.formats import read_measured
+from frenbrdf.io.patterns import pattern_samples
+from frenbrdf.io.sampling import as_table
+from frenbrdf.models.encoder import mlp
+from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
+from frenbrdf.render import Scene, material_mask, render_linear, tonemap
+from frenbrdf.render.scoring import highlight_mask, image_metrics
+from frenbrdf.training.augment import BatchDrawer
+from frenbrdf.training.config import TrainConfig
+from frenbrdf.training.prepared import prepare
+from frenbrdf.training.step import decoding_terms
+
+MIXED = Path(__file__).resolve().parents[1] / "results" / "version-5" / "encoder-mixed.json"
+PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
+#: What the second look reads of each sample: y (3), coordinates (6), ŷ (3), y − ŷ (3), cos θ_i (1).
+FEATURES = 16
+
+
+class FirstLook:
+    """The model's `best-fit` guess for a batch: every encoder's latent, the one whose decoding fits the context
+    best (the plain cos θ_i-weighted loss, as :meth:`frenbrdf.Model.encoding` chooses), without gradients."""
+
+    def __init__(self, model: Model):
+        encoder = model.network.encoder
+        self.members = encoder.encoders() if hasattr(encoder, "encoders") else [encoder]
+        self.decoder, self.kind = model.network.decoder, model.loss.get("kind", "l1")
+
+    @torch.no_grad()
+    def __call__(self, context: SampleBatch) -> torch.Tensor:
+        latents = torch.stack([member(context.encoder_input()) for member in self.members], dim=1)  # (B, M, L)
+        b, m, size = latents.shape
+        params = self.decoder(latents.reshape(b * m, size))
+        predicted = nbrdf_forward(params, context.coords.repeat_interleave(m, dim=0))
+        error = (predicted - context.values.repeat_interleave(m, dim=0)) * context.cos_in.repeat_interleave(m, dim=0)[..., None]
+        loss = (error.abs() if self.kind == "l1" else error.square()).mean(dim=(1, 2)).reshape(b, m)
+        return latents[torch.arange(b), loss.argmin(dim=1)]
+
+
+class SecondLook(nn.Module):
+    """Δz from the samples, their predictions under z₁ and z₁ itself (see the module docstring)."""
+
+    def __init__(self, latent: int, hidden=(128, 128, 128), after=(256,)):
+        super().__init__()
+        self.per_sample = nn.Sequential(mlp([FEATURES, *hidden]), nn.ReLU())
+        self.after_pool = mlp([hidden[-1] + latent, *after, latent])
+        last = self.after_pool[-1]
+        nn.init.zeros_(last.weight)
+        nn.init.zeros_(last.bias)
+
+    def forward(self, context: SampleBatch, z1: torch.Tensor, decoder) -> torch.Tensor:
+        with torch.no_grad():
+            predicted = nbrdf_forward(decoder(z1), context.coords)
+        features = torch.cat([context.values, context.coords, predicted, context.values - predicted,
+                              context.cos_in[..., None]], dim=-1)
+        pooled = self.per_sample(features).mean(dim=1)
+        return z1 + self.after_pool(torch.cat([pooled, z1], dim=-1))
+
+
+def run_config(path: Path, data: Path, seed: int) -> TrainConfig:
+    config = json.loads(path.read_text())
+    config.update(data=str(data), seed=seed, sampling=json.loads(MIXED.read_text())["sampling"], method="nbrdf",
+                  validate_through="sampling", render_every=0, device="cpu")
+    config["loss"] = {**config.get("loss", {}), "eta": 0.0}
+    return from_dict(TrainConfig, config)
+
+
+def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, data, drawer) -> tuple[float, float]:
+    """The validation tables' reconstruction loss of the first and the second look, read through the mixture
+    (the same samples every time)."""
+    generator = torch.Generator().manual_seed(cfg.seed + 1)
+    materials = list(data.validation)
+    sums = [0.0, 0.0]
+    second.eval()
+    with torch.no_grad():
+        for start in range(0, len(materials), cfg.batch_materials):
+            batch = materials[start:start + cfg.batch_materials]
+            patterns = list(drawer.patterns.choose(len(batch), generator))
+            context = drawer.pattern_context(batch, patterns, cfg.context_samples, generator)
+            query = data.bank.sample(batch, cfg.query_samples, generator)
+            z1 = first(context)
+            for k, z in enumerate((z1, second(context, z1, model.network.decoder))):
+                terms = decoding_terms(z, model.network.decoder(z), query, cfg.loss)
+                sums[k] += float(terms["rec"]) * len(batch) / len(materials)
+    second.train()
+    return sums[0], sums[1]
+
+
+def train(args) -> int:
+    model = Model.pretrained()
+    model.network.requires_grad_(False)
+    cfg = run_config(args.config, args.data, args.seed)
+    files = {path.stem: path for path in list_materials(cfg.data)}
+    split = split_materials(files, cfg.seed, cfg.split, cfg.holdout)
+    data = prepare(cfg, split, files, mapping=model.mapping)
+    drawer = BatchDrawer(cfg, data, with_truth=False)
+    torch.manual_seed(cfg.seed)
+    first, second = FirstLook(model), SecondLook(model.config.encoder.latent)
+    optimizer = torch.optim.Adam(second.parameters(), lr=cfg.lr)
+    generator = torch.Generator().manual_seed(cfg.seed)
+    args.out.mkdir(parents=True, exist_ok=True)
+    history, best = [], math.inf
+    deadline = time.monotonic() + 60 * args.minutes
+    epoch = 0
+    while time.monotonic() < deadline:
+        order = torch.randperm(data.n_train, generator=generator)
+        losses = []
+        for step in tqdm(range(data.n_train // cfg.batch_materials), desc=f"epoch {epoch}", leave=False):
+            batch = order[step * cfg.batch_materials:(step + 1) * cfg.batch_materials].tolist()
+            drawn = drawer.draw(batch, generator)
+            z = second(drawn.context, first(drawn.context), model.network.decoder)
+            terms = decoding_terms(z, model.network.decoder(z), drawn.query, cfg.loss)
+            total = terms["rec"] + terms["w"] + terms["z"]
+            optimizer.zero_grad(set_to_none=True)
+            total.backward()
+            optimizer.step()
+            losses.append(float(terms["rec"]))
+        val_first, val_second = validation_loss(model, first, second, cfg, data, drawer)
+        history.append({"epoch": epoch, "train_rec": float(np.mean(losses)), "val_first": val_first,
+                        "val_second": val_second})
+        print(json.dumps(history[-1]), flush=True)
+        if val_second < best:
+            best = val_second
+            torch.save({"state": second.state_dict(), "epoch": epoch}, args.out / "second_look.pt")
+        save_json(args.out / "history.json", history)
+        epoch += 1
+    return 0
+
+
+def score(args) -> int:
+    model = Model.pretrained()
+    second = SecondLook(model.config.encoder.latent)
+    saved = torch.load(args.run / "second_look.pt", weights_only=True)
+    second.load_state_dict(saved["state"])
+    second.eval()
+    scene = Scene(resolution=128)
+    mask = material_mask(scene)
+    rows = []
+    for path in tqdm(args.materials, desc="materials"):
+        truth = read_measured(path)
+        table = as_table(truth) if isinstance(truth, np.ndarray) else None
+        truth_linear = render_linear(truth, scene)
+        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
+        for draw, (p, name) in ((d, pn) for d in args.draws for pn in enumerate(args.patterns)):
+            rng = np.random.default_rng([draw, p, sum(map(ord, path.stem))])
+            values, directions = pattern_samples(truth, name, args.count, rng, table=table)
+            z1 = model.encoding(values, directions).z.astype(np.float32)
+            mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                                      for a in mapped_samples(model.mapping, values, directions))
+            with torch.no_grad():
+                z2 = second(SampleBatch(coords, mapped, cos_in), torch.from_numpy(z1)[None],
+                            model.network.decoder)[0].numpy()
+            row = {"material": path.stem, "pattern": name, "draw": draw}
+            for label, z in (("first", z1), ("second", z2)):
+                image = tonemap(render_linear(model.decode(z)[0], scene))
+                metrics = image_metrics(truth_image, image, mask, highlight)
+                row.update({f"{label}_psnr": metrics["psnr"], f"{label}_delta_e": metrics["delta_e"]})
+            rows.append(row)
+    out = args.run / f"score-{args.name}"
+    out.mkdir(parents=True, exist_ok=True)
+    save_json(out / "rows.json", rows)
+    lines = ["| pattern | first look | second look | second − first, per material |", "|---|---|---|---|"]
+    for name in args.patterns:
+        here = [r for r in rows if r["pattern"] == name]
+        materials = sorted({r["material"] for r in here})
+        diff = [np.mean([r["second_psnr"] - r["first_psnr"] for r in here if r["material"] == m]) for m in materials]
+        interval = paired_interval(diff)
+        cells = [f"{np.mean([r[f'{k}_psnr'] for r in here]):.2f} / {np.mean([r[f'{k}_delta_e'] for r in here]):.2f}"
+                 for k in ("first", "second")]
+        span = "" if interval["low"] is None else f" [{interval['low']:+.2f}, {interval['high']:+.2f}]"
+        lines.append(f"| {name} | {cells[0]} | {cells[1]} | {interval['mean']:+.2f}{span} |")
+    summary = "\n".join(lines) + "\n"
+    write_text(out / "summary.md", summary)
+    print(summary)
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    t = commands.add_parser("train")
+    t.add_argument("config", type=Path)
+    t.add_argument("data", type=Path)
+    t.add_argument("--out", type=Path, required=True)
+    t.add_argument("--minutes", type=float, default=30)
+    t.add_argument("--seed", type=int, default=0)
+    s = commands.add_parser("score")
+    s.add_argument("run", type=Path)
+    s.add_argument("materials", nargs="+", type=Path)
+    s.add_argument("--patterns", nargs="+", default=list(PATTERNS))
+    s.add_argument("--count", type=int, default=1500)
+    s.add_argument("--draws", type=int, nargs="+", default=[0])
+    s.add_argument("--name", default="explore")
+    args = parser.parse_args(argv)
+    return train(args) if args.command == "train" else score(args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
