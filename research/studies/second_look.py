@@ -1,7 +1,8 @@
 """A second look for the encoder: a network that reads what the first guess got wrong (issue 47; a prototype).
 
-    python research/studies/second_look.py train CONFIG DATA --out DIR [--minutes 30] [--seed 0]
-    python research/studies/second_look.py score DIR MATERIALS... [--patterns ...] [--count 1500] [--draws 0]
+    python research/studies/second_look.py train CONFIG DATA --out DIR [--minutes 30] [--epochs N] [--seed 0]
+    python research/studies/second_look.py score MATERIALS... --runs DIR... --out OUT [--patterns ...] [--count 1500]
+        [--draws 0]
 
 Through a device the shipped encoders stay 2–6 dB below their random-bin figure, and no choice among them closes
 it (research/results/encoder-choice: even the best of the five for each material stays 2.2–5.5 dB below), while
@@ -15,8 +16,9 @@ recipe's data and patterns (CONFIG: a run config such as research/results/folds-
 for a fixed time, keeping the weights of the best validation loss (the validation tables read through the
 mixture, as the device encoders were chosen).
 
-``score`` renders the first and the second look for each material and pattern (128², version 9's scene) and writes
-``DIR/score-*/rows.json`` and a summary: PSNR / ΔE of each, and the difference per material.
+``score`` renders the first look and each run's second look for each material and pattern (128², version 9's scene)
+and writes ``OUT/rows.json`` and ``OUT/summary.md``: PSNR / ΔE of each, and the difference per material (the second
+look the mean of the runs').
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ from frenbrdf.training.step import decoding_terms
 
 MIXED = Path(__file__).resolve().parents[1] / "results" / "version-5" / "encoder-mixed.json"
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
-#: What the second look reads of each sample: y (3), coordinates (6), ŷ (3), y − ŷ (3), cos θ_i (1).
+#: What the second look reads of each sample: y (3), coordinates (6), ŷ (3), y − ŷ (3), cos θ_i (1), and z₁.
 FEATURES = 16
 
 
@@ -78,21 +80,27 @@ class FirstLook:
 class SecondLook(nn.Module):
     """Δz from the samples, their predictions under z₁ and z₁ itself (see the module docstring)."""
 
-    def __init__(self, latent: int, hidden=(128, 128, 128), after=(256,)):
+    def __init__(self, latent: int, hidden=(128, 128, 128), after=(256, 256)):
         super().__init__()
-        self.per_sample = nn.Sequential(mlp([FEATURES, *hidden]), nn.ReLU())
-        self.after_pool = mlp([hidden[-1] + latent, *after, latent])
+        self.per_sample = nn.Sequential(mlp([FEATURES + latent, *hidden]), nn.ReLU())
+        # ρ reads the pooled features, z₁, and the samples' loss gradient at z₁ (its direction and log length)
+        self.after_pool = mlp([hidden[-1] + 2 * latent + 1, *after, latent])
         last = self.after_pool[-1]
         nn.init.zeros_(last.weight)
         nn.init.zeros_(last.bias)
 
     def forward(self, context: SampleBatch, z1: torch.Tensor, decoder) -> torch.Tensor:
-        with torch.no_grad():
-            predicted = nbrdf_forward(decoder(z1), context.coords)
+        with torch.enable_grad():
+            start = z1.detach().requires_grad_(True)
+            predicted = nbrdf_forward(decoder(start), context.coords)
+            error = ((predicted - context.values) * context.cos_in[..., None]).abs().mean(dim=(1, 2)).sum()
+            (gradient,) = torch.autograd.grad(error, start)
+        predicted, length = predicted.detach(), gradient.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+        n = context.values.shape[1]
         features = torch.cat([context.values, context.coords, predicted, context.values - predicted,
-                              context.cos_in[..., None]], dim=-1)
+                              context.cos_in[..., None], z1[:, None].expand(-1, n, -1)], dim=-1)
         pooled = self.per_sample(features).mean(dim=1)
-        return z1 + self.after_pool(torch.cat([pooled, z1], dim=-1))
+        return z1 + self.after_pool(torch.cat([pooled, z1, gradient / length, length.log()], dim=-1))
 
 
 def run_config(path: Path, data: Path, seed: int) -> TrainConfig:
@@ -140,7 +148,7 @@ def train(args) -> int:
     history, best = [], math.inf
     deadline = time.monotonic() + 60 * args.minutes
     epoch = 0
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and epoch < args.epochs:
         order = torch.randperm(data.n_train, generator=generator)
         losses = []
         for step in tqdm(range(data.n_train // cfg.batch_materials), desc=f"epoch {epoch}", leave=False):
@@ -167,10 +175,11 @@ def train(args) -> int:
 
 def score(args) -> int:
     model = Model.pretrained()
-    second = SecondLook(model.config.encoder.latent)
-    saved = torch.load(args.run / "second_look.pt", weights_only=True)
-    second.load_state_dict(saved["state"])
-    second.eval()
+    looks = []
+    for run in args.runs:
+        second = SecondLook(model.config.encoder.latent)
+        second.load_state_dict(torch.load(run / "second_look.pt", weights_only=True)["state"])
+        looks.append(second.eval())
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     rows = []
@@ -185,32 +194,47 @@ def score(args) -> int:
             z1 = model.encoding(values, directions).z.astype(np.float32)
             mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
                                       for a in mapped_samples(model.mapping, values, directions))
+            latents = {"first": z1}
             with torch.no_grad():
-                z2 = second(SampleBatch(coords, mapped, cos_in), torch.from_numpy(z1)[None],
-                            model.network.decoder)[0].numpy()
-            row = {"material": path.stem, "pattern": name, "draw": draw}
-            for label, z in (("first", z1), ("second", z2)):
+                for run, second in zip(args.runs, looks):
+                    latents[run.name] = second(SampleBatch(coords, mapped, cos_in), torch.from_numpy(z1)[None],
+                                               model.network.decoder)[0].numpy()
+            for look, z in latents.items():
                 image = tonemap(render_linear(model.decode(z)[0], scene))
                 metrics = image_metrics(truth_image, image, mask, highlight)
-                row.update({f"{label}_psnr": metrics["psnr"], f"{label}_delta_e": metrics["delta_e"]})
-            rows.append(row)
-    out = args.run / f"score-{args.name}"
-    out.mkdir(parents=True, exist_ok=True)
-    save_json(out / "rows.json", rows)
-    lines = ["| pattern | first look | second look | second − first, per material |", "|---|---|---|---|"]
-    for name in args.patterns:
-        here = [r for r in rows if r["pattern"] == name]
-        materials = sorted({r["material"] for r in here})
-        diff = [np.mean([r["second_psnr"] - r["first_psnr"] for r in here if r["material"] == m]) for m in materials]
-        interval = paired_interval(diff)
-        cells = [f"{np.mean([r[f'{k}_psnr'] for r in here]):.2f} / {np.mean([r[f'{k}_delta_e'] for r in here]):.2f}"
-                 for k in ("first", "second")]
-        span = "" if interval["low"] is None else f" [{interval['low']:+.2f}, {interval['high']:+.2f}]"
-        lines.append(f"| {name} | {cells[0]} | {cells[1]} | {interval['mean']:+.2f}{span} |")
-    summary = "\n".join(lines) + "\n"
-    write_text(out / "summary.md", summary)
+                rows.append({"material": path.stem, "pattern": name, "draw": draw, "look": look,
+                             "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    args.out.mkdir(parents=True, exist_ok=True)
+    save_json(args.out / "rows.json", rows)
+    summary = summarise(rows, args.patterns)
+    write_text(args.out / "summary.md", summary)
     print(summary)
     return 0
+
+
+def per_material(rows: list[dict], pattern: str, key: str = "psnr") -> dict[str, tuple[float, float]]:
+    """``{material: (first look, second look)}`` in ``key`` through ``pattern``, each the mean over the draws (the
+    second look's also over its runs)."""
+    out = {}
+    for material in sorted({r["material"] for r in rows}):
+        here = [r for r in rows if r["material"] == material and r["pattern"] == pattern]
+        out[material] = (float(np.mean([r[key] for r in here if r["look"] == "first"])),
+                         float(np.mean([r[key] for r in here if r["look"] != "first"])))
+    return out
+
+
+def summarise(rows: list[dict], patterns) -> str:
+    runs = sorted({r["look"] for r in rows} - {"first"})
+    lines = [f"second look: the mean of {len(runs)} run(s) ({', '.join(runs)}); PSNR dB / ΔE, means over the materials",
+             "", "| pattern | first look | second look | second − first, per material |", "|---|---|---|---|"]
+    for name in patterns:
+        psnr, delta_e = per_material(rows, name), per_material(rows, name, "delta_e")
+        interval = paired_interval([second - first for first, second in psnr.values()])
+        span = "" if interval["low"] is None else f" [{interval['low']:+.2f}, {interval['high']:+.2f}]"
+        cells = [f"{np.mean([v[k] for v in psnr.values()]):.2f} / {np.mean([v[k] for v in delta_e.values()]):.2f}"
+                 for k in (0, 1)]
+        lines.append(f"| {name} | {cells[0]} | {cells[1]} | {interval['mean']:+.2f}{span} |")
+    return "\n".join(lines) + "\n"
 
 
 def main(argv=None) -> int:
@@ -220,15 +244,16 @@ def main(argv=None) -> int:
     t.add_argument("config", type=Path)
     t.add_argument("data", type=Path)
     t.add_argument("--out", type=Path, required=True)
-    t.add_argument("--minutes", type=float, default=30)
+    t.add_argument("--minutes", type=float, default=30, help="stop after this long ...")
+    t.add_argument("--epochs", type=int, default=10**9, help="... or this many epochs, whichever comes first")
     t.add_argument("--seed", type=int, default=0)
     s = commands.add_parser("score")
-    s.add_argument("run", type=Path)
     s.add_argument("materials", nargs="+", type=Path)
+    s.add_argument("--runs", nargs="+", type=Path, required=True)
+    s.add_argument("--out", type=Path, required=True)
     s.add_argument("--patterns", nargs="+", default=list(PATTERNS))
     s.add_argument("--count", type=int, default=1500)
     s.add_argument("--draws", type=int, nargs="+", default=[0])
-    s.add_argument("--name", default="explore")
     args = parser.parse_args(argv)
     return train(args) if args.command == "train" else score(args)
 
