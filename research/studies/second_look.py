@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -38,17 +39,16 @@ from frenbrdf.configs import from_dict
 from frenbrdf.data.folders import SampleBatch, list_materials, split_materials
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.formats import read_measured
-from frenbrdf.io.patterns import pattern_samples
-from frenbrdf.io.sampling import as_table
 from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
 from frenbrdf.models.second_look import SecondLook, SecondLookConfig
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import highlight_mask, image_metrics
 from frenbrdf.training.augment import BatchDrawer
 from frenbrdf.training.config import TrainConfig
 from frenbrdf.training.prepared import prepare
 from frenbrdf.training.step import decoding_terms
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from pattern_readings import readings  # noqa: E402
 
 MIXED = Path(__file__).resolve().parents[1] / "results" / "version-5" / "encoder-mixed.json"
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
@@ -155,27 +155,19 @@ def score(args) -> int:
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     rows = []
-    for path in tqdm(args.materials, desc="materials"):
-        truth = read_measured(path)
-        table = as_table(truth) if isinstance(truth, np.ndarray) else None
-        truth_linear = render_linear(truth, scene)
-        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
-        for draw, (p, name) in ((d, pn) for d in args.draws for pn in enumerate(args.patterns)):
-            rng = np.random.default_rng([draw, p, sum(map(ord, path.stem))])
-            values, directions = pattern_samples(truth, name, args.count, rng, table=table)
-            z1 = model.encoding(values, directions).z.astype(np.float32)
-            mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                      for a in mapped_samples(model.mapping, values, directions))
-            latents = {"first": z1}
-            with torch.no_grad():
-                for run, second in zip(args.runs, looks, strict=True):
-                    latents[run.name] = second(coords, mapped, cos_in, torch.from_numpy(z1)[None],
-                                               model.network.decoder)[0].numpy()
-            for look, z in latents.items():
-                image = tonemap(render_linear(model.decode(z)[0], scene))
-                metrics = image_metrics(truth_image, image, mask, highlight)
-                rows.append({"material": path.stem, "pattern": name, "draw": draw, "look": look,
-                             "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
+        z1 = model.encoding(reading.values, reading.directions).z.astype(np.float32)
+        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
+        latents = {"first": z1}
+        with torch.no_grad():
+            for run, second in zip(args.runs, looks, strict=True):
+                latents[run.name] = second(coords, mapped, cos_in, torch.from_numpy(z1)[None],
+                                           model.network.decoder)[0].numpy()
+        for look, z in latents.items():
+            metrics = reading.metrics(tonemap(render_linear(model.decode(z)[0], scene)), mask)
+            rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
+                         "look": look, "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
     args.out.mkdir(parents=True, exist_ok=True)
     save_json(args.out / "rows.json", rows)
     summary = summarise(rows, args.patterns)
