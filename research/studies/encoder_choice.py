@@ -15,23 +15,22 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from frenbrdf import Model
-from frenbrdf.io.formats import read_measured
 from frenbrdf.io.atomic import write_text
-from frenbrdf.io.patterns import pattern_samples
-from frenbrdf.io.sampling import as_table
 from frenbrdf.material.outputs import DEVICE_COVERAGE_K
 from frenbrdf.models.coverage import coverage_weights
 from frenbrdf.models.losses import LossConfig, samples_loss
 from frenbrdf.models.nbrdf import mapped_samples
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import highlight_mask, image_metrics
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from pattern_readings import readings  # noqa: E402
 
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 
@@ -88,22 +87,14 @@ def main(argv=None) -> int:
     scene = Scene(resolution=args.resolution)
     mask = material_mask(scene)
     rows = []
-    for path in tqdm(args.materials, desc="materials"):
-        truth = read_measured(path)
-        table = as_table(truth) if isinstance(truth, np.ndarray) else None
-        truth_linear = render_linear(truth, scene)
-        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
-        for draw, (p, name) in ((d, pn) for d in args.draws for pn in enumerate(args.patterns)):
-            rng = np.random.default_rng([draw, p, sum(map(ord, path.stem))])
-            values, directions = pattern_samples(truth, name, args.count, rng, table=table)
-            members = member_rows(model, values, directions, args.coverage)
-            members.append({"encoder": "mean", "z": np.mean([m["z"] for m in members], axis=0),
-                            "loss": float("nan"), "coverage_loss": float("nan")})
-            for member in members:
-                image = tonemap(render_linear(model.decode(member.pop("z"))[0], scene))
-                metrics = image_metrics(truth_image, image, mask, highlight)
-                rows.append({"material": path.stem, "pattern": name, "draw": draw, **member,
-                             "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
+        members = member_rows(model, reading.values, reading.directions, args.coverage)
+        members.append({"encoder": "mean", "z": np.mean([m["z"] for m in members], axis=0),
+                        "loss": float("nan"), "coverage_loss": float("nan")})
+        for member in members:
+            metrics = reading.metrics(tonemap(render_linear(model.decode(member.pop("z"))[0], scene)), mask)
+            rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw, **member,
+                         "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
     args.out.mkdir(parents=True, exist_ok=True)
     write_text(args.out / "rows.json", json.dumps(rows, indent=1) + "\n")
     summary = summarise(rows, args.patterns)

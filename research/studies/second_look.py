@@ -26,12 +26,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
-from torch import nn
 from tqdm import tqdm
 
 from frenbrdf import Model
@@ -39,22 +39,19 @@ from frenbrdf.configs import from_dict
 from frenbrdf.data.folders import SampleBatch, list_materials, split_materials
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
-from frenbrdf.io.formats import read_measured
-from frenbrdf.io.patterns import pattern_samples
-from frenbrdf.io.sampling import as_table
-from frenbrdf.models.encoder import mlp
 from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
+from frenbrdf.models.second_look import SecondLook, SecondLookConfig
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
-from frenbrdf.render.scoring import highlight_mask, image_metrics
 from frenbrdf.training.augment import BatchDrawer
 from frenbrdf.training.config import TrainConfig
 from frenbrdf.training.prepared import prepare
 from frenbrdf.training.step import decoding_terms
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from pattern_readings import readings  # noqa: E402
+
 MIXED = Path(__file__).resolve().parents[1] / "results" / "version-5" / "encoder-mixed.json"
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
-#: What the second look reads of each sample: y (3), coordinates (6), ŷ (3), y − ŷ (3), cos θ_i (1), and z₁.
-FEATURES = 16
 
 
 class FirstLook:
@@ -75,32 +72,6 @@ class FirstLook:
         error = (predicted - context.values.repeat_interleave(m, dim=0)) * context.cos_in.repeat_interleave(m, dim=0)[..., None]
         loss = (error.abs() if self.kind == "l1" else error.square()).mean(dim=(1, 2)).reshape(b, m)
         return latents[torch.arange(b), loss.argmin(dim=1)]
-
-
-class SecondLook(nn.Module):
-    """Δz from the samples, their predictions under z₁ and z₁ itself (see the module docstring)."""
-
-    def __init__(self, latent: int, hidden=(128, 128, 128), after=(256, 256)):
-        super().__init__()
-        self.per_sample = nn.Sequential(mlp([FEATURES + latent, *hidden]), nn.ReLU())
-        # ρ reads the pooled features, z₁, and the samples' loss gradient at z₁ (its direction and log length)
-        self.after_pool = mlp([hidden[-1] + 2 * latent + 1, *after, latent])
-        last = self.after_pool[-1]
-        nn.init.zeros_(last.weight)
-        nn.init.zeros_(last.bias)
-
-    def forward(self, context: SampleBatch, z1: torch.Tensor, decoder) -> torch.Tensor:
-        with torch.enable_grad():
-            start = z1.detach().requires_grad_(True)
-            predicted = nbrdf_forward(decoder(start), context.coords)
-            error = ((predicted - context.values) * context.cos_in[..., None]).abs().mean(dim=(1, 2)).sum()
-            (gradient,) = torch.autograd.grad(error, start)
-        predicted, length = predicted.detach(), gradient.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-        n = context.values.shape[1]
-        features = torch.cat([context.values, context.coords, predicted, context.values - predicted,
-                              context.cos_in[..., None], z1[:, None].expand(-1, n, -1)], dim=-1)
-        pooled = self.per_sample(features).mean(dim=1)
-        return z1 + self.after_pool(torch.cat([pooled, z1, gradient / length, length.log()], dim=-1))
 
 
 def run_config(path: Path, data: Path, seed: int) -> TrainConfig:
@@ -125,7 +96,7 @@ def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, dat
             context = drawer.pattern_context(batch, patterns, cfg.context_samples, generator)
             query = data.bank.sample(batch, cfg.query_samples, generator)
             z1 = first(context)
-            for k, z in enumerate((z1, second(context, z1, model.network.decoder))):
+            for k, z in enumerate((z1, second(context.coords, context.values, context.cos_in, z1, model.network.decoder))):
                 terms = decoding_terms(z, model.network.decoder(z), query, cfg.loss)
                 sums[k] += float(terms["rec"]) * len(batch) / len(materials)
     second.train()
@@ -141,7 +112,7 @@ def train(args) -> int:
     data = prepare(cfg, split, files, mapping=model.mapping)
     drawer = BatchDrawer(cfg, data, with_truth=False)
     torch.manual_seed(cfg.seed)
-    first, second = FirstLook(model), SecondLook(model.config.encoder.latent)
+    first, second = FirstLook(model), SecondLook(model.config.encoder.latent, SecondLookConfig())
     optimizer = torch.optim.Adam(second.parameters(), lr=cfg.lr)
     generator = torch.Generator().manual_seed(cfg.seed)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -154,7 +125,8 @@ def train(args) -> int:
         for step in tqdm(range(data.n_train // cfg.batch_materials), desc=f"epoch {epoch}", leave=False):
             batch = order[step * cfg.batch_materials:(step + 1) * cfg.batch_materials].tolist()
             drawn = drawer.draw(batch, generator)
-            z = second(drawn.context, first(drawn.context), model.network.decoder)
+            context = drawn.context
+            z = second(context.coords, context.values, context.cos_in, first(context), model.network.decoder)
             terms = decoding_terms(z, model.network.decoder(z), drawn.query, cfg.loss)
             total = terms["rec"] + terms["w"] + terms["z"]
             optimizer.zero_grad(set_to_none=True)
@@ -177,33 +149,25 @@ def score(args) -> int:
     model = Model.pretrained()
     looks = []
     for run in args.runs:
-        second = SecondLook(model.config.encoder.latent)
+        second = SecondLook(model.config.encoder.latent, SecondLookConfig())
         second.load_state_dict(torch.load(run / "second_look.pt", weights_only=True)["state"])
         looks.append(second.eval())
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     rows = []
-    for path in tqdm(args.materials, desc="materials"):
-        truth = read_measured(path)
-        table = as_table(truth) if isinstance(truth, np.ndarray) else None
-        truth_linear = render_linear(truth, scene)
-        truth_image, highlight = tonemap(truth_linear), highlight_mask(truth_linear, mask)
-        for draw, (p, name) in ((d, pn) for d in args.draws for pn in enumerate(args.patterns)):
-            rng = np.random.default_rng([draw, p, sum(map(ord, path.stem))])
-            values, directions = pattern_samples(truth, name, args.count, rng, table=table)
-            z1 = model.encoding(values, directions).z.astype(np.float32)
-            mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                      for a in mapped_samples(model.mapping, values, directions))
-            latents = {"first": z1}
-            with torch.no_grad():
-                for run, second in zip(args.runs, looks):
-                    latents[run.name] = second(SampleBatch(coords, mapped, cos_in), torch.from_numpy(z1)[None],
-                                               model.network.decoder)[0].numpy()
-            for look, z in latents.items():
-                image = tonemap(render_linear(model.decode(z)[0], scene))
-                metrics = image_metrics(truth_image, image, mask, highlight)
-                rows.append({"material": path.stem, "pattern": name, "draw": draw, "look": look,
-                             "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
+        z1 = model.encoding(reading.values, reading.directions).z.astype(np.float32)
+        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
+        latents = {"first": z1}
+        with torch.no_grad():
+            for run, second in zip(args.runs, looks, strict=True):
+                latents[run.name] = second(coords, mapped, cos_in, torch.from_numpy(z1)[None],
+                                           model.network.decoder)[0].numpy()
+        for look, z in latents.items():
+            metrics = reading.metrics(tonemap(render_linear(model.decode(z)[0], scene)), mask)
+            rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
+                         "look": look, "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
     args.out.mkdir(parents=True, exist_ok=True)
     save_json(args.out / "rows.json", rows)
     summary = summarise(rows, args.patterns)

@@ -21,6 +21,7 @@ from .hypernetwork import DecoderConfig, HyperNetwork
 from .losses import LossConfig, samples_loss
 from .mapping import LogRelativeMapping, MappingConfig
 from .nbrdf import NBRDF, NBRDFConfig, mapped_samples
+from .second_look import SecondLook, SecondLookConfig
 
 #: :meth:`Model.encode` passes larger sample sets through the encoder in chunks of this size.
 ENCODE_CHUNK = 16384
@@ -45,6 +46,10 @@ class ModelConfig:
     mean; ``"best-fit"``, the one latent whose decoding fits the given samples best (the smallest reconstruction
     loss on them: the objective ``latent`` refinement lowers next). Encoders trained on different sampling patterns
     each read best what they trained on, and the samples say which that is (research/results/version-5)."""
+    second_look: SecondLookConfig | None = None
+    """A second look after the encoders (:mod:`.second_look`): :meth:`Model.encode` corrects their z from the samples'
+    errors under it. None (every model before it): z is the encoders'. Training (:mod:`frenbrdf.training`) reads the
+    encoders only; the second look is trained for a finished model by ``research/studies/second_look.py``."""
 
     def __post_init__(self):
         self.extra_encoders = tuple(self.extra_encoders)
@@ -73,7 +78,8 @@ class ModelConfig:
             return scores + (mlp([SAMPLE_SIZE, *encoder.hidden]) + mlp([encoder.hidden[-1], *encoder.pooled, latent])
                              if encoder.pooled else mlp([SAMPLE_SIZE, *encoder.hidden, latent]))
 
-        return sum(map(encoder_size, self.encoders)) + sum(
+        look = self.second_look.n_parameters(latent) if self.second_look is not None else 0
+        return look + sum(map(encoder_size, self.encoders)) + sum(
             mlp([latent, *self.decoder.hidden, math.prod(shape)]) for shape in self.nbrdf.shapes())
 
     @property
@@ -95,8 +101,11 @@ class AutoEncoder(nn.Module):
         super().__init__()
         self.encoder = SetEncoder(config.encoder) if not config.extra_encoders else EncoderMean(config.encoders)
         self.decoder = HyperNetwork(config.encoder.latent, config.nbrdf.shapes(), config.decoder)
+        self.second_look = (SecondLook(config.encoder.latent, config.second_look) if config.second_look is not None
+                            else None)
 
     def forward(self, samples: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor]]:
+        """The encoders' z (the first look: training reads no second look) and its decoding."""
         z = self.encoder(samples)
         return z, self.decoder(z)
 
@@ -115,13 +124,16 @@ class Encoding:
     """With ``encoder_choice="best-fit"``: each latent's decoding's reconstruction loss on the samples."""
     chosen: int | None = None
     """With ``encoder_choice="best-fit"``: the index of the encoder whose latent is z; None: z is their mean."""
+    first_look: np.ndarray | None = None
+    """With a second look (:mod:`.second_look`): the encoders' z, before it corrected it; None without one."""
 
     def summary(self) -> dict:
         """JSON-ready: how z was chosen (the latents themselves are left out)."""
+        look = {} if self.first_look is None else {"second_look": True}
         if self.chosen is None or self.losses is None:  # set together
-            return {"encoders": len(self.latents), "choice": "mean"}
+            return {"encoders": len(self.latents), "choice": "mean", **look}
         return {"encoders": len(self.latents), "choice": "best-fit", "chosen": self.chosen,
-                "pooling": self.poolings[self.chosen], "losses": [float(loss) for loss in self.losses]}
+                "pooling": self.poolings[self.chosen], "losses": [float(loss) for loss in self.losses], **look}
 
 
 class Model:
@@ -230,8 +242,20 @@ class Model:
     @torch.no_grad()
     def encoding(self, values, directions) -> Encoding:
         """:meth:`encode` with what it chose from: every encoder's latent and, with ``encoder_choice="best-fit"``,
-        each decoding's loss on the samples and which encoder gave z (:class:`Encoding`)."""
+        each decoding's loss on the samples and which encoder gave z; with a second look, the z it corrected
+        (:class:`Encoding`)."""
         mapped, coords, cos_in = mapped_samples(self.mapping, values, directions)
+        encoding = self._first_look(mapped, coords, cos_in)
+        look = self.network.second_look
+        if look is None:
+            return encoding
+        at, truth, cos = (torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in))
+        first = torch.from_numpy(encoding.z.astype(np.float32))[None]
+        encoding.first_look, encoding.z = encoding.z, look(at, truth, cos, first, self.network.decoder)[0].double().numpy()
+        return encoding
+
+    def _first_look(self, mapped: np.ndarray, coords: np.ndarray, cos_in: np.ndarray) -> Encoding:
+        """The encoders' z from prepared samples: their mean, or the best-fitting one's."""
         samples = torch.from_numpy(np.concatenate([mapped, coords], axis=-1).astype(np.float32))
         encoder = self.network.encoder
         members = encoder.encoders() if isinstance(encoder, EncoderMean) else [encoder]

@@ -1,0 +1,84 @@
+"""The encoder's second look: one learned step from what its first guess got wrong.
+
+An encoder reads the samples once and guesses z₁. `latent` refinement then reads the samples' errors under the
+guess and steps z by their gradient, 600 times. The second look takes one learned step of that kind: z₁ is decoded at
+the samples, a set network reads each sample with its prediction ŷ, its error y − ŷ, cos θ_i and z₁, pools the
+mean, and from it, z₁ and the samples' loss gradient at z₁ (its direction and log length) gives Δz; z = z₁ + Δz.
+Its last layer starts at zero, so an untrained second look is the first. It is trained for a frozen decoder and
+frozen encoders (research/results/second-look), and costs one decoding and one backward pass through it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+from .encoder import MAX_LAYERS, MAX_WIDTH, mlp
+from .nbrdf import nbrdf_forward
+
+#: What the second look reads of each sample besides z₁: y (3), the coordinates (6), ŷ (3), y − ŷ (3), cos θ_i (1).
+SAMPLE_FEATURES = 16
+
+
+@dataclass
+class SecondLookConfig:
+    """The second look's sizes."""
+
+    hidden: tuple[int, ...] = (128, 128, 128)
+    """Hidden widths of the per-sample network."""
+    after: tuple[int, ...] = (256, 256)
+    """Hidden widths of the network from the pooled features, z₁ and the gradient to Δz."""
+
+    def __post_init__(self):
+        self.hidden, self.after = tuple(int(h) for h in self.hidden), tuple(int(h) for h in self.after)
+        widths = (*self.hidden, *self.after)
+        if not self.hidden or min(widths) < 1 or max(widths) > MAX_WIDTH or max(len(self.hidden),
+                                                                               len(self.after)) > MAX_LAYERS:
+            raise ValueError(f"second look sizes must lie in 1 … {MAX_WIDTH}, at most {MAX_LAYERS} layers each and "
+                             f"at least one hidden layer, got hidden={self.hidden}, after={self.after}")
+
+    def n_parameters(self, latent: int) -> int:
+        """How many parameters a second look of this config has for a latent of this size."""
+        def size(sizes) -> int:
+            return sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:], strict=True))
+
+        return (size([SAMPLE_FEATURES + latent, *self.hidden])
+                + size([self.hidden[-1] + 2 * latent + 1, *self.after, latent]))
+
+
+class SecondLook(nn.Module):
+    """``(coords, values, cos_in)`` of B materials' samples and their first guesses z₁ ``(B, latent)`` → z."""
+
+    def __init__(self, latent: int, config: SecondLookConfig):
+        super().__init__()
+        self.per_sample = nn.Sequential(mlp([SAMPLE_FEATURES + latent, *config.hidden]), nn.ReLU())
+        self.after_pool = mlp([config.hidden[-1] + 2 * latent + 1, *config.after, latent])
+        last = self.after_pool[-1]
+        nn.init.zeros_(last.weight)  # Δz = 0: the untrained second look is the first
+        nn.init.zeros_(last.bias)
+
+    def forward(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
+                decoder: nn.Module, chunk: int = 1 << 16) -> torch.Tensor:
+        """``coords`` ``(B, N, 6)``, mapped ``values`` ``(B, N, 3)``, ``cos_in`` ``(B, N)``, ``z1`` ``(B, latent)``;
+        ``decoder`` the model's (z → NBRDF parameters). No gradient flows into z₁ or the decoder's reading of it.
+        The samples go through in parts of ``chunk`` (a whole table is 1.1 million)."""
+        n = values.shape[1]
+        parts = [slice(start, min(start + chunk, n)) for start in range(0, n, chunk)]
+        with torch.enable_grad():
+            start = z1.detach().requires_grad_(True)
+            params = decoder(start)
+            gradient, predicted = torch.zeros_like(z1), []
+            for part in parts:  # the gradient of the samples' mean L1 at z₁, part by part
+                guess = nbrdf_forward(params, coords[:, part])
+                error = ((guess - values[:, part]) * cos_in[:, part, None]).abs().sum() / (3 * n)
+                gradient += torch.autograd.grad(error, start, retain_graph=part is not parts[-1])[0]
+                predicted.append(guess.detach())
+        length = gradient.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+        pooled = 0
+        for part, guess in zip(parts, predicted, strict=True):
+            features = torch.cat([values[:, part], coords[:, part], guess, values[:, part] - guess,
+                                  cos_in[:, part, None], z1[:, None].expand(-1, guess.shape[1], -1)], dim=-1)
+            pooled = pooled + self.per_sample(features).sum(dim=1) / n
+        return z1 + self.after_pool(torch.cat([pooled, z1, gradient / length, length.log()], dim=-1))

@@ -1,0 +1,98 @@
+"""The encoder's second look (frenbrdf.models.second_look): a start that is the first look, parts that add up to
+the whole set, and a model that carries one through its config and checkpoint."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from frenbrdf.configs import from_dict, to_dict
+from frenbrdf.models import AutoEncoder, DecoderConfig, EncoderConfig, Model, ModelConfig, NBRDFConfig
+from frenbrdf.models.mapping import LogRelativeMapping
+from frenbrdf.models.second_look import SecondLook, SecondLookConfig
+
+from .conftest import unit_vectors
+
+LATENT = 4
+
+
+SMALL_LOOK = SecondLookConfig((16,), (16,))
+
+
+def small_config(look: SecondLookConfig | None = SMALL_LOOK) -> ModelConfig:
+    return ModelConfig(nbrdf=NBRDFConfig((8,)), encoder=EncoderConfig((16,), LATENT), decoder=DecoderConfig((16,)),
+                       second_look=look)
+
+
+def samples(n: int, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    wi, wo = unit_vectors(rng, n), unit_vectors(rng, n)
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    return rng.uniform(0, 1, (n, 3)), (wi, wo)
+
+
+def stirred(look: SecondLook, seed: int = 0) -> SecondLook:
+    """The look with its zero last layer given random weights, as training would."""
+    generator = torch.Generator().manual_seed(seed)
+    with torch.no_grad():
+        for p in look.after_pool[-1].parameters():
+            p.copy_(0.1 * torch.randn(p.shape, generator=generator))
+    return look
+
+
+def batch(n: int, b: int = 2, seed: int = 0):
+    generator = torch.Generator().manual_seed(seed)
+    coords, values = torch.rand(b, n, 6, generator=generator), torch.rand(b, n, 3, generator=generator)
+    return coords, values, torch.rand(b, n, generator=generator), torch.randn(b, LATENT, generator=generator)
+
+
+def test_an_untrained_second_look_is_the_first():
+    network = AutoEncoder(small_config())
+    coords, values, cos_in, z1 = batch(50)
+    assert torch.equal(network.second_look(coords, values, cos_in, z1, network.decoder), z1)
+
+
+def test_parts_give_the_whole_set():
+    network = AutoEncoder(small_config())
+    look = stirred(network.second_look)
+    coords, values, cos_in, z1 = batch(230)
+    whole = look(coords, values, cos_in, z1, network.decoder)
+    assert not torch.allclose(whole, z1)  # the stirred look moves z
+    parts = look(coords, values, cos_in, z1, network.decoder, chunk=50)  # 4 parts of 50 and one of 30
+    torch.testing.assert_close(parts, whole, rtol=1e-5, atol=1e-6)
+
+
+def test_it_learns_and_leaves_the_decoder_and_first_guess_alone():
+    network = AutoEncoder(small_config())
+    network.decoder.requires_grad_(False)
+    coords, values, cos_in, z1 = batch(40)
+    z1.requires_grad_(True)
+    z = network.second_look(coords, values, cos_in, z1.detach(), network.decoder)
+    z.square().sum().backward()
+    assert network.second_look.after_pool[-1].weight.grad.abs().sum() > 0
+    assert z1.grad is None and all(p.grad is None for p in network.decoder.parameters())
+
+
+def test_a_model_with_a_second_look_encodes_through_it():
+    config = small_config()
+    network = AutoEncoder(config)
+    stirred(network.second_look)
+    model = Model(network, LogRelativeMapping(np.full(3, 0.1)), config)
+    values, directions = samples(200)
+    encoding = model.encoding(values, directions)
+    assert encoding.first_look is not None and not np.allclose(encoding.z, encoding.first_look)
+    assert encoding.summary()["second_look"] is True
+    np.testing.assert_allclose(model.encode(values, directions), encoding.z)
+    first = Model(AutoEncoder(small_config(None)), model.mapping, small_config(None))
+    first.network.load_state_dict({k: v for k, v in network.state_dict().items() if not k.startswith("second_look")})
+    np.testing.assert_allclose(first.encode(values, directions), encoding.first_look, rtol=1e-6)
+
+
+def test_the_config_round_trips_and_counts_its_parameters():
+    config = small_config()
+    assert from_dict(ModelConfig, to_dict(config)) == config
+    assert from_dict(ModelConfig, to_dict(small_config(None))).second_look is None  # older models: no key, no look
+    assert config.n_parameters == sum(p.numel() for p in AutoEncoder(config).parameters())
+    with pytest.raises(ValueError, match="second look sizes"):
+        SecondLookConfig(hidden=())
