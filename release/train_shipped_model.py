@@ -152,7 +152,7 @@ packed in `python/frenbrdf/models/pretrained/` ({sum(card['bytes'].values()) / 1
   {card['materials']['validation']} validation and {card['materials']['test']} held-out test materials
   (split from seed {card['seed']}).
 - **Training**: `{json.dumps(card['training_config'])}` over its method's preset; best epoch
-  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}
+  {card['best_epoch']} of {card['epochs']}, {card['training_seconds']} s on {card['trained_on']}.{encoders_text(card)}{second_look_text(card)}
 - **Regenerate**: `bash release/train_shipped_model.sh` (the data, the decoder's training, its device encoders and
   packing: [release/README.md](../release/README.md)). These files
   were packed by `{card['command']}`.
@@ -216,6 +216,17 @@ def encoders_text(card: dict) -> str:
     return (f"\n- **Encoders**: {count} encoder{'s' * (count > 1)} of this decoder, z {how}: {who}, each "
             f"trained for the frozen decoder (`frenbrdf train --decoder-from`){config}{pooling}; why and the rule "
             f"that chose it: {why}. Packed by `{encoders['command']}`.")
+
+
+def second_look_text(card: dict) -> str:
+    """The card's line on the second look of release/pack_second_look.py, if the model has one."""
+    look = card.get("second_look")
+    if not look:
+        return ""
+    return (f"\n- **Second look**: z from the encoders is corrected once from the samples' errors under it "
+            f"(`frenbrdf.models.second_look`, `{json.dumps(look['config'])}`), trained for these frozen encoders "
+            f"and decoder by `research/studies/second_look.py` (`{look['run']}`, the lowest validation loss of "
+            f"{len(look.get('of', [look['run']]))} runs, at its epoch {look['epoch']}); why and the rule that chose it: {look['why']}. Packed by `{look['command']}`.")
 
 
 def by_source_text(groups: dict) -> str:

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Regenerates the shipped model (docs/pretrained.md), version 9's recipe (research/results/version-9): the training
-# folders from ../shared/data, the decoder's training run (on a GPU where torch sees one: shipped_model.json says
-# device "auto"), its four device encoders, then the decoder with its own encoder and the four, `best-fit`, packed
-# into the package with its card.
+# Regenerates the shipped model (docs/pretrained.md), version 10's recipe (research/results/version-9 and
+# second-look): the training folders from ../shared/data, the decoder's training run (on a GPU where torch sees one:
+# shipped_model.json says device "auto"), its four device encoders, the decoder with its own encoder and the four,
+# `best-fit` (version 9), then a second look for them, packed into the package with its card.
 #
 #   bash release/train_shipped_model.sh [SHARED_DATA] [WORK] [ARGS]  # then: git diff python/frenbrdf/models/pretrained
 #
@@ -54,5 +54,17 @@ for kind in $KINDS; do echo "$kind"; done | xargs -P 2 -L 1 bash -c '
         --quiet "${resume[@]}" && touch "$0/done/encoder-$1"' "$WORK"
 members=()
 for kind in $KINDS; do members+=("$WORK/encoders/$kind"); done
-python "$HERE/pack_encoder_mean.py" --base "$WORK/base" --members "${members[@]}" --choice best-fit \
-    --why '[version-9](../research/results/version-9/README.md)' --version 9 --work "$WORK/base-work"
+stage v9 python "$HERE/pack_encoder_mean.py" --base "$WORK/base" --members "${members[@]}" --choice best-fit \
+    --why '[version-9](../research/results/version-9/README.md)' --version 9 --work "$WORK/base-work" \
+    --dest "$WORK/v9" --card "$WORK/v9.md"
+# The second look for version 9's encoders (research/results/second-look): three runs on the tables of the decoder's
+# data (the merl, bank and rgl-fits folders: the same split as the judged runs), all at once; the one with the
+# lowest validation loss is packed with version 9 into the package, with its card.
+mkdir -p "$WORK/look-data"
+(shopt -s nullglob; link_into "$WORK/look-data" "$WORK"/merl/*.binary "$WORK"/bank/*.binary "$WORK"/rgl-fits/*.binary)
+for seed in 1 2 3; do echo "$seed"; done | xargs -P 3 -L 1 bash -c '  # $0 WORK, $1 this folder, $2 the seed
+    [[ -f "$0/done/look-$2" ]] && exit 0
+    python "$1/../research/studies/second_look.py" train "$1/shipped_model.json" "$0/look-data" --base "$0/v9" \
+        --out "$0/looks/s$2" --epochs 300 --minutes 600 --seed "$2" --quiet && touch "$0/done/look-$2"' "$WORK" "$HERE"
+python "$HERE/pack_second_look.py" --base "$WORK/v9" --looks "$WORK"/looks/s{1,2,3} --work "$WORK/base-work" \
+    --version 10 --why '[second-look](../research/results/second-look/README.md)'

@@ -62,16 +62,21 @@ def test_a_rerun_skips_what_finished_and_resumes_the_training_that_failed(tmp_pa
     assert "--resume" not in decoder and decoder.endswith("--trained-on X")
     assert sum(call.startswith("frenbrdf train") for call in first) == 4
     assert (tmp_path / "work" / "measured" / "felt.bsdf").is_symlink()
-    assert not any("pack_encoder_mean.py" in call for call in first)  # an encoder failed: nothing packed
+    assert not any("pack_" in call for call in first)  # an encoder failed: nothing packed
 
     second = _run(tmp_path)
     trainings = [call for call in second if call.startswith("frenbrdf train")]
     assert len(trainings) == 1 and "encoders/devices-mean" in trainings[0] and "--resume" in trainings[0]
     assert not any("import-nbrdf" in call or "synth" in call or "train_shipped_model.py" in call for call in second)
-    assert "pack_encoder_mean.py" in second[-1]
+    packed = next(call for call in second if "pack_encoder_mean.py" in call)
+    assert "--dest work/v9" in packed  # version 9 goes to the work folder, the package gets it with its second look
+    looks = [call for call in second if "second_look.py train" in call]
+    assert sorted(call.split("--seed ")[1].split()[0] for call in looks) == ["1", "2", "3"]
+    assert all("--base work/v9" in call for call in looks)
+    assert "pack_second_look.py" in second[-1] and "work/looks/s1 work/looks/s2 work/looks/s3" in second[-1]
 
     third = _run(tmp_path)
-    assert len(third) == 1 and "pack_encoder_mean.py" in third[0]
+    assert len(third) == 1 and "pack_second_look.py" in third[0]
 
 
 def test_a_decoder_stopped_midway_resumes(tmp_path):

@@ -1,6 +1,7 @@
 """A second look for the encoder: a network that reads what the first guess got wrong (issue 47; a prototype).
 
     python research/studies/second_look.py train CONFIG DATA --out DIR [--minutes 30] [--epochs N] [--seed 0]
+        [--base pretrained]
     python research/studies/second_look.py score MATERIALS... --runs DIR... --out OUT [--patterns ...] [--count 1500]
         [--draws 0]
 
@@ -35,7 +36,7 @@ import torch
 from tqdm import tqdm
 
 from frenbrdf import Model
-from frenbrdf.configs import from_dict
+from frenbrdf.configs import from_dict, to_dict
 from frenbrdf.data.folders import SampleBatch, list_materials, split_materials
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
@@ -104,7 +105,7 @@ def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, dat
 
 
 def train(args) -> int:
-    model = Model.pretrained()
+    model = Model.pretrained(None if args.base == "pretrained" else args.base)
     model.network.requires_grad_(False)
     cfg = run_config(args.config, args.data, args.seed)
     files = {path.stem: path for path in list_materials(cfg.data)}
@@ -122,7 +123,8 @@ def train(args) -> int:
     while time.monotonic() < deadline and epoch < args.epochs:
         order = torch.randperm(data.n_train, generator=generator)
         losses = []
-        for step in tqdm(range(data.n_train // cfg.batch_materials), desc=f"epoch {epoch}", leave=False):
+        for step in tqdm(range(data.n_train // cfg.batch_materials), desc=f"epoch {epoch}", leave=False,
+                         disable=args.quiet):
             batch = order[step * cfg.batch_materials:(step + 1) * cfg.batch_materials].tolist()
             drawn = drawer.draw(batch, generator)
             context = drawn.context
@@ -139,7 +141,8 @@ def train(args) -> int:
         print(json.dumps(history[-1]), flush=True)
         if val_second < best:
             best = val_second
-            torch.save({"state": second.state_dict(), "epoch": epoch}, args.out / "second_look.pt")
+            torch.save({"state": second.state_dict(), "epoch": epoch, "config": to_dict(SecondLookConfig())},
+                       args.out / "second_look.pt")
         save_json(args.out / "history.json", history)
         epoch += 1
     return 0
@@ -211,6 +214,9 @@ def main(argv=None) -> int:
     t.add_argument("--minutes", type=float, default=30, help="stop after this long ...")
     t.add_argument("--epochs", type=int, default=10**9, help="... or this many epochs, whichever comes first")
     t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--quiet", action="store_true", help="no progress bars")
+    t.add_argument("--base", default="pretrained", help="the model whose first look is corrected: 'pretrained' (the "
+                   "package's) or a packed model's folder")
     s = commands.add_parser("score")
     s.add_argument("materials", nargs="+", type=Path)
     s.add_argument("--runs", nargs="+", type=Path, required=True)

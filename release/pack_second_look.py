@@ -1,0 +1,127 @@
+"""Packs a packed model with a second look (``frenbrdf.models.second_look``) as the shipped model.
+
+    python release/pack_second_look.py --base WORK/v9 --looks WORK/looks/s1 WORK/looks/s2 WORK/looks/s3 \\
+        --work WORK/base-work --version 10 --why "[second-look](../research/results/second-look/README.md)"
+
+The base (``--base``: ``pretrained`` or a packed model's folder) gives everything but the second look: its
+decoder, encoders, mapping and card. Of the looks (run folders of ``research/studies/second_look.py train``, each
+trained for that base's first look) the one with the lowest validation loss is added to the config and the weights
+(research/results/second-look, amendment 1). The card is the base's with the version, the look and the held-out
+test materials measured anew, encoder only and refined, and through the card's sampling patterns, as assembled
+(float32) and as packed. The held-out materials and their sources are train_shipped_model.py's (``--work``), or
+(``--held-out CONFIG DIR --sources FILE``) those a training config's ``holdout`` names, from a folder, with a JSON
+of source folder name → material names.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import torch
+
+from frenbrdf import Model
+from frenbrdf.configs import from_dict, to_dict
+from frenbrdf.data.folders import list_materials
+from frenbrdf.io.atomic import write_text
+from frenbrdf.models import pretrained
+from frenbrdf.models.second_look import SecondLookConfig
+from frenbrdf.render.scoring import reconstruction_rows
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]
+from common import run_metadata  # noqa: E402
+from train_shipped_model import (  # noqa: E402
+    ROOT,
+    by_pattern,
+    by_source,
+    card_markdown,
+    held_out_files,
+    read_sources,
+    summary,
+)
+
+#: The file a second-look run keeps its weights in (research/studies/second_look.py).
+LOOK_FILE = "second_look.pt"
+
+
+def best_look(runs: list[Path]) -> Path:
+    """The run whose best validation loss (its ``history.json``) is lowest."""
+    def best(run: Path) -> float:
+        return min(entry["val_second"] for entry in json.loads((run / "history.json").read_text()))
+
+    return min(runs, key=best)
+
+
+def assemble(base: str | None, look_run: Path) -> tuple[dict, dict, dict]:
+    """The base's checkpoint with the second look of ``look_run`` added, its mapping and its card."""
+    packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
+    config = json.loads(packed["config"])
+    if config["model"].get("second_look"):
+        raise ValueError(f"{base}: the base has a second look already; give the model it was trained for")
+    saved = torch.load(look_run / LOOK_FILE, weights_only=True)
+    look = from_dict(SecondLookConfig, saved.get("config", {}), f"{look_run / LOOK_FILE} config")
+    config["model"]["second_look"] = to_dict(look)
+    weights = {name: value.float() for name, value in packed["model"].items()}
+    weights.update({f"second_look.{name}": value.float() for name, value in saved["state"].items()})
+    checkpoint = {"method": packed["method"], "config": json.dumps(config), "model": weights}
+    return checkpoint, mapping, {**card, "look_epoch": int(saved["epoch"])}
+
+
+def held_out(config: Path, folder: Path) -> list[Path]:
+    """The files of the materials ``config``'s ``holdout`` names, from ``folder``."""
+    names = json.loads(config.read_text())["holdout"]
+    files = {path.stem: path for path in list_materials(folder)}
+    missing = sorted(set(names) - files.keys())
+    if missing:
+        raise FileNotFoundError(f"{folder} lacks the held-out materials {missing}")
+    return [files[name] for name in sorted(names)]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
+    parser.add_argument("--looks", type=Path, nargs="+", required=True,
+                        help="second_look.py run folders, trained for the base; the lowest validation loss is packed")
+    parser.add_argument("--work", type=Path, help="train_shipped_model.py's --work (data/, run/split.json, sources.json)")
+    parser.add_argument("--held-out", nargs=2, type=Path, metavar=("CONFIG", "DIR"), help="instead of --work")
+    parser.add_argument("--sources", type=Path, help="with --held-out: JSON of source folder name → material names")
+    parser.add_argument("--why", help="a Markdown link to the study whose rule chose the look, for the card")
+    parser.add_argument("--version", required=True, help="the packed model's version, for its card")
+    parser.add_argument("--dest", default=str(pretrained.PACKAGE_DIR))
+    parser.add_argument("--card", default=str(ROOT / "docs" / "pretrained.md"))
+    args = parser.parse_args(argv)
+    if (args.work is None) == (args.held_out is None) or (args.held_out is not None) != (args.sources is not None):
+        parser.error("give --work, or --held-out with --sources")
+    pretrained.check_pack_destination(args.dest, inputs=[args.base, *args.looks])  # before any work
+    look = best_look(args.looks)
+    checkpoint, mapping, card = assemble(args.base, look)
+    if args.work is not None:
+        test = held_out_files(args.work, json.loads((args.work / "run" / "split.json").read_text())["test"])
+        sources = read_sources(args.work)
+    else:
+        test, sources = held_out(*args.held_out), json.loads(args.sources.read_text())
+    model = Model.from_checkpoint(checkpoint, mapping)
+    rows = reconstruction_rows(model, test, frequency_metric=False)
+    refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
+    card.update({"version": args.version,
+                 "second_look": {"run": str(look), "of": [str(run) for run in args.looks],
+                                 "epoch": card.pop("look_epoch"), "why": args.why,
+                                 "config": json.loads(checkpoint["config"])["model"]["second_look"],
+                                 "command": run_metadata()["command"]},
+                 "held_out": {"float32": summary(rows)}, "held_out_by_source": by_source(rows, sources),
+                 "held_out_refined_by_source": by_source(refined, sources),
+                 "held_out_by_pattern": by_pattern(model, test)})
+    card.pop("bytes", None)
+    pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
+    card["held_out"]["packed"] = summary(reconstruction_rows(Model.pretrained(args.dest), test, frequency_metric=False))
+    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
+    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)  # the card says its sizes
+    write_text(args.card, card_markdown(card))
+    print(json.dumps(card["held_out"], indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
