@@ -4,6 +4,8 @@
         [--base pretrained]
     python research/studies/second_look.py score MATERIALS... --runs DIR... --out OUT [--patterns ...] [--count 1500]
         [--draws 0]
+    python research/studies/second_look.py refine MATERIALS... --base MODEL --runs DIR... --out OUT
+        [--budgets none latent full] [--patterns merl-bins] [--count 4000] [--draws 0]
 
 Through a device the shipped encoders stay 2–6 dB below their random-bin figure, and no choice among them closes
 it (research/results/encoder-choice: even the best of the five for each material stays 2.2–5.5 dB below), while
@@ -25,6 +27,7 @@ look the mean of the runs').
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -40,7 +43,9 @@ from frenbrdf.configs import from_dict, to_dict
 from frenbrdf.data.folders import SampleBatch, list_materials, split_materials
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
+from frenbrdf.models.autoencoder import AutoEncoder, load_model
 from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
+from frenbrdf.models.reconstruct import reconstruct, refine_config
 from frenbrdf.models.second_look import SecondLook, SecondLookConfig
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 from frenbrdf.training.augment import BatchDrawer
@@ -105,7 +110,7 @@ def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, dat
 
 
 def train(args) -> int:
-    model = Model.pretrained(None if args.base == "pretrained" else args.base)
+    model = load_model(args.base)
     model.network.requires_grad_(False)
     cfg = run_config(args.config, args.data, args.seed)
     files = {path.stem: path for path in list_materials(cfg.data)}
@@ -145,6 +150,41 @@ def train(args) -> int:
                        args.out / "second_look.pt")
         save_json(args.out / "history.json", history)
         epoch += 1
+    return 0
+
+
+def with_look(model: Model, run: Path) -> Model:
+    """``model`` with the second look of the run folder ``run`` (trained for it)."""
+    saved = torch.load(run / "second_look.pt", weights_only=True)
+    config = dataclasses.replace(model.config, second_look=from_dict(SecondLookConfig, saved.get("config", {})))
+    network = AutoEncoder(config)
+    network.load_state_dict({**model.network.state_dict(),
+                             **{f"second_look.{name}": value for name, value in saved["state"].items()}})
+    return Model(network, model.mapping, config, model.method, model.loss)
+
+
+def refine(args) -> int:
+    """Each material through the patterns, reconstructed by the base alone and with each run's look, by each budget
+    (``none``: the encoder): the rows and a summary as :func:`score` writes them, one look label per budget."""
+    base = load_model(args.base)
+    models = {"first": base, **{run.name: with_look(base, run) for run in args.runs}}
+    scene = Scene(resolution=128)
+    mask = material_mask(scene)
+    rows = []
+    for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
+        for budget in args.budgets:
+            config = dataclasses.replace(refine_config(budget), seed=reading.draw)
+            for look, model in models.items():
+                result = reconstruct(model, reading.values, reading.directions, refine=config)
+                metrics = reading.metrics(tonemap(render_linear(result.nbrdf, scene)), mask)
+                rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
+                             "budget": budget, "look": look, "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    args.out.mkdir(parents=True, exist_ok=True)
+    save_json(args.out / "rows.json", rows)
+    text = "".join(f"\n{budget}\n\n" + summarise([r for r in rows if r["budget"] == budget], args.patterns)
+                   for budget in args.budgets)
+    write_text(args.out / "summary.md", text)
+    print(text)
     return 0
 
 
@@ -215,8 +255,8 @@ def main(argv=None) -> int:
     t.add_argument("--epochs", type=int, default=10**9, help="... or this many epochs, whichever comes first")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--quiet", action="store_true", help="no progress bars")
-    t.add_argument("--base", default="pretrained", help="the model whose first look is corrected: 'pretrained' (the "
-                   "package's) or a packed model's folder")
+    t.add_argument("--base", default="pretrained", help="the model whose first look is corrected: 'pretrained' "
+                   "(the package's), a packed model's folder or a run folder")
     s = commands.add_parser("score")
     s.add_argument("materials", nargs="+", type=Path)
     s.add_argument("--runs", nargs="+", type=Path, required=True)
@@ -224,8 +264,17 @@ def main(argv=None) -> int:
     s.add_argument("--patterns", nargs="+", default=list(PATTERNS))
     s.add_argument("--count", type=int, default=1500)
     s.add_argument("--draws", type=int, nargs="+", default=[0])
+    r = commands.add_parser("refine")
+    r.add_argument("materials", nargs="+", type=Path)
+    r.add_argument("--base", default="pretrained", help="the model the looks were trained for")
+    r.add_argument("--runs", nargs="+", type=Path, required=True)
+    r.add_argument("--budgets", nargs="+", default=["none", "latent", "full"])
+    r.add_argument("--out", type=Path, required=True)
+    r.add_argument("--patterns", nargs="+", default=["merl-bins"])
+    r.add_argument("--count", type=int, default=4000)
+    r.add_argument("--draws", type=int, nargs="+", default=[0])
     args = parser.parse_args(argv)
-    return train(args) if args.command == "train" else score(args)
+    return {"train": train, "score": score, "refine": refine}[args.command](args)
 
 
 if __name__ == "__main__":
