@@ -139,7 +139,7 @@ def train(args) -> int:
             optimizer.zero_grad(set_to_none=True)
             total.backward()
             optimizer.step()
-            losses.append(float(terms["rec"]))
+            losses.append(float(terms["rec"].detach()))
         val_first, val_second = validation_loss(model, first, second, cfg, data, drawer)
         history.append({"epoch": epoch, "train_rec": float(np.mean(losses)), "val_first": val_first,
                         "val_second": val_second})
