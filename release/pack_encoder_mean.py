@@ -24,25 +24,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from frenbrdf import Model
 from frenbrdf.configs import to_dict
-from frenbrdf.io.atomic import write_text
 from frenbrdf.models import pretrained
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.encoder import ENCODER_CHOICES
-from frenbrdf.render.scoring import reconstruction_rows
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]  # its folder, benches/
 from common import run_metadata  # noqa: E402
-from train_shipped_model import (  # noqa: E402
-    ROOT,
-    by_pattern,
-    by_source,
-    card_markdown,
-    held_out_files,
-    read_sources,
-    summary,
-)
+from train_shipped_model import ROOT, held_out_files, measure_and_pack, read_sources  # noqa: E402
 
 
 def assemble(base: str | None, members: list[str], *, base_encoder: bool = True,
@@ -109,24 +98,12 @@ def main(argv=None) -> int:
     work = Path(args.work)
     test = held_out_files(work, json.loads((work / "run" / "split.json").read_text())["test"])
     sources = read_sources(work)
-    model = Model.from_checkpoint(checkpoint, mapping)
-    held_out = reconstruction_rows(model, test, frequency_metric=False)
-    refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
     card.update({"version": args.version,  # "command" stays the one that trained and packed the base
                  "encoders": {"base": args.base, "members": args.members, "base_encoder": not args.without_base_encoder,
                               "choice": args.choice, "poolings": poolings(checkpoint),
                               "samplings": [member_sampling(member) for member in args.members], "why": args.why,
-                              "command": run_metadata()["command"]},
-                 "held_out": {"float32": summary(held_out)}, "held_out_by_source": by_source(held_out, sources),
-                 "held_out_refined_by_source": by_source(refined, sources),
-                 "held_out_by_pattern": by_pattern(model, test)})
-    card.pop("bytes", None)
-    pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
-    card["held_out"]["packed"] = summary(reconstruction_rows(Model.pretrained(args.dest), test, frequency_metric=False))
-    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
-    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)  # the card says its sizes
-    write_text(args.card, card_markdown(card))
-    print(json.dumps(card["held_out"], indent=2))
+                              "command": run_metadata()["command"]}})
+    measure_and_pack(checkpoint, mapping, test, sources, card, args.dest, args.card)
     return 0
 
 

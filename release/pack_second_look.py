@@ -22,25 +22,14 @@ from pathlib import Path
 
 import torch
 
-from frenbrdf import Model
 from frenbrdf.configs import from_dict, to_dict
 from frenbrdf.data.folders import list_materials
-from frenbrdf.io.atomic import write_text
 from frenbrdf.models import pretrained
 from frenbrdf.models.second_look import SecondLookConfig
-from frenbrdf.render.scoring import reconstruction_rows
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]
 from common import run_metadata  # noqa: E402
-from train_shipped_model import (  # noqa: E402
-    ROOT,
-    by_pattern,
-    by_source,
-    card_markdown,
-    held_out_files,
-    read_sources,
-    summary,
-)
+from train_shipped_model import ROOT, held_out_files, measure_and_pack, read_sources  # noqa: E402
 
 #: The file a second-look run keeps its weights in (research/studies/second_look.py).
 LOOK_FILE = "second_look.pt"
@@ -102,24 +91,12 @@ def main(argv=None) -> int:
         sources = read_sources(args.work)
     else:
         test, sources = held_out(*args.held_out), json.loads(args.sources.read_text())
-    model = Model.from_checkpoint(checkpoint, mapping)
-    rows = reconstruction_rows(model, test, frequency_metric=False)
-    refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
     card.update({"version": args.version,
                  "second_look": {"run": str(look), "of": [str(run) for run in args.looks],
                                  "epoch": card.pop("look_epoch"), "why": args.why,
                                  "config": json.loads(checkpoint["config"])["model"]["second_look"],
-                                 "command": run_metadata()["command"]},
-                 "held_out": {"float32": summary(rows)}, "held_out_by_source": by_source(rows, sources),
-                 "held_out_refined_by_source": by_source(refined, sources),
-                 "held_out_by_pattern": by_pattern(model, test)})
-    card.pop("bytes", None)
-    pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
-    card["held_out"]["packed"] = summary(reconstruction_rows(Model.pretrained(args.dest), test, frequency_metric=False))
-    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)
-    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, args.dest, card=card)  # the card says its sizes
-    write_text(args.card, card_markdown(card))
-    print(json.dumps(card["held_out"], indent=2))
+                                 "command": run_metadata()["command"]}})
+    measure_and_pack(checkpoint, mapping, test, sources, card, args.dest, args.card)
     return 0
 
 

@@ -138,6 +138,27 @@ def build(config_path: str, folders: list[Path], work: Path, dest: Path, card_pa
     return card
 
 
+def measure_and_pack(checkpoint: dict, mapping: dict, test: list[Path], sources: dict[str, list[str]], card: dict,
+                     dest: str | Path, card_path: str | Path) -> dict:
+    """A model assembled from packed parts (``release/pack_*.py``): its held-out materials ``test`` measured (encoder
+    only by source, with `latent` by source, through the card's patterns) into ``card``, packed into ``dest``,
+    measured again as packed, and ``card_path`` (Markdown) written; returns the card."""
+    model = Model.from_checkpoint(checkpoint, mapping)
+    rows = reconstruction_rows(model, test, frequency_metric=False)
+    refined = reconstruction_rows(model, test, frequency_metric=False, refine="latent")
+    card.update({"held_out": {"float32": summary(rows)}, "held_out_by_source": by_source(rows, sources),
+                 "held_out_refined_by_source": by_source(refined, sources),
+                 "held_out_by_pattern": by_pattern(model, test)})
+    card.pop("bytes", None)
+    pretrained.pack_checkpoint(checkpoint, mapping, dest, card=card)
+    card["held_out"]["packed"] = summary(reconstruction_rows(Model.pretrained(dest), test, frequency_metric=False))
+    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, dest, card=card)
+    card["bytes"] = pretrained.pack_checkpoint(checkpoint, mapping, dest, card=card)  # the card says its sizes
+    write_text(card_path, card_markdown(card))
+    print(json.dumps(card["held_out"], indent=2))
+    return card
+
+
 def card_markdown(card: dict) -> str:
     """docs/pretrained.md: what the shipped model is, how it was made, how well it reconstructs."""
     table = "\n".join(f"| {name} | {card['held_out']['float32'][key]:.4g} | {card['held_out']['packed'][key]:.4g} |"

@@ -3,6 +3,8 @@ the whole set, and a model that carries one through its config and checkpoint.""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -96,3 +98,38 @@ def test_the_config_round_trips_and_counts_its_parameters():
     assert config.n_parameters == sum(p.numel() for p in AutoEncoder(config).parameters())
     with pytest.raises(ValueError, match="second look sizes"):
         SecondLookConfig(hidden=())
+
+
+def test_the_packer_adds_the_look_with_the_lowest_validation_loss(tmp_path):
+    """release/pack_second_look.py: of several look runs the one whose validation loss fell lowest joins the base's
+    config and weights; the model it makes corrects its first look; a base with a look already is refused."""
+    from frenbrdf.models import pretrained
+
+    from .conftest import script_module
+
+    packer = script_module("pack_second_look")
+    config = small_config(None)
+    base = Model(AutoEncoder(config), LogRelativeMapping(np.full(3, 0.1)), config)
+    checkpoint = {"method": "frenbrdf", "config": json.dumps({"model": to_dict(config)}),
+                  "model": base.network.state_dict()}
+    pretrained.pack_checkpoint(checkpoint, base.mapping.state(), tmp_path / "base", half=False)
+    runs = []
+    for seed, losses in ((1, [0.5, 0.3]), (2, [0.4, 0.2])):  # the second run fell lowest
+        run = tmp_path / f"look-{seed}"
+        run.mkdir()
+        look = stirred(SecondLook(LATENT, SMALL_LOOK), seed)
+        torch.save({"state": look.state_dict(), "epoch": 1, "config": to_dict(SMALL_LOOK)}, run / "second_look.pt")
+        (run / "history.json").write_text(json.dumps([{"val_second": loss} for loss in losses]))
+        runs.append(run)
+    chosen = packer.best_look(runs)
+    assert chosen == runs[1]
+    assembled, mapping, card = packer.assemble(str(tmp_path / "base"), chosen)
+    model = Model.from_checkpoint(assembled, mapping)
+    assert model.config.second_look == SMALL_LOOK and card["look_epoch"] == 1
+    values, directions = samples(100)
+    encoding = model.encoding(values, directions)
+    np.testing.assert_allclose(encoding.first_look, base.encode(values, directions), rtol=1e-5, atol=1e-6)
+    assert not np.allclose(encoding.z, encoding.first_look)
+    pretrained.pack_checkpoint(assembled, mapping, tmp_path / "with-look", half=False)
+    with pytest.raises(ValueError, match="has a second look already"):
+        packer.assemble(str(tmp_path / "with-look"), chosen)
