@@ -11,6 +11,7 @@ frozen encoders (research/results/second-look), and costs one decoding and one b
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import torch
 from torch import nn
@@ -55,7 +56,7 @@ class SecondLook(nn.Module):
         super().__init__()
         self.per_sample = nn.Sequential(mlp([SAMPLE_FEATURES + latent, *config.hidden]), nn.ReLU())
         self.after_pool = mlp([config.hidden[-1] + 2 * latent + 1, *config.after, latent])
-        last = self.after_pool[-1]
+        last = cast(nn.Linear, self.after_pool[-1])
         nn.init.zeros_(last.weight)  # Δz = 0: the untrained second look is the first
         nn.init.zeros_(last.bias)
 
@@ -76,9 +77,8 @@ class SecondLook(nn.Module):
                 gradient += torch.autograd.grad(error, start, retain_graph=part is not parts[-1])[0]
                 predicted.append(guess.detach())
         length = gradient.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-        pooled = 0
-        for part, guess in zip(parts, predicted, strict=True):
-            features = torch.cat([values[:, part], coords[:, part], guess, values[:, part] - guess,
-                                  cos_in[:, part, None], z1[:, None].expand(-1, guess.shape[1], -1)], dim=-1)
-            pooled = pooled + self.per_sample(features).sum(dim=1) / n
+        pooled = sum(self.per_sample(torch.cat([values[:, part], coords[:, part], guess, values[:, part] - guess,
+                                                cos_in[:, part, None], z1[:, None].expand(-1, guess.shape[1], -1)],
+                                               dim=-1)).sum(dim=1) / n
+                     for part, guess in zip(parts, predicted, strict=True))
         return z1 + self.after_pool(torch.cat([pooled, z1, gradient / length, length.log()], dim=-1))
