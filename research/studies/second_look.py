@@ -8,20 +8,18 @@
         [--budgets none latent full] [--patterns merl-bins] [--count 4000] [--draws 0]
 
 Through a device the shipped encoders stay 2–6 dB below their random-bin figure, and no choice among them closes
-it (research/results/encoder-choice: even the best of the five for each material stays 2.2–5.5 dB below), while
-`latent`, which reads the samples' errors step by step, comes within about 1 dB through uniform pairs. This
-prototype asks whether one learned step does part of that: the shipped model's own `best-fit` guess z₁, decoded at
-the samples, gives each sample a prediction ŷ; a set network reads every sample with its prediction and error
-(y, its coordinates, ŷ, y − ŷ, cos θ_i) and, with z₁, gives a correction Δz (its last layer starts at zero: the
-untrained second look is the first). z = z₁ + Δz; the decoder and the encoders stay frozen. Trained on the shipped
-recipe's data and patterns (CONFIG: a run config such as research/results/folds-v8/config-v8.json, read with the
-`mixed` pattern mixture of version 5's device encoders, counts 300–4,000), without L_fre (η = 0: a prototype),
-for a fixed time, keeping the weights of the best validation loss (the validation tables read through the
-mixture, as the device encoders were chosen).
+it (research/results/encoder-choice), while `latent`, which reads the samples' errors step by step, comes within
+about 1 dB through uniform pairs. The second look (:mod:`frenbrdf.models.second_look`) takes one learned step of that
+kind from the base model's own guess z₁ (its encoders' `best-fit` choice); the decoder and the encoders stay frozen.
 
-``score`` renders the first look and each run's second look for each material and pattern (128², version 9's scene)
+``train`` fits one for ``--base`` on CONFIG's data and split (a run config such as
+research/results/folds-v8/config-v8.json) through the `mixed` pattern mixture of version 5's device encoders
+(counts 300–4,000), L1 without L_fre, Adam at the config's rate, for a number of epochs or a time, keeping the
+weights of the best validation loss (the validation tables read through the mixture).
+
+``score`` renders the package model's first look and each run's second look for each material and pattern (128²)
 and writes ``OUT/rows.json`` and ``OUT/summary.md``: PSNR / ΔE of each, and the difference per material (the second
-look the mean of the runs').
+look the mean of the runs'). ``refine`` reconstructs with and without each run's look by each refinement budget.
 """
 
 from __future__ import annotations
@@ -153,6 +151,13 @@ def train(args) -> int:
     return 0
 
 
+def first_look(model: Model, values, directions) -> np.ndarray:
+    """The z of ``model``'s encoders (its `best-fit` choice), float32: before its own second look where it has one
+    (version 10's encoders are version 9's, so the package's model gives the first look these readings began from)."""
+    encoding = model.encoding(values, directions)
+    return (encoding.z if encoding.first_look is None else encoding.first_look).astype(np.float32)
+
+
 def with_look(model: Model, run: Path) -> Model:
     """``model`` with the second look of the run folder ``run`` (trained for it)."""
     saved = torch.load(run / "second_look.pt", weights_only=True)
@@ -199,7 +204,7 @@ def score(args) -> int:
     mask = material_mask(scene)
     rows = []
     for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
-        z1 = model.encoding(reading.values, reading.directions).z.astype(np.float32)
+        z1 = first_look(model, reading.values, reading.directions)
         mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
                                   for a in mapped_samples(model.mapping, reading.values, reading.directions))
         latents = {"first": z1}

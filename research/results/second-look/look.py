@@ -22,6 +22,7 @@ from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from image_grid import save_image_grid  # noqa: E402
 from pattern_readings import readings  # noqa: E402
+from second_look import first_look  # noqa: E402
 
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 
@@ -45,7 +46,7 @@ def main(argv=None) -> int:
         # The pattern's place in the readings' order seeds its samples: the same samples the readings scored.
         reading = next(r for r in readings([Path(path)], PATTERNS, [args.draw], args.count, scene, mask)
                        if r.pattern == pattern)
-        z1 = model.encoding(reading.values, reading.directions).z.astype(np.float32)
+        z1 = first_look(model, reading.values, reading.directions)
         mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
                                   for a in mapped_samples(model.mapping, reading.values, reading.directions))
         with torch.no_grad():
