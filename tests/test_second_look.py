@@ -3,6 +3,7 @@ the whole set, and a model that carries one through its config and checkpoint.""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -12,6 +13,7 @@ import torch
 from frenbrdf.configs import from_dict, to_dict
 from frenbrdf.models import AutoEncoder, DecoderConfig, EncoderConfig, Model, ModelConfig, NBRDFConfig
 from frenbrdf.models.mapping import LogRelativeMapping
+from frenbrdf.models.nbrdf import mapped_samples
 from frenbrdf.models.second_look import SecondLook, SecondLookConfig
 
 from .conftest import unit_vectors
@@ -91,9 +93,36 @@ def test_a_model_with_a_second_look_encodes_through_it():
     np.testing.assert_allclose(first.encode(values, directions), encoding.first_look, rtol=1e-6)
 
 
+def test_more_looks_start_each_from_the_last():
+    """``steps`` looks: each reads the samples again from the z the one before gave, and a config of one step is
+    the model as it was."""
+    values, directions = samples(200)
+    network = AutoEncoder(small_config())
+    stirred(network.second_look)
+    models = {steps: Model(network, LogRelativeMapping(np.full(3, 0.1)),
+                           small_config(dataclasses.replace(SMALL_LOOK, steps=steps))) for steps in (1, 2, 3)}
+    encodings = {steps: model.encoding(values, directions) for steps, model in models.items()}
+    mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                              for a in mapped_samples(models[1].mapping, values, directions))
+    z = torch.from_numpy(encodings[1].first_look.astype(np.float32))[None]
+    with torch.no_grad():
+        for steps in (1, 2, 3):
+            z = network.second_look(coords, mapped, cos_in, z, network.decoder)
+            np.testing.assert_allclose(encodings[steps].z, z[0].numpy(), rtol=1e-5, atol=1e-6)
+            np.testing.assert_array_equal(encodings[steps].first_look, encodings[1].first_look)
+    assert not np.allclose(encodings[2].z, encodings[1].z)
+
+
+@pytest.mark.parametrize("steps", [0, -1, 17, 1.5, True, "2"])
+def test_a_wrong_number_of_looks_is_refused(steps):
+    with pytest.raises(ValueError, match="second look steps"):
+        SecondLookConfig(steps=steps)
+
+
 def test_the_config_round_trips_and_counts_its_parameters():
     config = small_config()
     assert from_dict(ModelConfig, to_dict(config)) == config
+    assert from_dict(SecondLookConfig, {"hidden": [16], "after": [16]}).steps == 1  # version 10's config: one look
     assert from_dict(ModelConfig, to_dict(small_config(None))).second_look is None  # older models: no key, no look
     assert config.n_parameters == sum(p.numel() for p in AutoEncoder(config).parameters())
     with pytest.raises(ValueError, match="second look sizes"):

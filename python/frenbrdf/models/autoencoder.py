@@ -246,12 +246,14 @@ class Model:
         (:class:`Encoding`)."""
         mapped, coords, cos_in = mapped_samples(self.mapping, values, directions)
         encoding = self._first_look(mapped, coords, cos_in)
-        look = self.network.second_look
-        if look is None:
+        look, config = self.network.second_look, self.config.second_look
+        if look is None or config is None:  # set together
             return encoding
         at, truth, cos = (torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in))
-        first = torch.from_numpy(encoding.z.astype(np.float32))[None]
-        encoding.first_look, encoding.z = encoding.z, look(at, truth, cos, first, self.network.decoder)[0].double().numpy()
+        z = torch.from_numpy(encoding.z.astype(np.float32))[None]
+        for _ in range(config.steps):
+            z = look(at, truth, cos, z, self.network.decoder)
+        encoding.first_look, encoding.z = encoding.z, z[0].double().numpy()
         return encoding
 
     def _first_look(self, mapped: np.ndarray, coords: np.ndarray, cos_in: np.ndarray) -> Encoding:

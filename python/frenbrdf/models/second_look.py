@@ -21,6 +21,8 @@ from .nbrdf import nbrdf_forward
 
 #: What the second look reads of each sample besides z₁: y (3), the coordinates (6), ŷ (3), y − ŷ (3), cos θ_i (1).
 SAMPLE_FEATURES = 16
+#: The most looks an encoding may take (each costs a decoding and a backward pass through it).
+MAX_STEPS = 16
 
 
 @dataclass
@@ -31,9 +33,14 @@ class SecondLookConfig:
     """Hidden widths of the per-sample network."""
     after: tuple[int, ...] = (256, 256)
     """Hidden widths of the network from the pooled features, z₁ and the gradient to Δz."""
+    steps: int = 1
+    """How many looks :meth:`Model.encode <frenbrdf.Model.encode>` takes, each from the z the one before gave
+    (a look is trained for one; research/results/repeated-look measures more)."""
 
     def __post_init__(self):
         self.hidden, self.after = tuple(int(h) for h in self.hidden), tuple(int(h) for h in self.after)
+        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or not 1 <= self.steps <= MAX_STEPS:
+            raise ValueError(f"second look steps must be a whole number in 1 … {MAX_STEPS}, got {self.steps!r}")
         widths = (*self.hidden, *self.after)
         if not self.hidden or min(widths) < 1 or max(widths) > MAX_WIDTH or max(len(self.hidden),
                                                                                len(self.after)) > MAX_LAYERS:
