@@ -159,6 +159,8 @@ def test_the_packer_adds_the_look_with_the_lowest_validation_loss(tmp_path):
     encoding = model.encoding(values, directions)
     np.testing.assert_allclose(encoding.first_look, base.encode(values, directions), rtol=1e-5, atol=1e-6)
     assert not np.allclose(encoding.z, encoding.first_look)
+    twice, _, _ = packer.assemble(str(tmp_path / "base"), chosen, steps=2)
+    assert json.loads(twice["config"])["model"]["second_look"]["steps"] == 2
     pretrained.pack_checkpoint(assembled, mapping, tmp_path / "with-look", half=False)
     with pytest.raises(ValueError, match="has a second look already"):
         packer.assemble(str(tmp_path / "with-look"), chosen)
