@@ -244,7 +244,9 @@ def second_look_text(card: dict) -> str:
     look = card.get("second_look")
     if not look:
         return ""
-    return (f"\n- **Second look**: z from the encoders is corrected once from the samples' errors under it "
+    steps = look["config"].get("steps", 1)
+    times = {1: "once", 2: "twice"}.get(steps, f"{steps} times, each look from the z the last gave")
+    return (f"\n- **Second look**: z from the encoders is corrected {times} from the samples' errors under it "
             f"(`frenbrdf.models.second_look`, `{json.dumps(look['config'])}`), trained for these frozen encoders "
             f"and decoder by `research/studies/second_look.py` (`{look['run']}`, the lowest validation loss of "
             f"{len(look.get('of', [look['run']]))} runs, at its epoch {look['epoch']}); why and the rule that chose it: {look['why']}. Packed by `{look['command']}`.")
