@@ -1,7 +1,7 @@
 """A second look for the encoder: a network that reads what the first guess got wrong (issue 47; a prototype).
 
     python research/studies/second_look.py train CONFIG DATA --out DIR [--minutes 30] [--epochs N] [--seed 0]
-        [--base pretrained]
+        [--base pretrained] [--steps 1] [--init RUN]
     python research/studies/second_look.py score MATERIALS... --runs DIR... --out OUT [--patterns ...] [--count 1500]
         [--draws 0]
     python research/studies/second_look.py refine MATERIALS... --base MODEL --runs DIR... --out OUT
@@ -86,9 +86,18 @@ def run_config(path: Path, data: Path, seed: int) -> TrainConfig:
     return from_dict(TrainConfig, config)
 
 
-def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, data, drawer) -> tuple[float, float]:
-    """The validation tables' reconstruction loss of the first and the second look, read through the mixture
-    (the same samples every time)."""
+def looked(second: SecondLook, context: SampleBatch, z1: torch.Tensor, decoder, steps: int) -> list[torch.Tensor]:
+    """z after each of ``steps`` looks, each from the z the last one gave."""
+    out = [z1]
+    for _ in range(steps):
+        out.append(second(context.coords, context.values, context.cos_in, out[-1], decoder))
+    return out[1:]
+
+
+def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, data, drawer,
+                    steps: int = 1) -> tuple[float, float]:
+    """The validation tables' reconstruction loss of the first look and after ``steps`` looks, read through the
+    mixture (the same samples every time)."""
     generator = torch.Generator().manual_seed(cfg.seed + 1)
     materials = list(data.validation)
     sums = [0.0, 0.0]
@@ -100,7 +109,7 @@ def validation_loss(model: Model, first: FirstLook, second: SecondLook, cfg, dat
             context = drawer.pattern_context(batch, patterns, cfg.context_samples, generator)
             query = data.bank.sample(batch, cfg.query_samples, generator)
             z1 = first(context)
-            for k, z in enumerate((z1, second(context.coords, context.values, context.cos_in, z1, model.network.decoder))):
+            for k, z in enumerate((z1, looked(second, context, z1, model.network.decoder, steps)[-1])):
                 terms = decoding_terms(z, model.network.decoder(z), query, cfg.loss)
                 sums[k] += float(terms["rec"]) * len(batch) / len(materials)
     second.train()
@@ -116,7 +125,10 @@ def train(args) -> int:
     data = prepare(cfg, split, files, mapping=model.mapping)
     drawer = BatchDrawer(cfg, data, with_truth=False)
     torch.manual_seed(cfg.seed)
-    first, second = FirstLook(model), SecondLook(model.config.encoder.latent, SecondLookConfig())
+    look_config = SecondLookConfig(steps=args.steps)
+    first, second = FirstLook(model), SecondLook(model.config.encoder.latent, look_config)
+    if args.init is not None:  # go on from a trained look
+        second.load_state_dict(torch.load(args.init / "second_look.pt", weights_only=True)["state"])
     optimizer = torch.optim.Adam(second.parameters(), lr=cfg.lr)
     generator = torch.Generator().manual_seed(cfg.seed)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -131,20 +143,22 @@ def train(args) -> int:
             batch = order[step * cfg.batch_materials:(step + 1) * cfg.batch_materials].tolist()
             drawn = drawer.draw(batch, generator)
             context = drawn.context
-            z = second(context.coords, context.values, context.cos_in, first(context), model.network.decoder)
-            terms = decoding_terms(z, model.network.decoder(z), drawn.query, cfg.loss)
+            # each look's loss, averaged: the last look starts from the earlier ones' answers
+            terms_by_look = [decoding_terms(z, model.network.decoder(z), drawn.query, cfg.loss)
+                             for z in looked(second, context, first(context), model.network.decoder, args.steps)]
+            terms = {key: sum(t[key] for t in terms_by_look) / args.steps for key in ("rec", "w", "z")}
             total = terms["rec"] + terms["w"] + terms["z"]
             optimizer.zero_grad(set_to_none=True)
             total.backward()
             optimizer.step()
             losses.append(float(terms["rec"].detach()))
-        val_first, val_second = validation_loss(model, first, second, cfg, data, drawer)
+        val_first, val_second = validation_loss(model, first, second, cfg, data, drawer, args.steps)
         history.append({"epoch": epoch, "train_rec": float(np.mean(losses)), "val_first": val_first,
                         "val_second": val_second})
         print(json.dumps(history[-1]), flush=True)
         if val_second < best:
             best = val_second
-            torch.save({"state": second.state_dict(), "epoch": epoch, "config": to_dict(SecondLookConfig())},
+            torch.save({"state": second.state_dict(), "epoch": epoch, "config": to_dict(look_config)},
                        args.out / "second_look.pt")
         save_json(args.out / "history.json", history)
         epoch += 1
@@ -262,6 +276,9 @@ def main(argv=None) -> int:
     t.add_argument("--quiet", action="store_true", help="no progress bars")
     t.add_argument("--base", default="pretrained", help="the model whose first look is corrected: 'pretrained' "
                    "(the package's), a packed model's folder or a run folder")
+    t.add_argument("--steps", type=int, default=1, help="looks unrolled in training, each look's loss averaged; "
+                   "the validation loss is the last one's (research/results/two-step-look)")
+    t.add_argument("--init", type=Path, help="a look run to start from instead of zero (the same sizes)")
     s = commands.add_parser("score")
     s.add_argument("materials", nargs="+", type=Path)
     s.add_argument("--runs", nargs="+", type=Path, required=True)
