@@ -246,10 +246,12 @@ def second_look_text(card: dict) -> str:
         return ""
     steps = look["config"].get("steps", 1)
     times = {1: "once", 2: "twice"}.get(steps, f"{steps} times, each look from the z the last gave")
+    runs = len(look.get("of", [look["run"]]))
+    chosen = f"the lowest validation loss of {runs} runs, " if runs > 1 else ""
     return (f"\n- **Second look**: z from the encoders is corrected {times} from the samples' errors under it "
             f"(`frenbrdf.models.second_look`, `{json.dumps(look['config'])}`), trained for these frozen encoders "
-            f"and decoder by `research/studies/second_look.py` (`{look['run']}`, the lowest validation loss of "
-            f"{len(look.get('of', [look['run']]))} runs, at its epoch {look['epoch']}); why and the rule that chose it: {look['why']}. Packed by `{look['command']}`.")
+            f"and decoder by `research/studies/second_look.py` (`{look['run']}`, {chosen}at its epoch "
+            f"{look['epoch']}); why and the rule that chose it: {look['why']}. Packed by `{look['command']}`.")
 
 
 def by_source_text(groups: dict) -> str:

@@ -1,5 +1,5 @@
 """Exploration only (research/results/repeated-look): the package model's look taken 0–8 times, z_{k+1} = look(z_k),
-encoder alone, 1,500 pairs, draw 0; prints each pattern's mean PSNR / ΔE and the worst material's PSNR by looks.
+encoder alone, 1,500 pairs, draw 0, with the samples' loss under each z; prints each pattern's mean PSNR / ΔE and the worst material's PSNR by looks.
 
     python research/results/repeated-look/explore.py OUT.json MATERIALS...
 """
@@ -18,6 +18,7 @@ from pattern_readings import readings  # noqa: E402
 from second_look import PATTERNS, first_look  # noqa: E402
 
 from frenbrdf import Model  # noqa: E402
+from frenbrdf.models.losses import samples_loss  # noqa: E402
 from frenbrdf.models.nbrdf import mapped_samples  # noqa: E402
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap  # noqa: E402
 
@@ -36,8 +37,10 @@ def main(out: Path, materials: list[Path]) -> int:
                                   for a in mapped_samples(model.mapping, reading.values, reading.directions))
         for k in range(MOST_LOOKS + 1):
             metrics = reading.metrics(tonemap(render_linear(model.decode(z[0].numpy())[0], scene)), mask)
+            with torch.no_grad():
+                loss = samples_loss(model.network.decoder(z), coords, mapped, cos_in)
             rows.append({"material": reading.material, "pattern": reading.pattern, "k": k, "psnr": metrics["psnr"],
-                         "de": metrics["delta_e"]})
+                         "de": metrics["delta_e"], "loss": loss})
             with torch.no_grad():
                 z = look(coords, mapped, cos_in, z, model.network.decoder)
     out.write_text(json.dumps(rows))
