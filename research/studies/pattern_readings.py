@@ -1,8 +1,10 @@
 """Materials read through sampling patterns, as the encoder studies read them: each material's truth rendered once,
-then its samples through each pattern and draw (encoder-choice, second-look)."""
+then its samples through each pattern and draw (encoder-choice, second-look, repeated-look); and those readings
+reconstructed by several models and scored."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,7 +15,8 @@ from tqdm import tqdm
 from frenbrdf.io.formats import read_measured
 from frenbrdf.io.patterns import pattern_samples
 from frenbrdf.io.sampling import as_table
-from frenbrdf.render import Scene, render_linear, tonemap
+from frenbrdf.models.reconstruct import reconstruct, refine_config
+from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 from frenbrdf.render.scoring import highlight_mask, image_metrics
 
 
@@ -47,3 +50,22 @@ def readings(materials: list[Path], patterns, draws, count: int, scene: Scene, m
                 rng = np.random.default_rng([draw, p, sum(map(ord, path.stem))])
                 values, directions = pattern_samples(truth, name, count, rng, table=table)
                 yield Reading(path.stem, name, draw, values, directions, truth_image, highlight)
+
+
+def reconstruction_rows(models: dict, label: str, materials: list[Path], patterns, draws, count: int,
+                        budgets) -> list[dict]:
+    """Every reading of :func:`readings` reconstructed by each of ``models`` (``{key: Model}``) by each budget
+    (``none``: the encoder alone; refinement seeded by the draw), its render (128²) scored against the truth's: one
+    row each, with the model's key under ``label``."""
+    scene = Scene(resolution=128)
+    mask = material_mask(scene)
+    rows = []
+    for reading in readings(materials, patterns, draws, count, scene, mask):
+        for budget in budgets:
+            config = dataclasses.replace(refine_config(budget), seed=reading.draw)
+            for key, model in models.items():
+                result = reconstruct(model, reading.values, reading.directions, refine=config)
+                metrics = reading.metrics(tonemap(render_linear(result.nbrdf, scene)), mask)
+                rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
+                             "budget": budget, label: key, "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    return rows

@@ -26,11 +26,9 @@ from frenbrdf import Model
 from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.models.autoencoder import load_model
-from frenbrdf.models.reconstruct import reconstruct, refine_config
-from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from pattern_readings import readings  # noqa: E402
+from pattern_readings import reconstruction_rows  # noqa: E402
 from second_look import PATTERNS, with_look  # noqa: E402
 
 
@@ -84,17 +82,7 @@ def main(argv=None) -> int:
     if args.look is not None:
         base = with_look(base, args.look)
     models = {k: with_steps(base, k) for k in args.steps}
-    scene = Scene(resolution=128)
-    mask = material_mask(scene)
-    rows = []
-    for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
-        for budget in args.budgets:
-            config = dataclasses.replace(refine_config(budget), seed=reading.draw)
-            for k, model in models.items():
-                result = reconstruct(model, reading.values, reading.directions, refine=config)
-                metrics = reading.metrics(tonemap(render_linear(result.nbrdf, scene)), mask)
-                rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
-                             "budget": budget, "looks": k, "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    rows = reconstruction_rows(models, "looks", args.materials, args.patterns, args.draws, args.count, args.budgets)
     args.out.mkdir(parents=True, exist_ok=True)
     save_json(args.out / "rows.json", rows)
     summary = summarise(rows)

@@ -43,7 +43,6 @@ from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.models.autoencoder import AutoEncoder, load_model
 from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
-from frenbrdf.models.reconstruct import reconstruct, refine_config
 from frenbrdf.models.second_look import SecondLook, SecondLookConfig
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 from frenbrdf.training.augment import BatchDrawer
@@ -52,7 +51,7 @@ from frenbrdf.training.prepared import prepare
 from frenbrdf.training.step import decoding_terms
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from pattern_readings import readings  # noqa: E402
+from pattern_readings import readings, reconstruction_rows  # noqa: E402
 
 MIXED = Path(__file__).resolve().parents[1] / "results" / "version-5" / "encoder-mixed.json"
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
@@ -187,17 +186,7 @@ def refine(args) -> int:
     (``none``: the encoder): the rows and a summary as :func:`score` writes them, one look label per budget."""
     base = load_model(args.base)
     models = {"first": base, **{run.name: with_look(base, run) for run in args.runs}}
-    scene = Scene(resolution=128)
-    mask = material_mask(scene)
-    rows = []
-    for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
-        for budget in args.budgets:
-            config = dataclasses.replace(refine_config(budget), seed=reading.draw)
-            for look, model in models.items():
-                result = reconstruct(model, reading.values, reading.directions, refine=config)
-                metrics = reading.metrics(tonemap(render_linear(result.nbrdf, scene)), mask)
-                rows.append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
-                             "budget": budget, "look": look, "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    rows = reconstruction_rows(models, "look", args.materials, args.patterns, args.draws, args.count, args.budgets)
     args.out.mkdir(parents=True, exist_ok=True)
     save_json(args.out / "rows.json", rows)
     text = "".join(f"\n{budget}\n\n" + summarise([r for r in rows if r["budget"] == budget], args.patterns)
