@@ -110,6 +110,7 @@ def test_more_looks_start_each_from_the_last():
             z = network.second_look(coords, mapped, cos_in, z, network.decoder)
             np.testing.assert_allclose(encodings[steps].z, z[0].numpy(), rtol=1e-5, atol=1e-6)
             np.testing.assert_array_equal(encodings[steps].first_look, encodings[1].first_look)
+            assert encodings[steps].summary()["looks"] == steps
     assert not np.allclose(encodings[2].z, encodings[1].z)
 
 

@@ -126,10 +126,12 @@ class Encoding:
     """With ``encoder_choice="best-fit"``: the index of the encoder whose latent is z; None: z is their mean."""
     first_look: np.ndarray | None = None
     """With a second look (:mod:`.second_look`): the encoders' z, before it corrected it; None without one."""
+    looks: int = 0
+    """How many second looks corrected z (``SecondLookConfig.steps``; 0 without a second look)."""
 
     def summary(self) -> dict:
         """JSON-ready: how z was chosen (the latents themselves are left out)."""
-        look = {} if self.first_look is None else {"second_look": True}
+        look = {} if self.first_look is None else {"second_look": True, "looks": self.looks}
         if self.chosen is None or self.losses is None:  # set together
             return {"encoders": len(self.latents), "choice": "mean", **look}
         return {"encoders": len(self.latents), "choice": "best-fit", "chosen": self.chosen,
@@ -253,7 +255,7 @@ class Model:
         z = torch.from_numpy(encoding.z.astype(np.float32))[None]
         for _ in range(config.steps):
             z = look(at, truth, cos, z, self.network.decoder)
-        encoding.first_look, encoding.z = encoding.z, z[0].double().numpy()
+        encoding.first_look, encoding.z, encoding.looks = encoding.z, z[0].double().numpy(), config.steps
         return encoding
 
     def _first_look(self, mapped: np.ndarray, coords: np.ndarray, cos_in: np.ndarray) -> Encoding:
