@@ -6,6 +6,7 @@ the samples, a set network reads each sample with its prediction ŷ, its error y
 mean, and from it, z₁ and the samples' loss gradient at z₁ (its direction and log length) gives Δz; z = z₁ + Δz.
 Its last layer starts at zero, so an untrained second look is the first. It is trained for a frozen decoder and
 frozen encoders (research/results/second-look), and costs one decoding and one backward pass through it.
+:attr:`SecondLookConfig.steps` takes it again from its own answer, z₃ = look(z₂), … (research/results/repeated-look).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ class SecondLookConfig:
     """Hidden widths of the network from the pooled features, z₁ and the gradient to Δz."""
     steps: int = 1
     """How many looks :meth:`Model.encode <frenbrdf.Model.encode>` takes, each from the z the one before gave
-    (a look is trained for one; research/results/repeated-look measures more)."""
+    (research/results/repeated-look)."""
 
     def __post_init__(self):
         self.hidden, self.after = tuple(int(h) for h in self.hidden), tuple(int(h) for h in self.after)
