@@ -12,6 +12,7 @@ import torch
 
 from frenbrdf.configs import from_dict, to_dict
 from frenbrdf.models import AutoEncoder, DecoderConfig, EncoderConfig, Model, ModelConfig, NBRDFConfig
+from frenbrdf.models.losses import samples_loss
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import mapped_samples
 from frenbrdf.models.second_look import SecondLook, SecondLookConfig
@@ -114,10 +115,41 @@ def test_more_looks_start_each_from_the_last():
     assert not np.allclose(encodings[2].z, encodings[1].z)
 
 
+def test_a_best_fit_choice_keeps_the_z_that_fits_the_samples_best():
+    """``choice="best-fit"``: of the encoders' z and each look's, the one whose decoding has the lowest samples'
+    loss, with the losses and the looks that led to it in the encoding and its summary."""
+    values, directions = samples(200)
+    network = AutoEncoder(small_config())
+    stirred(network.second_look, seed=3)
+    mapping = LogRelativeMapping(np.full(3, 0.1))
+    last = Model(network, mapping, small_config(dataclasses.replace(SMALL_LOOK, steps=3))).encoding(values, directions)
+    best = Model(network, mapping, small_config(dataclasses.replace(SMALL_LOOK, steps=3, choice="best-fit")))
+    encoding = best.encoding(values, directions)
+    mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                              for a in mapped_samples(mapping, values, directions))
+    zs = [torch.from_numpy(encoding.first_look.astype(np.float32))[None]]
+    with torch.no_grad():
+        for _ in range(3):
+            zs.append(network.second_look(coords, mapped, cos_in, zs[-1], network.decoder))
+        losses = [samples_loss(network.decoder(z), coords, mapped, cos_in) for z in zs]
+    assert encoding.look_losses is not None and len(encoding.look_losses) == 4
+    np.testing.assert_allclose(encoding.look_losses, losses, rtol=1e-5)
+    assert encoding.looks == int(np.argmin(losses))
+    np.testing.assert_allclose(encoding.z, zs[encoding.looks][0].numpy(), rtol=1e-5, atol=1e-6)
+    assert encoding.summary()["looks"] == encoding.looks and len(encoding.summary()["look_losses"]) == 4
+    np.testing.assert_allclose(last.z, zs[3][0].numpy(), rtol=1e-5, atol=1e-6)
+    assert last.look_losses is None and "look_losses" not in last.summary()
+
+
 @pytest.mark.parametrize("steps", [0, -1, 17, 1.5, True, "2"])
 def test_a_wrong_number_of_looks_is_refused(steps):
     with pytest.raises(ValueError, match="second look steps"):
         SecondLookConfig(steps=steps)
+
+
+def test_an_unknown_choice_of_look_is_refused():
+    with pytest.raises(ValueError, match="second look choice"):
+        SecondLookConfig(choice="mean")
 
 
 def test_the_config_round_trips_and_counts_its_parameters():

@@ -1,7 +1,7 @@
 """The second look taken more than once: z_{k+1} = look(z_k), each look reading the samples again (issue 47).
 
     python research/studies/repeated_look.py MATERIALS... --out OUT [--base pretrained] [--look RUN] [--steps 1 2]
-        [--budgets none] [--patterns ...] [--count 1500] [--draws 0]
+        [--choice last] [--budgets none] [--patterns ...] [--count 1500] [--draws 0]
 
 A look is trained for one step from the encoders' guess (research/studies/second_look.py), yet from its own answer it
 can read what is still wrong and step again, as `latent` refinement does 600 times. Each material is reconstructed
@@ -32,12 +32,14 @@ from pattern_readings import reconstruction_rows  # noqa: E402
 from second_look import PATTERNS, with_look  # noqa: E402
 
 
-def with_steps(model: Model, steps: int) -> Model:
-    """``model``, whose config has a second look, taking ``steps`` looks."""
+def with_steps(model: Model, steps: int, choice: str = "last") -> Model:
+    """``model``, whose config has a second look, taking ``steps`` looks, z chosen from them by ``choice``
+    (``SecondLookConfig.choice``)."""
     if model.config.second_look is None:
         raise ValueError("the model has no second look: pass --look with a look run trained for it")
     config = dataclasses.replace(model.config,
-                                 second_look=dataclasses.replace(model.config.second_look, steps=steps))
+                                 second_look=dataclasses.replace(model.config.second_look, steps=steps,
+                                                                 choice=choice))
     return Model(model.network, model.mapping, config, model.method, model.loss)
 
 
@@ -73,6 +75,7 @@ def main(argv=None) -> int:
                         "folder or a run folder")
     parser.add_argument("--look", type=Path, help="a look run trained for --base, which has none of its own")
     parser.add_argument("--steps", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--choice", default="last", help="how z is taken from the looks: 'last' or 'best-fit'")
     parser.add_argument("--budgets", nargs="+", default=["none"])
     parser.add_argument("--patterns", nargs="+", default=list(PATTERNS))
     parser.add_argument("--count", type=int, default=1500)
@@ -81,7 +84,7 @@ def main(argv=None) -> int:
     base = load_model(args.base)
     if args.look is not None:
         base = with_look(base, args.look)
-    models = {k: with_steps(base, k) for k in args.steps}
+    models = {k: with_steps(base, k, args.choice) for k in args.steps}
     rows = reconstruction_rows(models, "looks", args.materials, args.patterns, args.draws, args.count, args.budgets)
     args.out.mkdir(parents=True, exist_ok=True)
     save_json(args.out / "rows.json", rows)

@@ -127,11 +127,16 @@ class Encoding:
     first_look: np.ndarray | None = None
     """With a second look (:mod:`.second_look`): the encoders' z, before it corrected it; None without one."""
     looks: int = 0
-    """How many second looks corrected z (``SecondLookConfig.steps``; 0 without a second look)."""
+    """How many second looks corrected z: ``SecondLookConfig.steps``, or with its ``choice="best-fit"`` those that
+    led to the z chosen (0 also without a second look)."""
+    look_losses: np.ndarray | None = None
+    """With a second look's ``choice="best-fit"``: the samples' loss under the encoders' z and after each look."""
 
     def summary(self) -> dict:
         """JSON-ready: how z was chosen (the latents themselves are left out)."""
         look = {} if self.first_look is None else {"second_look": True, "looks": self.looks}
+        if self.look_losses is not None:
+            look["look_losses"] = [float(loss) for loss in self.look_losses]
         if self.chosen is None or self.losses is None:  # set together
             return {"encoders": len(self.latents), "choice": "mean", **look}
         return {"encoders": len(self.latents), "choice": "best-fit", "chosen": self.chosen,
@@ -252,10 +257,15 @@ class Model:
         if look is None or config is None:  # set together
             return encoding
         at, truth, cos = (torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in))
-        z = torch.from_numpy(encoding.z.astype(np.float32))[None]
+        zs = [torch.from_numpy(encoding.z.astype(np.float32))[None]]
         for _ in range(config.steps):
-            z = look(at, truth, cos, z, self.network.decoder)
-        encoding.first_look, encoding.z, encoding.looks = encoding.z, z[0].double().numpy(), config.steps
+            zs.append(look(at, truth, cos, zs[-1], self.network.decoder))
+        looks = config.steps
+        if config.choice == "best-fit":  # scored as the encoders' best-fit choice scores
+            kind = self.loss.get("kind", LossConfig.kind)
+            encoding.look_losses = np.array([samples_loss(self.network.decoder(z), at, truth, cos, kind) for z in zs])
+            looks = int(np.argmin(encoding.look_losses))
+        encoding.first_look, encoding.z, encoding.looks = encoding.z, zs[looks][0].double().numpy(), looks
         return encoding
 
     def _first_look(self, mapped: np.ndarray, coords: np.ndarray, cos_in: np.ndarray) -> Encoding:

@@ -6,7 +6,8 @@ the samples, a set network reads each sample with its prediction ŷ, its error y
 mean, and from it, z₁ and the samples' loss gradient at z₁ (its direction and log length) gives Δz; z = z₁ + Δz.
 Its last layer starts at zero, so an untrained second look is the first. It is trained for a frozen decoder and
 frozen encoders (research/results/second-look), and costs one decoding and one backward pass through it.
-:attr:`SecondLookConfig.steps` takes it again from its own answer, z₃ = look(z₂), … (research/results/repeated-look).
+:attr:`SecondLookConfig.steps` takes it again from its own answer, z₃ = look(z₂), … (research/results/repeated-look),
+and :attr:`SecondLookConfig.choice` ``"best-fit"`` keeps whichever z fits the samples best.
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from .nbrdf import nbrdf_forward
 SAMPLE_FEATURES = 16
 #: The most looks an encoding may take (each costs a decoding and a backward pass through it).
 MAX_STEPS = 16
+#: How z is taken from the looks (:attr:`SecondLookConfig.choice`).
+LOOK_CHOICES = ("last", "best-fit")
 
 
 @dataclass
@@ -37,11 +40,16 @@ class SecondLookConfig:
     steps: int = 1
     """How many looks :meth:`Model.encode <frenbrdf.Model.encode>` takes, each from the z the one before gave
     (research/results/repeated-look)."""
+    choice: str = "last"
+    """``"last"``: z is the last look's; ``"best-fit"``: of the encoders' z and every look's, the one whose decoding
+    fits the samples best (research/results/look-choice)."""
 
     def __post_init__(self):
         self.hidden, self.after = tuple(int(h) for h in self.hidden), tuple(int(h) for h in self.after)
         if isinstance(self.steps, bool) or not isinstance(self.steps, int) or not 1 <= self.steps <= MAX_STEPS:
             raise ValueError(f"second look steps must be a whole number in 1 … {MAX_STEPS}, got {self.steps!r}")
+        if self.choice not in LOOK_CHOICES:
+            raise ValueError(f"second look choice must be one of {LOOK_CHOICES}, got {self.choice!r}")
         widths = (*self.hidden, *self.after)
         if not self.hidden or min(widths) < 1 or max(widths) > MAX_WIDTH or max(len(self.hidden),
                                                                                len(self.after)) > MAX_LAYERS:
