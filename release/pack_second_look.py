@@ -1,7 +1,8 @@
 """Packs a packed model with a second look (``frenbrdf.models.second_look``) as the shipped model.
 
     python release/pack_second_look.py --base WORK/v9 --looks WORK/looks/s1 WORK/looks/s2 WORK/looks/s3 \\
-        --work WORK/base-work --version 10 --why "[second-look](../research/results/second-look/README.md)" [--steps 2]
+        --work WORK/base-work --version 10 --why "[second-look](../research/results/second-look/README.md)" \\
+        [--steps 2] [--choice last]
 
 The base (``--base``: ``pretrained`` or a packed model's folder) gives everything but the second look: its
 decoder, encoders, mapping and card. Of the looks (run folders of ``research/studies/second_look.py train``, each
@@ -43,15 +44,16 @@ def best_look(runs: list[Path]) -> Path:
     return min(runs, key=best)
 
 
-def assemble(base: str | None, look_run: Path, steps: int = 1) -> tuple[dict, dict, dict]:
-    """The base's checkpoint with the second look of ``look_run`` added, taking ``steps`` looks; its mapping and its
-    card."""
+def assemble(base: str | None, look_run: Path, steps: int = 1, choice: str = "last") -> tuple[dict, dict, dict]:
+    """The base's checkpoint with the second look of ``look_run`` added, taking ``steps`` looks and z from them by
+    ``choice``; its mapping and its card."""
     packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
     config = json.loads(packed["config"])
     if config["model"].get("second_look"):
         raise ValueError(f"{base}: the base has a second look already; give the model it was trained for")
     saved = torch.load(look_run / LOOK_FILE, weights_only=True)
-    look = from_dict(SecondLookConfig, {**saved.get("config", {}), "steps": steps}, f"{look_run / LOOK_FILE} config")
+    look = from_dict(SecondLookConfig, {**saved.get("config", {}), "steps": steps, "choice": choice},
+                     f"{look_run / LOOK_FILE} config")
     config["model"]["second_look"] = to_dict(look)
     weights = {name: value.float() for name, value in packed["model"].items()}
     weights.update({f"second_look.{name}": value.float() for name, value in saved["state"].items()})
@@ -76,6 +78,8 @@ def main(argv=None) -> int:
                         help="second_look.py run folders, trained for the base; the lowest validation loss is packed")
     parser.add_argument("--steps", type=int, default=1, help="how many looks the model takes (research/results/"
                         "repeated-look)")
+    parser.add_argument("--choice", default="last", help="how z is taken from the looks: 'last' or 'best-fit' "
+                        "(research/results/look-choice)")
     parser.add_argument("--work", type=Path, help="train_shipped_model.py's --work (data/, run/split.json, sources.json)")
     parser.add_argument("--held-out", nargs=2, type=Path, metavar=("CONFIG", "DIR"), help="instead of --work")
     parser.add_argument("--sources", type=Path, help="with --held-out: JSON of source folder name → material names")
@@ -88,7 +92,7 @@ def main(argv=None) -> int:
         parser.error("give --work, or --held-out with --sources")
     pretrained.check_pack_destination(args.dest, inputs=[args.base, *args.looks])  # before any work
     look = best_look(args.looks)
-    checkpoint, mapping, card = assemble(args.base, look, args.steps)
+    checkpoint, mapping, card = assemble(args.base, look, args.steps, args.choice)
     if args.work is not None:
         test = held_out_files(args.work, json.loads((args.work / "run" / "split.json").read_text())["test"])
         sources = read_sources(args.work)

@@ -246,6 +246,8 @@ def second_look_text(card: dict) -> str:
         return ""
     steps = look["config"].get("steps", 1)
     times = {1: "once", 2: "twice"}.get(steps, f"{steps} times, each look from the z the last gave")
+    if look["config"].get("choice", "last") == "best-fit":
+        times += ", keeping of the encoders' z and the looks' the one whose decoding fits the samples best"
     runs = len(look.get("of", [look["run"]]))
     chosen = f"the lowest validation loss of {runs} runs, " if runs > 1 else ""
     return (f"\n- **Second look**: z from the encoders is corrected {times} from the samples' errors under it "
