@@ -1,7 +1,9 @@
 """repeated-look's renders (README.md): materials through a pattern, the truth beside the package model's reading
-with one look and with two, each titled with its PSNR / ΔE; 1,500 samples, draw 0 (the readings' samples).
+with one look and with two (or the looks ``--models`` names: ``STEPS`` or ``STEPS:CHOICE``, as look-choice's
+renders), each titled with its PSNR / ΔE; 1,500 samples, draw 0 (the readings' samples).
 
     python research/results/repeated-look/look.py FIGURE MATERIAL:PATTERN... [--count 1500] [--draw 0]
+        [--models 1 2]
     (MATERIAL: a file of a MERL table or a measurement)
 """
 
@@ -27,9 +29,14 @@ def main(argv=None) -> int:
     parser.add_argument("readings", nargs="+", metavar="MATERIAL:PATTERN")
     parser.add_argument("--count", type=int, default=1500)
     parser.add_argument("--draw", type=int, default=0)
+    parser.add_argument("--models", nargs="+", default=["1", "2"], help="STEPS or STEPS:CHOICE (SecondLookConfig)")
     args = parser.parse_args(argv)
     model = Model.pretrained()
-    models = {f"{k} look{'s' * (k > 1)}": with_steps(model, k) for k in (1, 2)}
+    models = {}
+    for spec in args.models:
+        steps, _, choice = spec.partition(":")
+        label = f"{steps} look{'s' * (int(steps) > 1)}" + (f", {choice}" if choice else "")
+        models[label] = with_steps(model, int(steps), choice or "last")
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
