@@ -134,7 +134,7 @@ class Encoding:
 
     def summary(self) -> dict:
         """JSON-ready: how z was chosen (the latents themselves are left out)."""
-        look = {} if self.first_look is None else {"second_look": True, "looks": self.looks}
+        look: dict[str, object] = {} if self.first_look is None else {"second_look": True, "looks": self.looks}
         if self.look_losses is not None:
             look["look_losses"] = [float(loss) for loss in self.look_losses]
         if self.chosen is None or self.losses is None:  # set together
