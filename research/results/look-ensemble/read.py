@@ -1,0 +1,66 @@
+"""look-ensemble's judged readings (README.md): version 11 (its encoders' z, then the look `s1` twice) and the
+candidate (the looks `s1`, `s2`, `s3` of local/sl/judge with their answers averaged, twice), encoder alone, random bins
+and the five devices, 1,500 pairs; ``OUT/v11/rows.json`` and ``OUT/ensemble/rows.json``.
+
+    python research/results/look-ensemble/read.py MATERIALS... --out OUT [--draws 0 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+from pattern_readings import readings  # noqa: E402
+from second_look import PATTERNS, first_look  # noqa: E402
+
+from frenbrdf import Model  # noqa: E402
+from frenbrdf.io.atomic import save_json  # noqa: E402
+from frenbrdf.models.nbrdf import mapped_samples  # noqa: E402
+from frenbrdf.models.second_look import SecondLook, SecondLookConfig  # noqa: E402
+from frenbrdf.render import Scene, material_mask, render_linear, tonemap  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from explore import RUNS, averaged  # noqa: E402
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("materials", nargs="+", type=Path)
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--draws", type=int, nargs="+", default=[0, 1])
+    args = parser.parse_args(argv)
+    model = Model.pretrained()
+    decoder = model.network.decoder
+    looks = []
+    for run in ("s1", "s2", "s3"):
+        look = SecondLook(model.config.encoder.latent, SecondLookConfig())
+        look.load_state_dict(torch.load(RUNS / run / "second_look.pt", weights_only=True)["state"])
+        looks.append(look.eval())
+    scene = Scene(resolution=128)
+    mask = material_mask(scene)
+    rows: dict[str, list] = {"v11": [], "ensemble": []}
+    for reading in readings(args.materials, PATTERNS, args.draws, 1500, scene, mask):
+        z1 = torch.from_numpy(first_look(model, reading.values, reading.directions))[None]
+        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
+        samples = (coords, mapped, cos_in)
+        with torch.no_grad():
+            latents = {"v11": averaged(looks[:1], averaged(looks[:1], z1, samples, decoder), samples, decoder),
+                       "ensemble": averaged(looks, averaged(looks, z1, samples, decoder), samples, decoder)}
+        for name, z in latents.items():
+            metrics = reading.metrics(tonemap(render_linear(model.decode(z[0].numpy())[0], scene)), mask)
+            rows[name].append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
+                               "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
+    for name, found in rows.items():
+        (args.out / name).mkdir(parents=True, exist_ok=True)
+        save_json(args.out / name / "rows.json", found)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
