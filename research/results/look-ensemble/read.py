@@ -28,6 +28,27 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from explore import RUNS, averaged  # noqa: E402
 
 
+def trained_looks(model: Model) -> list[SecondLook]:
+    """second-look's three looks (local/sl/judge/s1 … s3), trained for version 11's encoders and decoder."""
+    looks = []
+    for run in ("s1", "s2", "s3"):
+        look = SecondLook(model.config.encoder.latent, SecondLookConfig())
+        look.load_state_dict(torch.load(RUNS / run / "second_look.pt", weights_only=True)["state"])
+        looks.append(look.eval())
+    return looks
+
+
+@torch.no_grad()
+def latents(model: Model, looks: list[SecondLook], reading) -> dict[str, torch.Tensor]:
+    """Version 11's z (``s1`` twice) and the candidate's (the three averaged, twice) for one reading."""
+    z1 = torch.from_numpy(first_look(model, reading.values, reading.directions))[None]
+    mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                              for a in mapped_samples(model.mapping, reading.values, reading.directions))
+    samples, decoder = (coords, mapped, cos_in), model.network.decoder
+    return {name: averaged(chosen, averaged(chosen, z1, samples, decoder), samples, decoder)
+            for name, chosen in (("v11", looks[:1]), ("ensemble", looks))}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("materials", nargs="+", type=Path)
@@ -35,24 +56,12 @@ def main(argv=None) -> int:
     parser.add_argument("--draws", type=int, nargs="+", default=[0, 1])
     args = parser.parse_args(argv)
     model = Model.pretrained()
-    decoder = model.network.decoder
-    looks = []
-    for run in ("s1", "s2", "s3"):
-        look = SecondLook(model.config.encoder.latent, SecondLookConfig())
-        look.load_state_dict(torch.load(RUNS / run / "second_look.pt", weights_only=True)["state"])
-        looks.append(look.eval())
+    looks = trained_looks(model)
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     rows: dict[str, list] = {"v11": [], "ensemble": []}
     for reading in readings(args.materials, PATTERNS, args.draws, 1500, scene, mask):
-        z1 = torch.from_numpy(first_look(model, reading.values, reading.directions))[None]
-        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
-        samples = (coords, mapped, cos_in)
-        with torch.no_grad():
-            latents = {"v11": averaged(looks[:1], averaged(looks[:1], z1, samples, decoder), samples, decoder),
-                       "ensemble": averaged(looks, averaged(looks, z1, samples, decoder), samples, decoder)}
-        for name, z in latents.items():
+        for name, z in latents(model, looks, reading).items():
             metrics = reading.metrics(tonemap(render_linear(model.decode(z[0].numpy())[0], scene)), mask)
             rows[name].append({"material": reading.material, "pattern": reading.pattern, "draw": reading.draw,
                                "psnr": metrics["psnr"], "delta_e": metrics["delta_e"]})
