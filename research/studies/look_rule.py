@@ -56,3 +56,23 @@ def rule(first: dict[str, dict], second: dict[str, dict]) -> tuple[bool, str]:
     return a and b and c and d, (f"(a) first set's devices above 0: {a}; (b) second set's devices not wholly below "
                                  f"0: {b}; (c) random bins not wholly below 0 on either: {c}; (d) no device wholly "
                                  f"below 0 on either: {d}")
+
+
+def decide(out: Path, candidate: str, base: str, compared: str, verdict: str) -> int:
+    """A study's decision from ``OUT/{families,tables,measured}/{candidate,base}/rows.json``: each set's table
+    (``compared`` names the difference), then the rule with the families first and the tables second (the
+    measurements are reported only); ``verdict`` is printed where it passes."""
+    judged = ("families", "tables")
+    verdicts = {}
+    for name in (*judged, "measured"):
+        new, old = out / name / candidate / "rows.json", out / name / base / "rows.json"
+        if not (new.exists() and old.exists()):
+            continue
+        text, verdicts[name] = table(new, old)
+        print(f"\n{name}: {compared}, per material, 95 % interval\n\n{text}")
+    if not set(judged) <= set(verdicts):
+        print("\nthe families' or the tables' readings are missing: no decision")
+        return 1
+    passes, reasons = rule(verdicts["families"], verdicts["tables"])
+    print(f"\n{reasons}\nrule: " + (verdict if passes else "fails, version 11 stays"))
+    return 0

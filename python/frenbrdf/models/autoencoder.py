@@ -262,11 +262,17 @@ class Model:
             zs.append(look(at, truth, cos, zs[-1], self.network.decoder))
         looks = config.steps
         if config.choice == "best-fit":  # scored as the encoders' best-fit choice scores
-            kind = self.loss.get("kind", LossConfig.kind)
-            encoding.look_losses = np.array([samples_loss(self.network.decoder(z), at, truth, cos, kind) for z in zs])
+            encoding.look_losses = self._fit_losses(zs, at, truth, cos)
             looks = int(np.argmin(encoding.look_losses))
         encoding.first_look, encoding.z, encoding.looks = encoding.z, zs[looks][0].double().numpy(), looks
         return encoding
+
+    def _fit_losses(self, latents: list[torch.Tensor], at: torch.Tensor, truth: torch.Tensor,
+                    cos: torch.Tensor) -> np.ndarray:
+        """Each latent ``(1, latent)``'s decoding scored on the prepared samples, as refinement scores it: what a
+        best-fit choice (of encoders, or of looks) compares."""
+        kind = self.loss.get("kind", LossConfig.kind)
+        return np.array([samples_loss(self.network.decoder(z), at, truth, cos, kind) for z in latents])
 
     def _first_look(self, mapped: np.ndarray, coords: np.ndarray, cos_in: np.ndarray) -> Encoding:
         """The encoders' z from prepared samples: their mean, or the best-fitting one's."""
@@ -280,9 +286,7 @@ class Model:
             return Encoding(latents.mean(axis=0), latents, poolings)
         # best-fit: each latent's decoding scored on the samples, as refinement scores it
         at, truth, cos = (torch.from_numpy(a.astype(np.float32))[None] for a in (coords, mapped, cos_in))
-        kind = self.loss.get("kind", LossConfig.kind)
-        losses = np.array([samples_loss(self.network.decoder(torch.from_numpy(z.astype(np.float32))[None]), at, truth,
-                                        cos, kind) for z in latents])
+        losses = self._fit_losses([torch.from_numpy(z.astype(np.float32))[None] for z in latents], at, truth, cos)
         chosen = int(np.argmin(losses))
         return Encoding(latents[chosen], latents, poolings, losses, chosen)
 

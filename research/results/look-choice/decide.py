@@ -12,27 +12,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from look_rule import rule, table  # noqa: E402
-
-JUDGED = ("families", "tables")
-
-
-def main(out: Path) -> int:
-    verdicts = {}
-    for name in (*JUDGED, "measured"):
-        candidate, base = out / name / "best8" / "rows.json", out / name / "v11" / "rows.json"
-        if not (candidate.exists() and base.exists()):
-            continue
-        text, verdicts[name] = table(candidate, base)
-        print(f"\n{name}: 8 looks, best-fit − version 11, per material, 95 % interval\n\n{text}")
-    if not set(JUDGED) <= set(verdicts):
-        print("\nthe families' or the tables' readings are missing: no decision")
-        return 1
-    passes, reasons = rule(verdicts["families"], verdicts["tables"])
-    print(f"\n{reasons}\nrule: " + ("PASSES, the model takes eight looks and keeps the best-fitting z" if passes
-                                   else "fails, version 11 stays"))
-    return 0
-
+from look_rule import decide  # noqa: E402
 
 if __name__ == "__main__":
-    raise SystemExit(main(Path(sys.argv[1])))
+    raise SystemExit(decide(Path(sys.argv[1]), "best8", "v11", "8 looks, best-fit − version 11",
+                            "PASSES, the model takes eight looks and keeps the best-fitting z"))
