@@ -2,14 +2,16 @@
 
     python release/pack_second_look.py --base WORK/v9 --looks WORK/looks/s1 WORK/looks/s2 WORK/looks/s3 \\
         --work WORK/base-work --version 10 --why "[second-look](../research/results/second-look/README.md)" \\
-        [--steps 2] [--choice last]
+        [--steps 2] [--choice last] [--mean]
 
 The base (``--base``: ``pretrained`` or a packed model's folder) gives everything but the second look: its
 decoder, encoders, mapping and card. Of the looks (run folders of ``research/studies/second_look.py train``, each
 trained for that base's first look) the one with the lowest validation loss is added to the config and the weights
-(research/results/second-look, amendment 1), taking ``--steps`` looks (research/results/repeated-look). The card
-is the base's with the version, the look and the held-out test materials measured anew, encoder only and refined,
-and through the card's sampling patterns, as assembled (float32) and as packed. The held-out materials and their sources are train_shipped_model.py's (``--work``), or
+(research/results/second-look, amendment 1), or with ``--mean`` all of them, their answers averaged
+(``SecondLookConfig.members``, research/results/look-ensemble); the model takes ``--steps`` looks
+(research/results/repeated-look). The card is the base's with the version, the look and the held-out test materials
+measured anew, encoder only and refined, and through the card's sampling patterns, as assembled (float32) and as
+packed. The held-out materials and their sources are train_shipped_model.py's (``--work``), or
 (``--held-out CONFIG DIR --sources FILE``) those a training config's ``holdout`` names, from a folder, with a JSON
 of source folder name → material names.
 """
@@ -17,6 +19,7 @@ of source folder name → material names.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -44,21 +47,29 @@ def best_look(runs: list[Path]) -> Path:
     return min(runs, key=best)
 
 
-def assemble(base: str | None, look_run: Path, steps: int = 1, choice: str = "last") -> tuple[dict, dict, dict]:
-    """The base's checkpoint with the second look of ``look_run`` added, taking ``steps`` looks and z from them by
-    ``choice``; its mapping and its card."""
+def assemble(base: str | None, look_runs: list[Path], steps: int = 1, choice: str = "last") -> tuple[dict, dict, dict]:
+    """The base's checkpoint with the second looks of ``look_runs`` added (several: their answers averaged), taking
+    ``steps`` looks and z from them by ``choice``; its mapping and its card."""
     packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
     config = json.loads(packed["config"])
     if config["model"].get("second_look"):
         raise ValueError(f"{base}: the base has a second look already; give the model it was trained for")
-    saved = torch.load(look_run / LOOK_FILE, weights_only=True)
-    look = from_dict(SecondLookConfig, {**saved.get("config", {}), "steps": steps, "choice": choice},
-                     f"{look_run / LOOK_FILE} config")
+    saved = [torch.load(run / LOOK_FILE, weights_only=True) for run in look_runs]
+    trained = [from_dict(SecondLookConfig, run.get("config", {}), f"{path / LOOK_FILE} config")
+               for run, path in zip(saved, look_runs, strict=True)]
+    sizes = {(config.hidden, config.after) for config in trained}
+    if len(sizes) > 1:
+        raise ValueError(f"the looks {[str(run) for run in look_runs]} have different sizes (hidden, after: "
+                         f"{sorted(sizes)}); looks averaged must share them")
+    look = dataclasses.replace(trained[0], steps=steps, choice=choice, members=len(saved))
     config["model"]["second_look"] = to_dict(look)
     weights = {name: value.float() for name, value in packed["model"].items()}
-    weights.update({f"second_look.{name}": value.float() for name, value in saved["state"].items()})
+    # one look keeps SecondLook's names; several are a LookMean's members (frenbrdf.models.second_look)
+    prefixes = ["second_look."] if len(saved) == 1 else [f"second_look.members.{i}." for i in range(len(saved))]
+    for prefix, run in zip(prefixes, saved, strict=True):
+        weights.update({prefix + name: value.float() for name, value in run["state"].items()})
     checkpoint = {"method": packed["method"], "config": json.dumps(config), "model": weights}
-    return checkpoint, mapping, {**card, "look_epoch": int(saved["epoch"])}
+    return checkpoint, mapping, {**card, "look_epochs": [int(run["epoch"]) for run in saved]}
 
 
 def held_out(config: Path, folder: Path) -> list[Path]:
@@ -78,6 +89,8 @@ def main(argv=None) -> int:
                         help="second_look.py run folders, trained for the base; the lowest validation loss is packed")
     parser.add_argument("--steps", type=int, default=1, help="how many looks the model takes (research/results/"
                         "repeated-look)")
+    parser.add_argument("--mean", action="store_true", help="pack every look, their answers averaged, instead of "
+                        "the lowest validation loss's (research/results/look-ensemble)")
     parser.add_argument("--choice", default="last", help="how z is taken from the looks: 'last' or 'best-fit' "
                         "(research/results/look-choice)")
     parser.add_argument("--work", type=Path, help="train_shipped_model.py's --work (data/, run/split.json, sources.json)")
@@ -91,16 +104,16 @@ def main(argv=None) -> int:
     if (args.work is None) == (args.held_out is None) or (args.held_out is not None) != (args.sources is not None):
         parser.error("give --work, or --held-out with --sources")
     pretrained.check_pack_destination(args.dest, inputs=[args.base, *args.looks])  # before any work
-    look = best_look(args.looks)
-    checkpoint, mapping, card = assemble(args.base, look, args.steps, args.choice)
+    looks = args.looks if args.mean else [best_look(args.looks)]
+    checkpoint, mapping, card = assemble(args.base, looks, args.steps, args.choice)
     if args.work is not None:
         test = held_out_files(args.work, json.loads((args.work / "run" / "split.json").read_text())["test"])
         sources = read_sources(args.work)
     else:
         test, sources = held_out(*args.held_out), json.loads(args.sources.read_text())
     card.update({"version": args.version,
-                 "second_look": {"run": str(look), "of": [str(run) for run in args.looks],
-                                 "epoch": card.pop("look_epoch"), "why": args.why,
+                 "second_look": {"runs": [str(run) for run in looks], "of": [str(run) for run in args.looks],
+                                 "epochs": card.pop("look_epochs"), "why": args.why,
                                  "config": json.loads(checkpoint["config"])["model"]["second_look"],
                                  "command": run_metadata()["command"]}})
     measure_and_pack(checkpoint, mapping, test, sources, card, args.dest, args.card)

@@ -248,12 +248,17 @@ def second_look_text(card: dict) -> str:
     times = {1: "once", 2: "twice"}.get(steps, f"{steps} times, each look from the z the last gave")
     if look["config"].get("choice", "last") == "best-fit":
         times += ", keeping of the encoders' z and the looks' the one whose decoding fits the samples best"
-    runs = len(look.get("of", [look["run"]]))
-    chosen = f"the lowest validation loss of {runs} runs, " if runs > 1 else ""
+    runs, of = look["runs"], len(look["of"])
+    if len(runs) > 1:
+        epochs = ", ".join(map(str, look["epochs"]))
+        which = f"{len(runs)} looks trained apart, their answers averaged (`{'`, `'.join(runs)}`, at their epochs {epochs})"
+    else:
+        chosen = f"the lowest validation loss of {of} runs, " if of > 1 else ""
+        which = f"`{runs[0]}`, {chosen}at its epoch {look['epochs'][0]}"
     return (f"\n- **Second look**: z from the encoders is corrected {times} from the samples' errors under it "
             f"(`frenbrdf.models.second_look`, `{json.dumps(look['config'])}`), trained for these frozen encoders "
-            f"and decoder by `research/studies/second_look.py` (`{look['run']}`, {chosen}at its epoch "
-            f"{look['epoch']}); why and the rule that chose it: {look['why']}. Packed by `{look['command']}`.")
+            f"and decoder by `research/studies/second_look.py` ({which}); why and the rule that chose it: "
+            f"{look['why']}. Packed by `{look['command']}`.")
 
 
 def by_source_text(groups: dict) -> str:

@@ -58,9 +58,9 @@ stage v9 python "$HERE/pack_encoder_mean.py" --base "$WORK/base" --members "${me
     --why '[version-9](../research/results/version-9/README.md)' --version 9 --work "$WORK/base-work" \
     --dest "$WORK/v9" --card "$WORK/v9.md"
 # The second look for version 9's encoders (research/results/second-look): three runs on the tables of the decoder's
-# data (the merl, bank and rgl-fits folders: the same split as the judged runs), all at once; the one with the
-# lowest validation loss is packed with version 9 into the package, taking two looks (research/results/repeated-look),
-# with its card.
+# data (the merl, bank and rgl-fits folders: the same split as the judged runs), all at once; all three are packed
+# with version 9 into the package, their answers averaged (research/results/look-ensemble), taking two looks
+# (research/results/repeated-look), with its card.
 mkdir -p "$WORK/look-data"
 (shopt -s nullglob; link_into "$WORK/look-data" "$WORK"/merl/*.binary "$WORK"/bank/*.binary "$WORK"/rgl-fits/*.binary)
 for seed in 1 2 3; do echo "$seed"; done | xargs -P 3 -L 1 bash -c '  # $0 WORK, $1 this folder, $2 the seed
@@ -68,5 +68,5 @@ for seed in 1 2 3; do echo "$seed"; done | xargs -P 3 -L 1 bash -c '  # $0 WORK,
     python "$1/../research/studies/second_look.py" train "$1/shipped_model.json" "$0/look-data" --base "$0/v9" \
         --out "$0/looks/s$2" --epochs 300 --minutes 600 --seed "$2" --quiet && touch "$0/done/look-$2"' "$WORK" "$HERE"
 python "$HERE/pack_second_look.py" --base "$WORK/v9" --looks "$WORK"/looks/s{1,2,3} --work "$WORK/base-work" \
-    --steps 2 --version 11 \
-    --why '[second-look](../research/results/second-look/README.md), two looks by [repeated-look](../research/results/repeated-look/README.md)'
+    --mean --steps 2 --version 12 \
+    --why '[second-look](../research/results/second-look/README.md), two looks by [repeated-look](../research/results/repeated-look/README.md), three averaged by [look-ensemble](../research/results/look-ensemble/README.md)'

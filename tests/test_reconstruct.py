@@ -707,19 +707,22 @@ def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
     card = frenbrdf.Model.pretrained(tmp_path / "packed-2").card
     assert card["encoders"]["members"] == [str(member.path)] and card["version"] == "t"
     assert card["held_out_by_source"][toy_materials.name]["n"] == test_count
-    # Then second looks for that model, the lowest validation loss packed (one epoch each: the pipeline, not quality).
+    # Then second looks for that model, both packed, their answers averaged (one epoch each: the pipeline, not
+    # quality).
     looks = [tmp_path / f"look-{seed}" for seed in (1, 2)]
     for seed, look in enumerate(looks, start=1):
         assert script_module("second_look").main([
             "train", str(config), str(work / "data"), "--base", str(tmp_path / "packed-2"), "--out", str(look),
             "--epochs", "1", "--seed", str(seed), "--quiet"]) == 0
     assert script_module("pack_second_look").main([
-        "--base", str(tmp_path / "packed-2"), "--looks", *map(str, looks), "--version", "t2", "--work", str(work),
-        "--dest", str(tmp_path / "packed-3"), "--card", str(tmp_path / "card-3.md")]) == 0
-    card = frenbrdf.Model.pretrained(tmp_path / "packed-3").card
-    assert card["version"] == "t2" and card["second_look"]["run"] in map(str, looks)
+        "--base", str(tmp_path / "packed-2"), "--looks", *map(str, looks), "--mean", "--version", "t2", "--work",
+        str(work), "--dest", str(tmp_path / "packed-3"), "--card", str(tmp_path / "card-3.md")]) == 0
+    packed = frenbrdf.Model.pretrained(tmp_path / "packed-3")
+    card = packed.card
+    assert card["version"] == "t2" and card["second_look"]["runs"] == list(map(str, looks))
+    assert packed.config.second_look.members == 2
     assert card["held_out_by_source"][toy_materials.name]["n"] == test_count
-    assert "**Second look**" in (tmp_path / "card-3.md").read_text()
+    assert "2 looks trained apart, their answers averaged" in (tmp_path / "card-3.md").read_text()
 
 
 #: The PSNR (dB, metric renderer, refine="full") the shipped model must reach on a bank material.

@@ -74,7 +74,7 @@ def test_a_rerun_skips_what_finished_and_resumes_the_training_that_failed(tmp_pa
     assert sorted(call.split("--seed ")[1].split()[0] for call in looks) == ["1", "2", "3"]
     assert all("--base work/v9" in call for call in looks)
     assert "pack_second_look.py" in second[-1] and "work/looks/s1 work/looks/s2 work/looks/s3" in second[-1]
-    assert "--steps 2 --version 11" in second[-1]  # version 11 takes two looks (research/results/repeated-look)
+    assert "--mean --steps 2 --version 12" in second[-1]  # the three looks averaged, twice (look-ensemble)
 
     third = _run(tmp_path)
     assert len(third) == 1 and "pack_second_look.py" in third[0]

@@ -15,7 +15,7 @@ from frenbrdf.models import AutoEncoder, DecoderConfig, EncoderConfig, Model, Mo
 from frenbrdf.models.losses import samples_loss
 from frenbrdf.models.mapping import LogRelativeMapping
 from frenbrdf.models.nbrdf import mapped_samples
-from frenbrdf.models.second_look import SecondLook, SecondLookConfig
+from frenbrdf.models.second_look import LookMean, SecondLook, SecondLookConfig
 
 from .conftest import unit_vectors
 
@@ -147,6 +147,29 @@ def test_a_wrong_number_of_looks_is_refused(steps):
         SecondLookConfig(steps=steps)
 
 
+@pytest.mark.parametrize("members", [0, 9, 2.0, False])
+def test_a_wrong_number_of_members_is_refused(members):
+    with pytest.raises(ValueError, match="second look members"):
+        SecondLookConfig(members=members)
+
+
+def test_several_members_answer_from_one_reading_of_the_guess():
+    """``members``: z is the mean of each look's answer, and the guess is decoded once for all of them."""
+    config = small_config(dataclasses.replace(SMALL_LOOK, members=3))
+    network = AutoEncoder(config)
+    assert isinstance(network.second_look, LookMean) and config.n_parameters == sum(
+        p.numel() for p in network.parameters())
+    looks = [stirred(look, seed) for seed, look in enumerate(network.second_look.looks())]
+    coords, values, cos_in, z1 = batch(120)
+    decodings = []
+    network.decoder.register_forward_hook(lambda *_: decodings.append(1))
+    z = network.second_look(coords, values, cos_in, z1, network.decoder, chunk=50)
+    assert len(decodings) == 1
+    alone = torch.stack([look(coords, values, cos_in, z1, network.decoder) for look in looks]).mean(dim=0)
+    torch.testing.assert_close(z, alone, rtol=1e-5, atol=1e-6)
+    assert from_dict(ModelConfig, to_dict(config)) == config
+
+
 def test_an_unknown_choice_of_look_is_refused():
     with pytest.raises(ValueError, match="second look choice"):
         SecondLookConfig(choice="mean")
@@ -185,15 +208,36 @@ def test_the_packer_adds_the_look_with_the_lowest_validation_loss(tmp_path):
         runs.append(run)
     chosen = packer.best_look(runs)
     assert chosen == runs[1]
-    assembled, mapping, card = packer.assemble(str(tmp_path / "base"), chosen)
+    assembled, mapping, card = packer.assemble(str(tmp_path / "base"), [chosen])
     model = Model.from_checkpoint(assembled, mapping)
-    assert model.config.second_look == SMALL_LOOK and card["look_epoch"] == 1
+    assert model.config.second_look == SMALL_LOOK and card["look_epochs"] == [1]
     values, directions = samples(100)
     encoding = model.encoding(values, directions)
     np.testing.assert_allclose(encoding.first_look, base.encode(values, directions), rtol=1e-5, atol=1e-6)
     assert not np.allclose(encoding.z, encoding.first_look)
-    twice, _, _ = packer.assemble(str(tmp_path / "base"), chosen, steps=2)
+    twice, _, _ = packer.assemble(str(tmp_path / "base"), [chosen], steps=2)
     assert json.loads(twice["config"])["model"]["second_look"]["steps"] == 2
     pretrained.pack_checkpoint(assembled, mapping, tmp_path / "with-look", half=False)
     with pytest.raises(ValueError, match="has a second look already"):
-        packer.assemble(str(tmp_path / "with-look"), chosen)
+        packer.assemble(str(tmp_path / "with-look"), [chosen])
+    # --mean: every look packed, their answers averaged
+    both, mapping, card = packer.assemble(str(tmp_path / "base"), runs, steps=2)
+    averaged = Model.from_checkpoint(both, mapping)
+    assert averaged.config.second_look == dataclasses.replace(SMALL_LOOK, steps=2, members=2)
+    assert card["look_epochs"] == [1, 1]
+    separately = [Model.from_checkpoint(packer.assemble(str(tmp_path / "base"), [run])[0], mapping) for run in runs]
+    mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                              for a in mapped_samples(averaged.mapping, values, directions))
+    z = torch.from_numpy(encoding.first_look.astype(np.float32))[None]
+    with torch.no_grad():
+        for _ in range(2):
+            z = torch.stack([one.network.second_look(coords, mapped, cos_in, z, one.network.decoder)
+                             for one in separately]).mean(dim=0)
+    np.testing.assert_allclose(averaged.encode(values, directions), z[0].numpy(), rtol=1e-5, atol=1e-6)
+    wider = tmp_path / "look-wider"
+    wider.mkdir()
+    other = SecondLookConfig((16,), (8,))
+    torch.save({"state": SecondLook(LATENT, other).state_dict(), "epoch": 1, "config": to_dict(other)},
+               wider / "second_look.pt")
+    with pytest.raises(ValueError, match="different sizes"):
+        packer.assemble(str(tmp_path / "base"), [runs[0], wider])

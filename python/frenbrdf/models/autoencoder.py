@@ -21,7 +21,7 @@ from .hypernetwork import DecoderConfig, HyperNetwork
 from .losses import LossConfig, samples_loss
 from .mapping import LogRelativeMapping, MappingConfig
 from .nbrdf import NBRDF, NBRDFConfig, mapped_samples
-from .second_look import SecondLook, SecondLookConfig
+from .second_look import SecondLookConfig, build_second_look
 
 #: :meth:`Model.encode` passes larger sample sets through the encoder in chunks of this size.
 ENCODE_CHUNK = 16384
@@ -101,7 +101,7 @@ class AutoEncoder(nn.Module):
         super().__init__()
         self.encoder = SetEncoder(config.encoder) if not config.extra_encoders else EncoderMean(config.encoders)
         self.decoder = HyperNetwork(config.encoder.latent, config.nbrdf.shapes(), config.decoder)
-        self.second_look = (SecondLook(config.encoder.latent, config.second_look) if config.second_look is not None
+        self.second_look = (build_second_look(config.encoder.latent, config.second_look) if config.second_look is not None
                             else None)
 
     def forward(self, samples: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor]]:

@@ -7,7 +7,9 @@ mean, and from it, z₁ and the samples' loss gradient at z₁ (its direction an
 Its last layer starts at zero, so an untrained second look is the first. It is trained for a frozen decoder and
 frozen encoders (research/results/second-look), and costs one decoding and one backward pass through it.
 :attr:`SecondLookConfig.steps` takes it again from its own answer, z₃ = look(z₂), … (research/results/repeated-look),
-and :attr:`SecondLookConfig.choice` ``"best-fit"`` keeps whichever z fits the samples best.
+and :attr:`SecondLookConfig.choice` ``"best-fit"`` keeps whichever z fits the samples best. With
+:attr:`SecondLookConfig.members` several looks, trained apart for the same encoders, answer each step and z is their
+mean (:class:`LookMean`, research/results/look-ensemble); they share the step's decoding and backward pass.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from .nbrdf import nbrdf_forward
 SAMPLE_FEATURES = 16
 #: The most looks an encoding may take (each costs a decoding and a backward pass through it).
 MAX_STEPS = 16
+#: The most looks whose answers one step may average (:attr:`SecondLookConfig.members`).
+MAX_MEMBERS = 8
 #: How z is taken from the looks (:attr:`SecondLookConfig.choice`).
 LOOK_CHOICES = ("last", "best-fit")
 
@@ -43,11 +47,16 @@ class SecondLookConfig:
     choice: str = "last"
     """``"last"``: z is the last look's; ``"best-fit"``: of the encoders' z and every look's, the one whose decoding
     fits the samples best (research/results/look-choice)."""
+    members: int = 1
+    """How many looks, trained apart for the same encoders, answer at each step; z is the mean of their answers
+    (research/results/look-ensemble)."""
 
     def __post_init__(self):
         self.hidden, self.after = tuple(int(h) for h in self.hidden), tuple(int(h) for h in self.after)
         if isinstance(self.steps, bool) or not isinstance(self.steps, int) or not 1 <= self.steps <= MAX_STEPS:
             raise ValueError(f"second look steps must be a whole number in 1 … {MAX_STEPS}, got {self.steps!r}")
+        if isinstance(self.members, bool) or not isinstance(self.members, int) or not 1 <= self.members <= MAX_MEMBERS:
+            raise ValueError(f"second look members must be a whole number in 1 … {MAX_MEMBERS}, got {self.members!r}")
         if self.choice not in LOOK_CHOICES:
             raise ValueError(f"second look choice must be one of {LOOK_CHOICES}, got {self.choice!r}")
         widths = (*self.hidden, *self.after)
@@ -61,8 +70,8 @@ class SecondLookConfig:
         def size(sizes) -> int:
             return sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:], strict=True))
 
-        return (size([SAMPLE_FEATURES + latent, *self.hidden])
-                + size([self.hidden[-1] + 2 * latent + 1, *self.after, latent]))
+        return self.members * (size([SAMPLE_FEATURES + latent, *self.hidden])
+                               + size([self.hidden[-1] + 2 * latent + 1, *self.after, latent]))
 
 
 class SecondLook(nn.Module):
@@ -81,20 +90,69 @@ class SecondLook(nn.Module):
         """``coords`` ``(B, N, 6)``, mapped ``values`` ``(B, N, 3)``, ``cos_in`` ``(B, N)``, ``z1`` ``(B, latent)``;
         ``decoder`` the model's (z → NBRDF parameters). No gradient flows into z₁ or the decoder's reading of it.
         The samples go through in parts of ``chunk`` (a whole table is 1.1 million)."""
+        return self.answer(coords, values, cos_in, z1, read_guess(coords, values, cos_in, z1, decoder, chunk))
+
+    def answer(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
+               guess: Guess) -> torch.Tensor:
+        """z from the samples and the guess z₁ read at them (:func:`read_guess`)."""
         n = values.shape[1]
-        parts = [slice(start, min(start + chunk, n)) for start in range(0, n, chunk)]
-        with torch.enable_grad():
-            start = z1.detach().requires_grad_(True)
-            params = decoder(start)
-            gradient, predicted = torch.zeros_like(z1), []
-            for part in parts:  # the gradient of the samples' mean L1 at z₁, part by part
-                guess = nbrdf_forward(params, coords[:, part])
-                error = ((guess - values[:, part]) * cos_in[:, part, None]).abs().sum() / (3 * n)
-                gradient += torch.autograd.grad(error, start, retain_graph=part is not parts[-1])[0]
-                predicted.append(guess.detach())
-        length = gradient.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-        pooled = sum(self.per_sample(torch.cat([values[:, part], coords[:, part], guess, values[:, part] - guess,
-                                                cos_in[:, part, None], z1[:, None].expand(-1, guess.shape[1], -1)],
-                                               dim=-1)).sum(dim=1) / n
-                     for part, guess in zip(parts, predicted, strict=True))
-        return z1 + self.after_pool(torch.cat([pooled, z1, gradient / length, length.log()], dim=-1))
+        pooled = sum(self.per_sample(torch.cat([values[:, part], coords[:, part], predicted,
+                                                values[:, part] - predicted, cos_in[:, part, None],
+                                                z1[:, None].expand(-1, predicted.shape[1], -1)], dim=-1)).sum(dim=1) / n
+                     for part, predicted in zip(guess.parts, guess.predicted, strict=True))
+        length = guess.gradient.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+        return z1 + self.after_pool(torch.cat([pooled, z1, guess.gradient / length, length.log()], dim=-1))
+
+
+class LookMean(nn.Module):
+    """Several second looks of one model (:attr:`SecondLookConfig.members`): called as a :class:`SecondLook` is, z is
+    the mean of their answers. The guess is decoded and its gradient taken once for all of them."""
+
+    def __init__(self, latent: int, config: SecondLookConfig):
+        super().__init__()
+        self.members = nn.ModuleList(SecondLook(latent, config) for _ in range(config.members))
+
+    def looks(self) -> list[SecondLook]:
+        """The members, typed."""
+        return [member for member in self.members if isinstance(member, SecondLook)]
+
+    def forward(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
+                decoder: nn.Module, chunk: int = 1 << 16) -> torch.Tensor:
+        guess = read_guess(coords, values, cos_in, z1, decoder, chunk)
+        return torch.stack([look.answer(coords, values, cos_in, z1, guess) for look in self.looks()]).mean(dim=0)
+
+
+def build_second_look(latent: int, config: SecondLookConfig) -> SecondLook | LookMean:
+    """The second look a config gives: one network, or with several members their :class:`LookMean` (one look's
+    weights keep the names they had before members existed)."""
+    return SecondLook(latent, config) if config.members == 1 else LookMean(latent, config)
+
+
+@dataclass
+class Guess:
+    """A guess z₁ read at the samples: what every look of a step reads besides the samples."""
+
+    parts: list[slice]
+    """The parts the samples go through in."""
+    predicted: list[torch.Tensor]
+    """ŷ, the guess's decoding at each part's samples ``(B, part, 3)``."""
+    gradient: torch.Tensor
+    """The gradient of the samples' mean cosine-weighted L1 at z₁ ``(B, latent)``."""
+
+
+def read_guess(coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
+               decoder: nn.Module, chunk: int) -> Guess:
+    """Decodes z₁ at the samples, part by part, and takes the gradient of their loss at it; no gradient flows into
+    z₁ or the decoder."""
+    n = values.shape[1]
+    parts = [slice(start, min(start + chunk, n)) for start in range(0, n, chunk)]
+    with torch.enable_grad():
+        start = z1.detach().requires_grad_(True)
+        params = decoder(start)
+        gradient, predicted = torch.zeros_like(z1), []
+        for part in parts:
+            guess = nbrdf_forward(params, coords[:, part])
+            error = ((guess - values[:, part]) * cos_in[:, part, None]).abs().sum() / (3 * n)
+            gradient += torch.autograd.grad(error, start, retain_graph=part is not parts[-1])[0]
+            predicted.append(guess.detach())
+    return Guess(parts, predicted, gradient)
