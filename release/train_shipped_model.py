@@ -250,8 +250,8 @@ def second_look_text(card: dict) -> str:
         times += ", keeping of the encoders' z and the looks' the one whose decoding fits the samples best"
     runs, of = look["runs"], len(look["of"])
     if len(runs) > 1:
-        epochs = ", ".join(map(str, look["epochs"]))
-        which = f"{len(runs)} looks trained apart, their answers averaged (`{'`, `'.join(runs)}`, at their epochs {epochs})"
+        which = f"{len(runs)} runs, their answers averaged: " + ", ".join(
+            f"`{run}` at its epoch {epoch}" for run, epoch in zip(runs, look["epochs"], strict=True))
     else:
         chosen = f"the lowest validation loss of {of} runs, " if of > 1 else ""
         which = f"`{runs[0]}`, {chosen}at its epoch {look['epochs'][0]}"

@@ -722,7 +722,7 @@ def test_the_pretrained_bench_builds_a_tiny_model(toy_materials, tmp_path):
     assert card["version"] == "t2" and card["second_look"]["runs"] == list(map(str, looks))
     assert packed.config.second_look.members == 2
     assert card["held_out_by_source"][toy_materials.name]["n"] == test_count
-    assert "2 looks trained apart, their answers averaged" in (tmp_path / "card-3.md").read_text()
+    assert "2 runs, their answers averaged" in (tmp_path / "card-3.md").read_text()
 
 
 #: The PSNR (dB, metric renderer, refine="full") the shipped model must reach on a bank material.

@@ -40,7 +40,7 @@ MODEL_FILE, MAPPING_FILE, CARD_FILE = "model.pt", "mapping.npz", "card.json"
 #: The format of the packed files that :func:`pack_pretrained` writes and :func:`load_packed` reads.
 FORMAT = 1
 #: The version of the shipped model (the card's ``version``; docs/pretrained.md states it).
-VERSION = "11"
+VERSION = "12"
 #: Quantisation levels of ln(f_ref + ε): 16 bits.
 LEVELS = 65535
 
