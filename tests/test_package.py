@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 import frenbrdf
+from frenbrdf.models import pretrained
 
 
 def test_public_api_is_exported():
@@ -32,6 +33,16 @@ def test_cli_info_reports_a_working_install():
     assert report["self_check"] == "ok"
     assert report["frenbrdf"] == frenbrdf.__version__
     assert report["native_threads"] >= 1
+    assert report["pretrained_model"] == f"version {pretrained.VERSION}"
+
+
+def test_cli_info_says_when_the_shipped_model_is_absent_or_damaged(tmp_path, monkeypatch):
+    from frenbrdf.cli import commands
+
+    monkeypatch.setattr(pretrained, "PACKAGE_DIR", tmp_path)
+    assert commands._pretrained_version() == "none shipped with this installation"
+    (tmp_path / pretrained.CARD_FILE).write_text("{not json")
+    assert commands._pretrained_version().startswith("unreadable: ")
 
 
 def test_cli_rejects_unknown_commands():

@@ -27,6 +27,7 @@ def info(args: argparse.Namespace) -> int:
         "python": platform.python_version(),
         "numpy": np.__version__,
         "torch": _torch_version(),
+        "pretrained_model": _pretrained_version(),
         "self_check": "ok" if abs(angles[0]) < 1e-12 else f"FAILED: θ_h = {angles[0]}",
     }
     if args.json:
@@ -36,6 +37,20 @@ def info(args: argparse.Namespace) -> int:
         for key, value in report.items():
             print(f"{key:<{width}}  {value}")
     return 0 if report["self_check"] == "ok" else 1
+
+
+def _pretrained_version() -> str:
+    """The shipped model's version, from its card (docs/pretrained.md), or why there is none."""
+    from frenbrdf.io.jsonfile import read_json
+    from frenbrdf.models.pretrained import CARD_FILE, PACKAGE_DIR
+
+    try:
+        card = read_json(PACKAGE_DIR / CARD_FILE, "model card", max_bytes=1 << 20)
+    except FileNotFoundError:
+        return "none shipped with this installation"
+    except (OSError, ValueError) as error:
+        return f"unreadable: {error}"
+    return f"version {card.get('version', 'unknown')}"
 
 
 def _torch_version() -> str:
