@@ -41,6 +41,8 @@ def assemble(base: str | None, members: list[str], *, base_encoder: bool = True,
     packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
     base_decoder = {name: value.float() for name, value in packed["model"].items() if name.startswith("decoder.")}
     config = json.loads(packed["config"])
+    if config["model"].get("second_look"):  # trained for the base's encoders, not for new ones
+        raise ValueError(f"{base}: the base has a second look; give the model without one that it was trained for")
     if base_encoder and config["model"].get("extra_encoders"):
         raise ValueError(f"{base}: the base has several encoders; give its single-encoder base and its members instead")
     encoders = []  # (state dict, encoder config) of each encoder, in order

@@ -1,8 +1,8 @@
 """Packs a packed model with a second look (``frenbrdf.models.second_look``) as the shipped model.
 
     python release/pack_second_look.py --base WORK/v9 --looks WORK/looks/s1 WORK/looks/s2 WORK/looks/s3 \\
-        --work WORK/base-work --version 10 --why "[second-look](../research/results/second-look/README.md)" \\
-        [--steps 2] [--choice last] [--mean]
+        --work WORK/base-work --version 12 --why "[look-ensemble](../research/results/look-ensemble/README.md)" \\
+        --mean --steps 2 [--choice last]
 
 The base (``--base``: ``pretrained`` or a packed model's folder) gives everything but the second look: its
 decoder, encoders, mapping and card. Of the looks (run folders of ``research/studies/second_look.py train``, each
@@ -29,7 +29,7 @@ import torch
 from frenbrdf.configs import from_dict, to_dict
 from frenbrdf.data.folders import list_materials
 from frenbrdf.models import pretrained
-from frenbrdf.models.second_look import SecondLookConfig
+from frenbrdf.models.second_look import SecondLookConfig, look_weights
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1] / "benches")]
 from common import run_metadata  # noqa: E402
@@ -54,21 +54,20 @@ def assemble(base: str | None, look_runs: list[Path], steps: int = 1, choice: st
     config = json.loads(packed["config"])
     if config["model"].get("second_look"):
         raise ValueError(f"{base}: the base has a second look already; give the model it was trained for")
+    if len({run.resolve() for run in look_runs}) < len(look_runs):
+        raise ValueError(f"a look is given twice in {[str(run) for run in look_runs]}; looks averaged must differ")
     saved = [torch.load(run / LOOK_FILE, weights_only=True) for run in look_runs]
     trained = [from_dict(SecondLookConfig, run.get("config", {}), f"{path / LOOK_FILE} config")
                for run, path in zip(saved, look_runs, strict=True)]
-    sizes = {(config.hidden, config.after) for config in trained}
+    sizes = {(look.hidden, look.after) for look in trained}
     if len(sizes) > 1:
         raise ValueError(f"the looks {[str(run) for run in look_runs]} have different sizes (hidden, after: "
                          f"{sorted(sizes)}); looks averaged must share them")
     look = dataclasses.replace(trained[0], steps=steps, choice=choice, members=len(saved))
     config["model"]["second_look"] = to_dict(look)
-    weights = {name: value.float() for name, value in packed["model"].items()}
-    # one look keeps SecondLook's names; several are a LookMean's members (frenbrdf.models.second_look)
-    prefixes = ["second_look."] if len(saved) == 1 else [f"second_look.members.{i}." for i in range(len(saved))]
-    for prefix, run in zip(prefixes, saved, strict=True):
-        weights.update({prefix + name: value.float() for name, value in run["state"].items()})
-    checkpoint = {"method": packed["method"], "config": json.dumps(config), "model": weights}
+    weights = {**packed["model"], **look_weights([run["state"] for run in saved])}
+    checkpoint = {"method": packed["method"], "config": json.dumps(config),
+                  "model": {name: value.float() for name, value in weights.items()}}
     return checkpoint, mapping, {**card, "look_epochs": [int(run["epoch"]) for run in saved]}
 
 
@@ -86,7 +85,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--base", default="pretrained", help="'pretrained' or a packed model's folder")
     parser.add_argument("--looks", type=Path, nargs="+", required=True,
-                        help="second_look.py run folders, trained for the base; the lowest validation loss is packed")
+                        help="second_look.py run folders, trained for the base; the lowest validation loss is packed, "
+                        "or with --mean all of them")
     parser.add_argument("--steps", type=int, default=1, help="how many looks the model takes (research/results/"
                         "repeated-look)")
     parser.add_argument("--mean", action="store_true", help="pack every look, their answers averaged, instead of "

@@ -220,6 +220,8 @@ def test_the_packer_adds_the_look_with_the_lowest_validation_loss(tmp_path):
     pretrained.pack_checkpoint(assembled, mapping, tmp_path / "with-look", half=False)
     with pytest.raises(ValueError, match="has a second look already"):
         packer.assemble(str(tmp_path / "with-look"), [chosen])
+    with pytest.raises(ValueError, match="has a second look"):  # new encoders would not be the look's
+        script_module("pack_encoder_mean").assemble(str(tmp_path / "with-look"), [], base_encoder=False)
     # --mean: every look packed, their answers averaged
     both, mapping, card = packer.assemble(str(tmp_path / "base"), runs, steps=2)
     averaged = Model.from_checkpoint(both, mapping)
@@ -241,3 +243,9 @@ def test_the_packer_adds_the_look_with_the_lowest_validation_loss(tmp_path):
                wider / "second_look.pt")
     with pytest.raises(ValueError, match="different sizes"):
         packer.assemble(str(tmp_path / "base"), [runs[0], wider])
+    with pytest.raises(ValueError, match="given twice"):
+        packer.assemble(str(tmp_path / "base"), [runs[0], runs[0]])
+    # a config of two looks with one look's weights: named, not a crash
+    mismatched = {**assembled, "config": both["config"]}
+    with pytest.raises(ValueError, match="do not match its model config: second_look"):
+        Model.from_checkpoint(mismatched, mapping)

@@ -29,7 +29,7 @@ from frenbrdf.models.autoencoder import load_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from pattern_readings import reconstruction_rows  # noqa: E402
-from second_look import PATTERNS, with_look  # noqa: E402
+from second_look import PATTERNS, with_looks  # noqa: E402
 
 
 def with_steps(model: Model, steps: int, choice: str = "last") -> Model:
@@ -83,7 +83,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     base = load_model(args.base)
     if args.look is not None:
-        base = with_look(base, args.look)
+        base = with_looks(base, [args.look])
     models = {k: with_steps(base, k, args.choice) for k in args.steps}
     rows = reconstruction_rows(models, "looks", args.materials, args.patterns, args.draws, args.count, args.budgets)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -43,7 +43,7 @@ from frenbrdf.evaluation.statistics import paired_interval
 from frenbrdf.io.atomic import save_json, write_text
 from frenbrdf.models.autoencoder import AutoEncoder, load_model
 from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
-from frenbrdf.models.second_look import SecondLook, SecondLookConfig
+from frenbrdf.models.second_look import SecondLook, SecondLookConfig, look_weights
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 from frenbrdf.training.augment import BatchDrawer
 from frenbrdf.training.config import TrainConfig
@@ -171,13 +171,17 @@ def first_look(model: Model, values, directions) -> np.ndarray:
     return (encoding.z if encoding.first_look is None else encoding.first_look).astype(np.float32)
 
 
-def with_look(model: Model, run: Path) -> Model:
-    """``model`` with the second look of the run folder ``run`` (trained for it)."""
-    saved = torch.load(run / "second_look.pt", weights_only=True)
-    config = dataclasses.replace(model.config, second_look=from_dict(SecondLookConfig, saved.get("config", {})))
+def with_looks(model: Model, runs: list[Path], steps: int | None = None) -> Model:
+    """``model`` with the second looks of the run folders ``runs`` (trained for it; several: their answers averaged,
+    ``SecondLookConfig.members``), taking ``steps`` looks (None: as many as the first run was trained for)."""
+    if model.config.second_look is not None:
+        raise ValueError("the model has a second look already; give the model the looks were trained for")
+    saved = [torch.load(run / "second_look.pt", weights_only=True) for run in runs]
+    look = from_dict(SecondLookConfig, saved[0].get("config", {}))
+    config = dataclasses.replace(model.config, second_look=dataclasses.replace(
+        look, members=len(runs), steps=look.steps if steps is None else steps))
     network = AutoEncoder(config)
-    network.load_state_dict({**model.network.state_dict(),
-                             **{f"second_look.{name}": value for name, value in saved["state"].items()}})
+    network.load_state_dict({**model.network.state_dict(), **look_weights([run["state"] for run in saved])})
     return Model(network, model.mapping, config, model.method, model.loss)
 
 
@@ -185,7 +189,7 @@ def refine(args) -> int:
     """Each material through the patterns, reconstructed by the base alone and with each run's look, by each budget
     (``none``: the encoder): the rows and a summary as :func:`score` writes them, one look label per budget."""
     base = load_model(args.base)
-    models = {"first": base, **{run.name: with_look(base, run) for run in args.runs}}
+    models = {"first": base, **{run.name: with_looks(base, [run]) for run in args.runs}}
     rows = reconstruction_rows(models, "look", args.materials, args.patterns, args.draws, args.count, args.budgets)
     args.out.mkdir(parents=True, exist_ok=True)
     save_json(args.out / "rows.json", rows)

@@ -74,6 +74,38 @@ class SecondLookConfig:
                                + size([self.hidden[-1] + 2 * latent + 1, *self.after, latent]))
 
 
+@dataclass
+class Guess:
+    """A guess z₁ read at the samples: what every look of a step reads besides the samples."""
+
+    z1: torch.Tensor
+    """The guess ``(B, latent)``."""
+    parts: list[slice]
+    """The parts the samples go through in."""
+    predicted: list[torch.Tensor]
+    """ŷ, the guess's decoding at each part's samples ``(B, part, 3)``."""
+    gradient: torch.Tensor
+    """The gradient of the samples' mean cosine-weighted L1 at z₁ ``(B, latent)``."""
+
+
+def read_guess(coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
+               decoder: nn.Module, chunk: int) -> Guess:
+    """Decodes z₁ at the samples, part by part, and takes the gradient of their loss at it. Nothing read here passes
+    a gradient back, to z₁ or to the decoder."""
+    n = values.shape[1]
+    parts = [slice(begin, min(begin + chunk, n)) for begin in range(0, n, chunk)]
+    with torch.enable_grad():
+        z1_leaf = z1.detach().requires_grad_(True)
+        params = decoder(z1_leaf)
+        gradient, predicted = torch.zeros_like(z1), []
+        for part in parts:
+            predicted_part = nbrdf_forward(params, coords[:, part])
+            error = ((predicted_part - values[:, part]) * cos_in[:, part, None]).abs().sum() / (3 * n)
+            gradient += torch.autograd.grad(error, z1_leaf, retain_graph=part is not parts[-1])[0]
+            predicted.append(predicted_part.detach())
+    return Guess(z1, parts, predicted, gradient)
+
+
 class SecondLook(nn.Module):
     """``(coords, values, cos_in)`` of B materials' samples and their first guesses z₁ ``(B, latent)`` → z."""
 
@@ -88,14 +120,13 @@ class SecondLook(nn.Module):
     def forward(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
                 decoder: nn.Module, chunk: int = 1 << 16) -> torch.Tensor:
         """``coords`` ``(B, N, 6)``, mapped ``values`` ``(B, N, 3)``, ``cos_in`` ``(B, N)``, ``z1`` ``(B, latent)``;
-        ``decoder`` the model's (z → NBRDF parameters). No gradient flows into z₁ or the decoder's reading of it.
-        The samples go through in parts of ``chunk`` (a whole table is 1.1 million)."""
-        return self.answer(coords, values, cos_in, z1, read_guess(coords, values, cos_in, z1, decoder, chunk))
+        ``decoder`` the model's (z → NBRDF parameters). The decoder's reading of z₁ passes no gradient back
+        (:func:`read_guess`). The samples go through in parts of ``chunk`` (a whole table is 1.1 million)."""
+        return self.answer(coords, values, cos_in, read_guess(coords, values, cos_in, z1, decoder, chunk))
 
-    def answer(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
-               guess: Guess) -> torch.Tensor:
-        """z from the samples and the guess z₁ read at them (:func:`read_guess`)."""
-        n = values.shape[1]
+    def answer(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, guess: Guess) -> torch.Tensor:
+        """z from the samples and the guess read at them (:func:`read_guess`)."""
+        n, z1 = values.shape[1], guess.z1
         pooled = sum(self.per_sample(torch.cat([values[:, part], coords[:, part], predicted,
                                                 values[:, part] - predicted, cos_in[:, part, None],
                                                 z1[:, None].expand(-1, predicted.shape[1], -1)], dim=-1)).sum(dim=1) / n
@@ -114,12 +145,13 @@ class LookMean(nn.Module):
 
     def looks(self) -> list[SecondLook]:
         """The members, typed."""
-        return [member for member in self.members if isinstance(member, SecondLook)]
+        return [cast(SecondLook, member) for member in self.members]
 
     def forward(self, coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
                 decoder: nn.Module, chunk: int = 1 << 16) -> torch.Tensor:
+        """As :meth:`SecondLook.forward`: the mean of the members' answers from one reading of the guess."""
         guess = read_guess(coords, values, cos_in, z1, decoder, chunk)
-        return torch.stack([look.answer(coords, values, cos_in, z1, guess) for look in self.looks()]).mean(dim=0)
+        return torch.stack([look.answer(coords, values, cos_in, guess) for look in self.looks()]).mean(dim=0)
 
 
 def build_second_look(latent: int, config: SecondLookConfig) -> SecondLook | LookMean:
@@ -128,31 +160,8 @@ def build_second_look(latent: int, config: SecondLookConfig) -> SecondLook | Loo
     return SecondLook(latent, config) if config.members == 1 else LookMean(latent, config)
 
 
-@dataclass
-class Guess:
-    """A guess z₁ read at the samples: what every look of a step reads besides the samples."""
-
-    parts: list[slice]
-    """The parts the samples go through in."""
-    predicted: list[torch.Tensor]
-    """ŷ, the guess's decoding at each part's samples ``(B, part, 3)``."""
-    gradient: torch.Tensor
-    """The gradient of the samples' mean cosine-weighted L1 at z₁ ``(B, latent)``."""
-
-
-def read_guess(coords: torch.Tensor, values: torch.Tensor, cos_in: torch.Tensor, z1: torch.Tensor,
-               decoder: nn.Module, chunk: int) -> Guess:
-    """Decodes z₁ at the samples, part by part, and takes the gradient of their loss at it; no gradient flows into
-    z₁ or the decoder."""
-    n = values.shape[1]
-    parts = [slice(start, min(start + chunk, n)) for start in range(0, n, chunk)]
-    with torch.enable_grad():
-        start = z1.detach().requires_grad_(True)
-        params = decoder(start)
-        gradient, predicted = torch.zeros_like(z1), []
-        for part in parts:
-            guess = nbrdf_forward(params, coords[:, part])
-            error = ((guess - values[:, part]) * cos_in[:, part, None]).abs().sum() / (3 * n)
-            gradient += torch.autograd.grad(error, start, retain_graph=part is not parts[-1])[0]
-            predicted.append(guess.detach())
-    return Guess(parts, predicted, gradient)
+def look_weights(states: list[dict[str, torch.Tensor]]) -> dict[str, torch.Tensor]:
+    """The state dicts of looks trained apart (each a :class:`SecondLook`'s) as a model's ``second_look.*`` weights:
+    one look's under its own names, several as a :class:`LookMean`'s members, in the order given."""
+    prefixes = ["second_look."] if len(states) == 1 else [f"second_look.members.{i}." for i in range(len(states))]
+    return {prefix + name: value for prefix, state in zip(prefixes, states, strict=True) for name, value in state.items()}
