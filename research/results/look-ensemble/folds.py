@@ -21,11 +21,25 @@ from look_rule import PATTERNS, by_material, table  # noqa: E402
 from pattern_readings import reconstruction_rows  # noqa: E402
 from second_look import with_looks  # noqa: E402
 
+from frenbrdf import Model  # noqa: E402
 from frenbrdf.io.atomic import save_json, write_text  # noqa: E402
 from frenbrdf.models.autoencoder import load_model  # noqa: E402
 
 FOLDS = ROOT / "research" / "studies" / "measured_folds" / "folds.json"
 MEASURED = ROOT.parent / "shared" / "data" / "rgl-measured"
+
+
+def fold_names() -> list[list[str]]:
+    """Each fold's measurements (research/studies/measured_folds/folds.json)."""
+    return json.loads(FOLDS.read_text())["folds"]
+
+
+def fold_models(runs: Path, looks: Path, fold: int) -> dict[str, Model]:
+    """The seed-0 run of ``fold`` with its seed-1 look (``"one"``) and with its three looks averaged (``"three"``),
+    both taken twice."""
+    base = load_model(runs / f"mf-f{fold}-s0")
+    found = [looks / f"look-f{fold}", looks / f"look-f{fold}-s2", looks / f"look-f{fold}-s3"]
+    return {"one": with_looks(base, found[:1], steps=2), "three": with_looks(base, found, steps=2)}
 
 
 def means(rows: list[dict]) -> str:
@@ -43,10 +57,8 @@ def main(argv=None) -> int:
     parser.add_argument("--count", type=int, default=1500)
     args = parser.parse_args(argv)
     rows: dict[str, list[dict]] = {"one": [], "three": []}
-    for fold, names in enumerate(json.loads(FOLDS.read_text())["folds"]):
-        base = load_model(args.runs / f"mf-f{fold}-s0")
-        looks = [args.looks / f"look-f{fold}", args.looks / f"look-f{fold}-s2", args.looks / f"look-f{fold}-s3"]
-        models = {"one": with_looks(base, looks[:1], steps=2), "three": with_looks(base, looks, steps=2)}
+    for fold, names in enumerate(fold_names()):
+        models = fold_models(args.runs, args.looks, fold)
         materials = [MEASURED / f"{name}.bsdf" for name in names]
         for row in reconstruction_rows(models, "arm", materials, PATTERNS, args.draws, args.count, ["none"]):
             rows[row.pop("arm")].append(row)
