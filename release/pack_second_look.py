@@ -47,13 +47,9 @@ def best_look(runs: list[Path]) -> Path:
     return min(runs, key=best)
 
 
-def assemble(base: str | None, look_runs: list[Path], steps: int = 1, choice: str = "last") -> tuple[dict, dict, dict]:
-    """The base's checkpoint with the second looks of ``look_runs`` added (several: their answers averaged), taking
-    ``steps`` looks and z from them by ``choice``; its mapping and its card."""
-    packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
-    config = json.loads(packed["config"])
-    if config["model"].get("second_look"):
-        raise ValueError(f"{base}: the base has a second look already; give the model it was trained for")
+def read_looks(look_runs: list[Path]) -> tuple[SecondLookConfig, list[dict]]:
+    """The first look's config and every look run's saved look (``second_look.pt``: ``state``, ``epoch``,
+    ``config``). Looks to be averaged must differ and share their sizes; a ValueError says which do not."""
     if len({run.resolve() for run in look_runs}) < len(look_runs):
         raise ValueError(f"a look is given twice in {[str(run) for run in look_runs]}; looks averaged must differ")
     saved = [torch.load(run / LOOK_FILE, weights_only=True) for run in look_runs]
@@ -63,7 +59,18 @@ def assemble(base: str | None, look_runs: list[Path], steps: int = 1, choice: st
     if len(sizes) > 1:
         raise ValueError(f"the looks {[str(run) for run in look_runs]} have different sizes (hidden, after: "
                          f"{sorted(sizes)}); looks averaged must share them")
-    look = dataclasses.replace(trained[0], steps=steps, choice=choice, members=len(saved))
+    return trained[0], saved
+
+
+def assemble(base: str | None, look_runs: list[Path], steps: int = 1, choice: str = "last") -> tuple[dict, dict, dict]:
+    """The base's checkpoint with the second looks of ``look_runs`` added (several: their answers averaged), taking
+    ``steps`` looks and z from them by ``choice``; its mapping and its card."""
+    packed, mapping, card = pretrained.load_packed(None if base in (None, "pretrained") else base)
+    config = json.loads(packed["config"])
+    if config["model"].get("second_look"):
+        raise ValueError(f"{base}: the base has a second look already; give the model it was trained for")
+    trained, saved = read_looks(look_runs)
+    look = dataclasses.replace(trained, steps=steps, choice=choice, members=len(saved))
     config["model"]["second_look"] = to_dict(look)
     weights = {**packed["model"], **look_weights([run["state"] for run in saved])}
     checkpoint = {"method": packed["method"], "config": json.dumps(config),

@@ -50,8 +50,10 @@ from frenbrdf.training.config import TrainConfig
 from frenbrdf.training.prepared import prepare
 from frenbrdf.training.step import decoding_terms
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[2] / "release")]
 from pattern_readings import readings, reconstruction_rows  # noqa: E402
+
+from pack_second_look import read_looks  # noqa: E402
 
 MIXED = Path(__file__).resolve().parents[1] / "results" / "version-5" / "encoder-mixed.json"
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
@@ -164,6 +166,21 @@ def train(args) -> int:
     return 0
 
 
+def trained_look(run: Path, latent: int) -> SecondLook:
+    """The look a run of :func:`train` saved (``run/second_look.pt``), at the sizes it was trained with, for eval."""
+    config, (saved,) = read_looks([run])
+    look = SecondLook(latent, config)
+    look.load_state_dict(saved["state"])
+    return look.eval()
+
+
+def look_samples(model: Model, reading) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """A reading's samples as a look reads them: coordinates, mapped values and cos θ_i, float32, a batch of one."""
+    mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
+                              for a in mapped_samples(model.mapping, reading.values, reading.directions))
+    return coords, mapped, cos_in
+
+
 def first_look(model: Model, values, directions) -> np.ndarray:
     """The z of ``model``'s encoders (its `best-fit` choice), float32: before its own second look where it has one
     (version 10's encoders are version 9's, so the package's model gives the first look these readings began from)."""
@@ -176,8 +193,7 @@ def with_looks(model: Model, runs: list[Path], steps: int | None = None) -> Mode
     ``SecondLookConfig.members``), taking ``steps`` looks (None: as many as the first run was trained for)."""
     if model.config.second_look is not None:
         raise ValueError("the model has a second look already; give the model the looks were trained for")
-    saved = [torch.load(run / "second_look.pt", weights_only=True) for run in runs]
-    look = from_dict(SecondLookConfig, saved[0].get("config", {}))
+    look, saved = read_looks(runs)
     config = dataclasses.replace(model.config, second_look=dataclasses.replace(
         look, members=len(runs), steps=look.steps if steps is None else steps))
     network = AutoEncoder(config)
@@ -202,18 +218,13 @@ def refine(args) -> int:
 
 def score(args) -> int:
     model = Model.pretrained()
-    looks = []
-    for run in args.runs:
-        second = SecondLook(model.config.encoder.latent, SecondLookConfig())
-        second.load_state_dict(torch.load(run / "second_look.pt", weights_only=True)["state"])
-        looks.append(second.eval())
+    looks = [trained_look(run, model.config.encoder.latent) for run in args.runs]
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     rows = []
     for reading in readings(args.materials, args.patterns, args.draws, args.count, scene, mask):
         z1 = first_look(model, reading.values, reading.directions)
-        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
+        coords, mapped, cos_in = look_samples(model, reading)
         latents = {"first": z1}
         with torch.no_grad():
             for run, second in zip(args.runs, looks, strict=True):

@@ -16,11 +16,9 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from pattern_readings import readings  # noqa: E402
-from second_look import PATTERNS, first_look  # noqa: E402
+from second_look import PATTERNS, first_look, look_samples, trained_look  # noqa: E402
 
 from frenbrdf import Model  # noqa: E402
-from frenbrdf.models.nbrdf import mapped_samples  # noqa: E402
-from frenbrdf.models.second_look import SecondLook, SecondLookConfig  # noqa: E402
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap  # noqa: E402
 
 RUNS = Path("local/sl/judge")
@@ -34,19 +32,13 @@ def averaged(looks, z: torch.Tensor, samples: tuple, decoder) -> torch.Tensor:
 def main(out: Path, materials: list[Path]) -> int:
     model = Model.pretrained()
     decoder = model.network.decoder
-    looks = []
-    for run in ("s1", "s2", "s3"):
-        look = SecondLook(model.config.encoder.latent, SecondLookConfig())
-        look.load_state_dict(torch.load(RUNS / run / "second_look.pt", weights_only=True)["state"])
-        looks.append(look.eval())
+    looks = [trained_look(RUNS / run, model.config.encoder.latent) for run in ("s1", "s2", "s3")]
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     rows = []
     for reading in readings(materials, PATTERNS, [0], 1500, scene, mask):
         z1 = torch.from_numpy(first_look(model, reading.values, reading.directions))[None]
-        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
-        samples = (coords, mapped, cos_in)
+        samples = look_samples(model, reading)
         with torch.no_grad():
             variants = {f"{run} ×2": averaged([look], averaged([look], z1, samples, decoder), samples, decoder)
                         for run, look in zip(("s1", "s2", "s3"), looks, strict=True)}

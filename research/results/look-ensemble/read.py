@@ -16,12 +16,11 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from pattern_readings import readings  # noqa: E402
-from second_look import PATTERNS, first_look  # noqa: E402
+from second_look import PATTERNS, first_look, look_samples, trained_look  # noqa: E402
 
 from frenbrdf import Model  # noqa: E402
 from frenbrdf.io.atomic import save_json  # noqa: E402
-from frenbrdf.models.nbrdf import mapped_samples  # noqa: E402
-from frenbrdf.models.second_look import SecondLook, SecondLookConfig  # noqa: E402
+from frenbrdf.models.second_look import SecondLook  # noqa: E402
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -30,21 +29,14 @@ from explore import RUNS, averaged  # noqa: E402
 
 def trained_looks(model: Model) -> list[SecondLook]:
     """second-look's three looks (local/sl/judge/s1 … s3), trained for version 11's encoders and decoder."""
-    looks = []
-    for run in ("s1", "s2", "s3"):
-        look = SecondLook(model.config.encoder.latent, SecondLookConfig())
-        look.load_state_dict(torch.load(RUNS / run / "second_look.pt", weights_only=True)["state"])
-        looks.append(look.eval())
-    return looks
+    return [trained_look(RUNS / run, model.config.encoder.latent) for run in ("s1", "s2", "s3")]
 
 
 @torch.no_grad()
 def latents(model: Model, looks: list[SecondLook], reading) -> dict[str, torch.Tensor]:
     """Version 11's z (``s1`` twice) and the candidate's (the three averaged, twice) for one reading."""
     z1 = torch.from_numpy(first_look(model, reading.values, reading.directions))[None]
-    mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                              for a in mapped_samples(model.mapping, reading.values, reading.directions))
-    samples, decoder = (coords, mapped, cos_in), model.network.decoder
+    samples, decoder = look_samples(model, reading), model.network.decoder
     return {name: averaged(chosen, averaged(chosen, z1, samples, decoder), samples, decoder)
             for name, chosen in (("v11", looks[:1]), ("ensemble", looks))}
 

@@ -15,11 +15,10 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from pattern_readings import readings  # noqa: E402
-from second_look import PATTERNS, first_look  # noqa: E402
+from second_look import PATTERNS, first_look, look_samples  # noqa: E402
 
 from frenbrdf import Model  # noqa: E402
 from frenbrdf.models.losses import samples_loss  # noqa: E402
-from frenbrdf.models.nbrdf import mapped_samples  # noqa: E402
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap  # noqa: E402
 
 MOST_LOOKS = 8
@@ -33,8 +32,7 @@ def main(out: Path, materials: list[Path]) -> int:
     rows = []
     for reading in readings(materials, PATTERNS, [0], 1500, scene, mask):
         z = torch.from_numpy(first_look(model, reading.values, reading.directions))[None]
-        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
+        coords, mapped, cos_in = look_samples(model, reading)
         for k in range(MOST_LOOKS + 1):
             metrics = reading.metrics(tonemap(render_linear(model.decode(z[0].numpy())[0], scene)), mask)
             with torch.no_grad():

@@ -15,14 +15,12 @@ import numpy as np
 import torch
 
 from frenbrdf import Model
-from frenbrdf.models.nbrdf import mapped_samples
-from frenbrdf.models.second_look import SecondLook, SecondLookConfig
 from frenbrdf.render import Scene, material_mask, render_linear, tonemap
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from image_grid import save_image_grid  # noqa: E402
 from pattern_readings import readings  # noqa: E402
-from second_look import first_look  # noqa: E402
+from second_look import first_look, look_samples, trained_look  # noqa: E402
 
 PATTERNS = ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular")
 
@@ -36,8 +34,7 @@ def main(argv=None) -> int:
     parser.add_argument("--draw", type=int, default=0)
     args = parser.parse_args(argv)
     model = Model.pretrained()
-    look = SecondLook(model.config.encoder.latent, SecondLookConfig())
-    look.load_state_dict(torch.load(args.run / "second_look.pt", weights_only=True)["state"])
+    look = trained_look(args.run, model.config.encoder.latent)
     scene = Scene(resolution=128)
     mask = material_mask(scene)
     grid = []
@@ -47,8 +44,7 @@ def main(argv=None) -> int:
         reading = next(r for r in readings([Path(path)], PATTERNS, [args.draw], args.count, scene, mask)
                        if r.pattern == pattern)
         z1 = first_look(model, reading.values, reading.directions)
-        mapped, coords, cos_in = (torch.from_numpy(a.astype(np.float32))[None]
-                                  for a in mapped_samples(model.mapping, reading.values, reading.directions))
+        coords, mapped, cos_in = look_samples(model, reading)
         with torch.no_grad():
             z2 = look(coords, mapped, cos_in, torch.from_numpy(z1)[None], model.network.decoder)[0].numpy()
         images = [("truth", reading.truth_image)]
