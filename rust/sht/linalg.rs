@@ -194,18 +194,20 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
             // right factor's slice holds a full tile's columns from it (the next values,
             // whose products are computed and not stored): the narrow loop runs in scalars,
             // and took five times as long a map for batches of two or three maps
-            // (research/performance.md).
+            // (research/performance.md). The last tile of a product (an order's last
+            // degrees) computes only its own rows: padding rows cost as much as real ones,
+            // 7 % of a 90 × 180 analysis's products.
             let acc = if tile_cols == TILE_COLS || full_width_fits(&rhs, c0, TILE_COLS) {
-                full_tile::<T, TILE_COLS>(panel, rhs, c0)
+                match tile_rows {
+                    1 => full_tile::<T, 1, TILE_COLS>(panel, rhs, c0),
+                    2 => full_tile::<T, 2, TILE_COLS>(panel, rhs, c0),
+                    3 => full_tile::<T, 3, TILE_COLS>(panel, rhs, c0),
+                    _ => full_tile::<T, 4, TILE_COLS>(panel, rhs, c0),
+                }
             } else {
                 edge_tile::<T, TILE_COLS>(panel, rhs, c0, tile_cols)
             };
-            for (r, row) in acc.iter().enumerate().take(tile_rows) {
-                let start = out_offset + (r0 + r) * out_stride + c0;
-                for (o, v) in out[start..start + tile_cols].iter_mut().zip(row) {
-                    *o = *v;
-                }
-            }
+            store_rows(out, out_offset + r0 * out_stride + c0, out_stride, &acc[..tile_rows], tile_cols);
         }
     }
 }
@@ -216,13 +218,15 @@ fn full_width_fits<T>(rhs: &MatRef<'_, T>, c0: usize, width: usize) -> bool {
     rhs.rows == 0 || rhs.offset + (rhs.rows - 1) * rhs.row_stride + c0 + width <= rhs.data.len()
 }
 
+/// The first `ROWS` rows of a tile (the others are left zero).
 #[inline(always)]
-fn full_tile<T: Real, const TILE_COLS: usize>(
+fn full_tile<T: Real, const ROWS: usize, const TILE_COLS: usize>(
     panel: &[T],
     rhs: MatRef<'_, T>,
     c0: usize,
 ) -> [[T; TILE_COLS]; TILE_ROWS] {
-    // Separate accumulators per row keep the whole tile in registers.
+    // Separate accumulators per row keep the whole tile in registers; the rows past `ROWS`
+    // are compiled out.
     let (mut acc0, mut acc1, mut acc2, mut acc3) = (
         [T::zero(); TILE_COLS],
         [T::zero(); TILE_COLS],
@@ -236,12 +240,39 @@ fn full_tile<T: Real, const TILE_COLS: usize>(
         let (a0, a1, a2, a3) = (a[0], a[1], a[2], a[3]);
         for c in 0..TILE_COLS {
             acc0[c] = a0.mul_add(b[c], acc0[c]);
-            acc1[c] = a1.mul_add(b[c], acc1[c]);
-            acc2[c] = a2.mul_add(b[c], acc2[c]);
-            acc3[c] = a3.mul_add(b[c], acc3[c]);
+            if ROWS > 1 {
+                acc1[c] = a1.mul_add(b[c], acc1[c]);
+            }
+            if ROWS > 2 {
+                acc2[c] = a2.mul_add(b[c], acc2[c]);
+            }
+            if ROWS > 3 {
+                acc3[c] = a3.mul_add(b[c], acc3[c]);
+            }
         }
     }
     [acc0, acc1, acc2, acc3]
+}
+
+/// Writes a tile's first `cols` columns of `rows` from `start`, rows `stride` apart. A whole
+/// tile's row is copied as one fixed-size array, which compiles to vector stores (a
+/// run-time length became a call to `memcpy` a row).
+#[inline(always)]
+fn store_rows<T: Real, const TILE_COLS: usize>(
+    out: &mut [T],
+    start: usize,
+    stride: usize,
+    rows: &[[T; TILE_COLS]],
+    cols: usize,
+) {
+    for (r, row) in rows.iter().enumerate() {
+        let line = &mut out[start + r * stride..];
+        if cols == TILE_COLS {
+            line[..TILE_COLS].copy_from_slice(row);
+        } else {
+            line[..cols].copy_from_slice(&row[..cols]);
+        }
+    }
 }
 
 #[inline(always)]
@@ -294,6 +325,7 @@ mod tests {
             (1, 7, 33),
             (7, 9, 2),
             (9, 45, 6),
+            (6, 5, 40),
             (3, 20, 1),
         ];
         for ((m, k, n), tail) in shapes.into_iter().flat_map(|shape| [(shape, 0), (shape, 64)]) {

@@ -40,11 +40,11 @@ pub(super) fn scatter_order<T: Real>(order: &OrderBlock<'_, T>, out: &mut [Maybe
     if is_x86_feature_detected!("avx2") {
         use std::any::TypeId;
         if TypeId::of::<T>() == TypeId::of::<f64>() {
-            (maps_done, degrees_done) = (batch / 4 * 4, degrees / 4 * 4);
+            (maps_done, degrees_done) = (batch / 4 * 4, vector_degrees(degrees, 4));
             // SAFETY: AVX2 is present, T is f64, and the asserts above bound every access.
             unsafe { avx2::scatter_f64(same_type(order), same_type_slice_mut(out)) };
         } else if TypeId::of::<T>() == TypeId::of::<f32>() {
-            (maps_done, degrees_done) = (batch / 8 * 8, degrees / 8 * 8);
+            (maps_done, degrees_done) = (batch / 8 * 8, vector_degrees(degrees, 8));
             // SAFETY: as above, with T f32.
             unsafe { avx2::scatter_f32(same_type(order), same_type_slice_mut(out)) };
         }
@@ -59,6 +59,28 @@ pub(super) fn scatter_order<T: Real>(order: &OrderBlock<'_, T>, out: &mut [Maybe
             }
         }
     }
+}
+
+/// The degrees the vector kernels scatter, in blocks of `width`: all of them where there
+/// is at least one block, the last block overlapping the one before it (its values are
+/// written twice, the same both times). The scalar loop that took the remainder cost a
+/// tenth of the f32 scatter's time again (research/performance.md).
+#[cfg(target_arch = "x86_64")]
+fn vector_degrees(degrees: usize, width: usize) -> usize {
+    if degrees >= width {
+        degrees
+    } else {
+        0
+    }
+}
+
+/// The first degree of each block of `width` degrees the vector kernels scatter (see
+/// [`vector_degrees`]).
+#[cfg(target_arch = "x86_64")]
+fn degree_blocks(degrees: usize, width: usize) -> impl Iterator<Item = usize> {
+    let whole = degrees / width * width;
+    let overlapping = (degrees > whole && degrees >= width).then(|| degrees - width);
+    (0..whole).step_by(width).chain(overlapping)
 }
 
 /// `value` as the same type under another name (the caller has checked that A is B).
@@ -125,7 +147,8 @@ pub(super) mod avx2 {
         ]
     }
 
-    /// [`super::scatter_order`] for whole 4 × 4 blocks of (maps, degrees).
+    /// [`super::scatter_order`] for whole 4 × 4 blocks of (maps, degrees), the last block of
+    /// degrees overlapping ([`super::degree_blocks`]).
     ///
     /// # Safety
     /// AVX2 must be present, and `scatter_order`'s asserts must hold.
@@ -144,7 +167,7 @@ pub(super) mod avx2 {
         let (source, destination) = (block.as_ptr(), out.as_mut_ptr().cast::<f64>());
         for b0 in (0..batch / 4 * 4).step_by(4) {
             for part in 0..parts {
-                for i0 in (0..degrees / 4 * 4).step_by(4) {
+                for i0 in super::degree_blocks(degrees, 4) {
                     let rows = [0, 1, 2, 3].map(|j| _mm256_loadu_pd(source.add((2 * (i0 + j) + part) * batch + b0)));
                     for (b, column) in transpose_f64(rows).into_iter().enumerate() {
                         let at = (b0 + b) * stride + offset + part * degrees + i0;
@@ -155,7 +178,7 @@ pub(super) mod avx2 {
         }
     }
 
-    /// [`super::scatter_order`] for whole 8 × 8 blocks of (maps, degrees).
+    /// [`super::scatter_order`] for whole 8 × 8 blocks of (maps, degrees), as [`scatter_f64`].
     ///
     /// # Safety
     /// As [`scatter_f64`].
@@ -174,7 +197,7 @@ pub(super) mod avx2 {
         let (source, destination) = (block.as_ptr(), out.as_mut_ptr().cast::<f32>());
         for b0 in (0..batch / 8 * 8).step_by(8) {
             for part in 0..parts {
-                for i0 in (0..degrees / 8 * 8).step_by(8) {
+                for i0 in super::degree_blocks(degrees, 8) {
                     let rows = [0, 1, 2, 3, 4, 5, 6, 7]
                         .map(|j| _mm256_loadu_ps(source.add((2 * (i0 + j) + part) * batch + b0)));
                     for (b, column) in transpose_f32(rows).into_iter().enumerate() {
