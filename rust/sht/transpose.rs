@@ -96,6 +96,12 @@ pub(super) fn same_type_mut<A, B>(value: &mut A) -> &mut B {
     unsafe { &mut *(value as *mut A as *mut B) }
 }
 
+pub(super) fn same_type_slice<A, B>(values: &[A]) -> &[B] {
+    assert_eq!(std::mem::size_of::<A>(), std::mem::size_of::<B>());
+    // SAFETY: as in `same_type`.
+    unsafe { std::slice::from_raw_parts(values.as_ptr().cast(), values.len()) }
+}
+
 fn same_type_slice_mut<A, B>(values: &mut [A]) -> &mut [B] {
     assert_eq!(std::mem::size_of::<A>(), std::mem::size_of::<B>());
     // SAFETY: as in `same_type`.
