@@ -274,8 +274,15 @@ impl Prefetching {
     /// first-level cache evicted the block being transformed; two pairs ahead into the
     /// second-level cache took 10 % off the batched 90 × 180 analysis
     /// (research/performance.md). Elsewhere the next pair into the first-level cache, as
-    /// measured on the Intel Xeon.
+    /// measured on the Intel Xeon. Asked once a process: CPUID traps to the hypervisor on
+    /// a virtual machine, and asked every chunk it took 1 % of the batched analysis
+    /// (research/performance.md).
     fn for_this_cpu() -> Self {
+        static CHOICE: std::sync::OnceLock<Prefetching> = std::sync::OnceLock::new();
+        *CHOICE.get_or_init(Self::by_vendor)
+    }
+
+    fn by_vendor() -> Self {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: CPUID leaf 0 (the vendor) exists on every x86-64 CPU. (`__cpuid` is a
