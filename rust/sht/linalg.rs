@@ -207,7 +207,8 @@ fn kernel<T: Real, const TILE_COLS: usize>(dst: MatMut<'_, T>, lhs: &Packed<T>, 
             } else {
                 edge_tile::<T, TILE_COLS>(panel, rhs, c0, tile_cols)
             };
-            store_rows(out, out_offset + r0 * out_stride + c0, out_stride, &acc[..tile_rows], tile_cols);
+            let start = out_offset + r0 * out_stride + c0;
+            store_rows(out, start, out_stride, &acc[..tile_rows], tile_cols);
         }
     }
 }
