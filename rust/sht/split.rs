@@ -100,7 +100,6 @@ fn split_scalar<T: Real>(pair: &PairSpectra<'_, T>, out: &mut PairParts<'_, T>, 
 mod avx2 {
     use std::arch::x86_64::*;
 
-    use super::super::transpose::avx2::{transpose_f32, transpose_f64};
     use super::{PairParts, PairSpectra, BLOCK};
 
     const _: () = assert!(BLOCK == 8, "the transpositions below are for blocks of 8 maps");
@@ -109,52 +108,63 @@ mod avx2 {
     pub const F64_ORDERS: usize = 4;
     pub const F32_ORDERS: usize = 8;
 
-    /// Orders m0..m0 + 4 of the block's 8 maps (m0 ≥ 1, m0 + 4 ≤ orders).
+    /// Orders m0..m0 + 4 of the block's 8 maps (m0 ≥ 1, m0 + 4 ≤ orders), four maps at a
+    /// time.
+    ///
+    /// As in [`split_f32`], no shuffle separates real from imaginary parts before the
+    /// transposition: each complex value is a 128-bit lane, moved whole, and each order's
+    /// values of four maps come out as two vectors, maps (0, 2) and (1, 3), which one
+    /// unpack per part puts back in line. 32 shuffles a step of four maps instead of 64.
     ///
     /// # Safety
     /// AVX2 must be present, and `split_pair`'s asserts must hold.
     #[target_feature(enable = "avx2")]
     pub unsafe fn split_f64(pair: &PairSpectra<'_, f64>, out: &mut PairParts<'_, f64>, m0: usize) {
         let z = pair.spectra.as_ptr().cast::<f64>();
-        let (nlon, f, af) = (
-            pair.nlon,
+        let nlon = pair.nlon;
+        let (f, minus_f, af) = (
             _mm256_set1_pd(pair.sym_factor),
+            _mm256_set1_pd(-pair.sym_factor),
             _mm256_set1_pd(pair.anti_factor),
         );
         for half in 0..2 {
-            // Per map of this half: [SYM cos, SYM sin, ANTI cos, ANTI sin] over the 4 orders.
-            let mut parts = [[_mm256_setzero_pd(); 4]; 4];
-            for (i, map_parts) in parts.iter_mut().enumerate() {
-                let spectrum = z.add(2 * (half * 4 + i) * nlon);
-                // Z_m0..Z_m0+3, deinterleaved into real and imaginary parts.
-                let (lo, hi) = (
-                    _mm256_loadu_pd(spectrum.add(2 * m0)),
-                    _mm256_loadu_pd(spectrum.add(2 * m0 + 4)),
-                );
-                let a_re = _mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_unpacklo_pd(lo, hi));
-                let a_im = _mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_unpackhi_pd(lo, hi));
-                // Z_−m0..Z_−m0−3 = Z_(nlon−m0−3..=nlon−m0) reversed.
-                let (lo, hi) = (
-                    _mm256_loadu_pd(spectrum.add(2 * (nlon - m0 - 3))),
-                    _mm256_loadu_pd(spectrum.add(2 * (nlon - m0 - 1))),
-                );
-                let b_re = _mm256_permute4x64_pd::<0b00_10_01_11>(_mm256_unpacklo_pd(lo, hi));
-                let b_im = _mm256_permute4x64_pd::<0b00_10_01_11>(_mm256_unpackhi_pd(lo, hi));
-                *map_parts = [
-                    _mm256_mul_pd(f, _mm256_add_pd(a_re, b_re)),
-                    _mm256_mul_pd(f, _mm256_sub_pd(b_im, a_im)),
-                    _mm256_mul_pd(af, _mm256_add_pd(a_im, b_im)),
-                    _mm256_mul_pd(af, _mm256_sub_pd(a_re, b_re)),
+            let load = |map: usize, index: usize| _mm256_loadu_pd(z.add(2 * ((half * 4 + map) * nlon + index)));
+            // Two complex values a vector: Z_m0, Z_m0+1 | Z_m0+2, Z_m0+3, and
+            // Z_−m0−3, Z_−m0−2 | Z_−m0−1, Z_−m0.
+            let ahead: [[__m256d; 4]; 2] = [m0, m0 + 2].map(|first| std::array::from_fn(|map| load(map, first)));
+            let behind: [[__m256d; 4]; 2] =
+                [nlon - m0 - 1, nlon - m0 - 3].map(|first| std::array::from_fn(|map| load(map, first)));
+            for j in 0..4 {
+                // Order m0 + j's lane of maps (0, 2) and of maps (1, 3).
+                let lane = |vectors: &[__m256d; 4], high: bool| {
+                    if high {
+                        [
+                            _mm256_permute2f128_pd::<0x31>(vectors[0], vectors[2]),
+                            _mm256_permute2f128_pd::<0x31>(vectors[1], vectors[3]),
+                        ]
+                    } else {
+                        [
+                            _mm256_permute2f128_pd::<0x20>(vectors[0], vectors[2]),
+                            _mm256_permute2f128_pd::<0x20>(vectors[1], vectors[3]),
+                        ]
+                    }
+                };
+                let [a_x, a_y] = lane(&ahead[j / 2], j % 2 == 1);
+                // `behind`'s lanes run down: Z_−m0 is the high lane of its first pair.
+                let [b_x, b_y] = lane(&behind[j / 2], j % 2 == 0);
+                // Z_m + Z_−m: (SYM cos, ANTI cos) sums; Z_m − Z_−m: (ANTI sin, −SYM sin) sums.
+                let (sum_x, sum_y) = (_mm256_add_pd(a_x, b_x), _mm256_add_pd(a_y, b_y));
+                let (difference_x, difference_y) = (_mm256_sub_pd(a_x, b_x), _mm256_sub_pd(a_y, b_y));
+                let parts = [
+                    _mm256_mul_pd(f, _mm256_unpacklo_pd(sum_x, sum_y)),
+                    _mm256_mul_pd(minus_f, _mm256_unpackhi_pd(difference_x, difference_y)),
+                    _mm256_mul_pd(af, _mm256_unpackhi_pd(sum_x, sum_y)),
+                    _mm256_mul_pd(af, _mm256_unpacklo_pd(difference_x, difference_y)),
                 ];
-            }
-            let by_part: [[__m256d; 4]; 4] = std::array::from_fn(|part| parts.map(|map_parts| map_parts[part]));
-            for (part, rows) in by_part.into_iter().enumerate() {
-                let columns = transpose_f64(rows);
-                let destination = if part < 2 { &mut *out.sym } else { &mut *out.anti };
-                let offset = (part % 2) * out.half_width + out.first + half * 4;
-                for (j, column) in columns.into_iter().enumerate() {
-                    let at = (m0 + j) * out.width + offset;
-                    _mm256_storeu_pd(destination[at..at + 4].as_mut_ptr(), column);
+                for (part, values) in parts.into_iter().enumerate() {
+                    let destination = if part < 2 { &mut *out.sym } else { &mut *out.anti };
+                    let at = (m0 + j) * out.width + (part % 2) * out.half_width + out.first + half * 4;
+                    _mm256_storeu_pd(destination[at..at + 4].as_mut_ptr(), values);
                 }
             }
         }
@@ -162,57 +172,86 @@ mod avx2 {
 
     /// Orders m0..m0 + 8 of the block's 8 maps (m0 ≥ 1, m0 + 8 ≤ orders).
     ///
+    /// The complex values are transposed as pairs (one f64 lane each), so that no shuffle
+    /// separates real from imaginary parts before the transposition, and Z_−m needs no
+    /// reversal: a column of the transposed block is an order whichever way it was read.
+    /// Each order's values of the 8 maps come out as two vectors, maps (0, 1, 4, 5) and
+    /// (2, 3, 6, 7), the order in which one shuffle per part puts them back in line. This
+    /// takes 96 shuffles a step instead of 176 (research/performance.md).
+    ///
     /// # Safety
     /// As [`split_f64`].
     #[target_feature(enable = "avx2")]
     pub unsafe fn split_f32(pair: &PairSpectra<'_, f32>, out: &mut PairParts<'_, f32>, m0: usize) {
         let z = pair.spectra.as_ptr().cast::<f32>();
-        let (nlon, f, af) = (
-            pair.nlon,
+        let nlon = pair.nlon;
+        let load = |map: usize, index: usize| _mm256_castps_pd(_mm256_loadu_ps(z.add(2 * (map * nlon + index))));
+        // Z_m0 … Z_m0+7 and Z_−m0−7 … Z_−m0 of every map, four complex values a vector.
+        let columns = |first: usize| transpose_pairs(std::array::from_fn(|map| load(map, first)));
+        let (ahead, behind) = ([m0, m0 + 4].map(columns), [nlon - m0 - 3, nlon - m0 - 7].map(columns));
+        let (f, minus_f, af) = (
             _mm256_set1_ps(pair.sym_factor),
+            _mm256_set1_ps(-pair.sym_factor),
             _mm256_set1_ps(pair.anti_factor),
         );
-        let reverse = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
-        // Even and odd lanes of two vectors, in order: the real and imaginary parts.
-        let deinterleave = |lo: __m256, hi: __m256| {
-            let re = _mm256_shuffle_ps::<0b10_00_10_00>(lo, hi);
-            let im = _mm256_shuffle_ps::<0b11_01_11_01>(lo, hi);
-            let order = |v: __m256| _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)));
-            (order(re), order(im))
-        };
-        // Per map: [SYM cos, SYM sin, ANTI cos, ANTI sin] over the 8 orders.
-        let mut parts = [[_mm256_setzero_ps(); 4]; BLOCK];
-        for (i, map_parts) in parts.iter_mut().enumerate() {
-            let spectrum = z.add(2 * i * nlon);
-            let (a_re, a_im) = deinterleave(
-                _mm256_loadu_ps(spectrum.add(2 * m0)),
-                _mm256_loadu_ps(spectrum.add(2 * m0 + 8)),
+        for j in 0..8 {
+            // Z_m and Z_−m for m = m0 + j: `behind`'s columns run down from Z_−m0 (its
+            // first block) and from Z_−m0−4 (its second).
+            let [a_x, a_y] = ahead[j / 4][j % 4];
+            let [b_x, b_y] = behind[j / 4][3 - j % 4];
+            let (a_x, a_y, b_x, b_y) = (
+                _mm256_castpd_ps(a_x),
+                _mm256_castpd_ps(a_y),
+                _mm256_castpd_ps(b_x),
+                _mm256_castpd_ps(b_y),
             );
-            let (b_re, b_im) = deinterleave(
-                _mm256_loadu_ps(spectrum.add(2 * (nlon - m0 - 7))),
-                _mm256_loadu_ps(spectrum.add(2 * (nlon - m0 - 3))),
-            );
-            let (b_re, b_im) = (
-                _mm256_permutevar8x32_ps(b_re, reverse),
-                _mm256_permutevar8x32_ps(b_im, reverse),
-            );
-            *map_parts = [
-                _mm256_mul_ps(f, _mm256_add_ps(a_re, b_re)),
-                _mm256_mul_ps(f, _mm256_sub_ps(b_im, a_im)),
-                _mm256_mul_ps(af, _mm256_add_ps(a_im, b_im)),
-                _mm256_mul_ps(af, _mm256_sub_ps(a_re, b_re)),
+            // Z_m + Z_−m: (SYM cos, ANTI cos) sums; Z_m − Z_−m: (ANTI sin, −SYM sin) sums.
+            let (sum_x, sum_y) = (_mm256_add_ps(a_x, b_x), _mm256_add_ps(a_y, b_y));
+            let (difference_x, difference_y) = (_mm256_sub_ps(a_x, b_x), _mm256_sub_ps(a_y, b_y));
+            let real = |x, y| _mm256_shuffle_ps::<0b10_00_10_00>(x, y);
+            let imaginary = |x, y| _mm256_shuffle_ps::<0b11_01_11_01>(x, y);
+            let parts = [
+                _mm256_mul_ps(f, real(sum_x, sum_y)),
+                _mm256_mul_ps(minus_f, imaginary(difference_x, difference_y)),
+                _mm256_mul_ps(af, imaginary(sum_x, sum_y)),
+                _mm256_mul_ps(af, real(difference_x, difference_y)),
             ];
-        }
-        let by_part: [[__m256; BLOCK]; 4] = std::array::from_fn(|part| parts.map(|map_parts| map_parts[part]));
-        for (part, rows) in by_part.into_iter().enumerate() {
-            let columns = transpose_f32(rows);
-            let destination = if part < 2 { &mut *out.sym } else { &mut *out.anti };
-            let offset = (part % 2) * out.half_width + out.first;
-            for (j, column) in columns.into_iter().enumerate() {
-                let at = (m0 + j) * out.width + offset;
-                _mm256_storeu_ps(destination[at..at + BLOCK].as_mut_ptr(), column);
+            for (part, values) in parts.into_iter().enumerate() {
+                let destination = if part < 2 { &mut *out.sym } else { &mut *out.anti };
+                let at = (m0 + j) * out.width + (part % 2) * out.half_width + out.first;
+                _mm256_storeu_ps(destination[at..at + BLOCK].as_mut_ptr(), values);
             }
         }
+    }
+
+    /// Rows of 8 maps, each four complex values (one f64 lane each) → per column, the
+    /// values of maps (0, 1, 4, 5) and of maps (2, 3, 6, 7).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn transpose_pairs(rows: [__m256d; BLOCK]) -> [[__m256d; 2]; 4] {
+        // Columns 0 and 2 of rows (r, r + 1), and columns 1 and 3.
+        let low = |r: usize| _mm256_unpacklo_pd(rows[r], rows[r + 1]);
+        let high = |r: usize| _mm256_unpackhi_pd(rows[r], rows[r + 1]);
+        let (l01, l23, l45, l67) = (low(0), low(2), low(4), low(6));
+        let (h01, h23, h45, h67) = (high(0), high(2), high(4), high(6));
+        [
+            [
+                _mm256_permute2f128_pd::<0x20>(l01, l45),
+                _mm256_permute2f128_pd::<0x20>(l23, l67),
+            ],
+            [
+                _mm256_permute2f128_pd::<0x20>(h01, h45),
+                _mm256_permute2f128_pd::<0x20>(h23, h67),
+            ],
+            [
+                _mm256_permute2f128_pd::<0x31>(l01, l45),
+                _mm256_permute2f128_pd::<0x31>(l23, l67),
+            ],
+            [
+                _mm256_permute2f128_pd::<0x31>(h01, h45),
+                _mm256_permute2f128_pd::<0x31>(h23, h67),
+            ],
+        ]
     }
 }
 
