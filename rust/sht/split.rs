@@ -130,25 +130,25 @@ mod avx2 {
         for half in 0..2 {
             let load = |map: usize, index: usize| _mm256_loadu_pd(z.add(2 * ((half * 4 + map) * nlon + index)));
             // Two complex values a vector: Z_m0, Z_m0+1 | Z_m0+2, Z_m0+3, and
-            // Z_−m0−3, Z_−m0−2 | Z_−m0−1, Z_−m0.
+            // Z_−m0−1, Z_−m0 | Z_−m0−3, Z_−m0−2.
             let ahead: [[__m256d; 4]; 2] = [m0, m0 + 2].map(|first| std::array::from_fn(|map| load(map, first)));
             let behind: [[__m256d; 4]; 2] =
                 [nlon - m0 - 1, nlon - m0 - 3].map(|first| std::array::from_fn(|map| load(map, first)));
+            // One lane of the four maps' vectors: that of maps (0, 2) and that of maps (1, 3).
+            let lane = |vectors: &[__m256d; 4], high: bool| {
+                if high {
+                    [
+                        _mm256_permute2f128_pd::<0x31>(vectors[0], vectors[2]),
+                        _mm256_permute2f128_pd::<0x31>(vectors[1], vectors[3]),
+                    ]
+                } else {
+                    [
+                        _mm256_permute2f128_pd::<0x20>(vectors[0], vectors[2]),
+                        _mm256_permute2f128_pd::<0x20>(vectors[1], vectors[3]),
+                    ]
+                }
+            };
             for j in 0..4 {
-                // Order m0 + j's lane of maps (0, 2) and of maps (1, 3).
-                let lane = |vectors: &[__m256d; 4], high: bool| {
-                    if high {
-                        [
-                            _mm256_permute2f128_pd::<0x31>(vectors[0], vectors[2]),
-                            _mm256_permute2f128_pd::<0x31>(vectors[1], vectors[3]),
-                        ]
-                    } else {
-                        [
-                            _mm256_permute2f128_pd::<0x20>(vectors[0], vectors[2]),
-                            _mm256_permute2f128_pd::<0x20>(vectors[1], vectors[3]),
-                        ]
-                    }
-                };
                 let [a_x, a_y] = lane(&ahead[j / 2], j % 2 == 1);
                 // `behind`'s lanes run down: Z_−m0 is the high lane of its first pair.
                 let [b_x, b_y] = lane(&behind[j / 2], j % 2 == 0);
