@@ -5,9 +5,10 @@
 //! SYM_m = (Z_m + conj Z_−m)/2 and ANTI_m = (Z_m − conj Z_−m)/2i; the cosine sums are the
 //! real parts and the sine sums minus the imaginary parts. This is a transposition (each
 //! map's spectrum is contiguous in m, the output is contiguous in maps), so on x86 with
-//! AVX2 whole blocks of 8 maps go through vector registers: a vector of orders per map,
-//! then a transposition of the block to a vector of maps per order. The scalar loop was
-//! a large share of a batched 90 × 180 analysis (research/performance.md).
+//! AVX2 whole blocks of 8 maps go through vector registers: vectors of orders per map,
+//! transposed with each complex value kept whole into vectors of maps per order, whose
+//! real and imaginary parts are then separated. The scalar loop was a large share of a
+//! batched 90 × 180 analysis (research/performance.md).
 
 use realfft::num_complex::Complex;
 
@@ -100,6 +101,7 @@ fn split_scalar<T: Real>(pair: &PairSpectra<'_, T>, out: &mut PairParts<'_, T>, 
 mod avx2 {
     use std::arch::x86_64::*;
 
+    use super::super::transpose::avx2::transpose_f64;
     use super::{PairParts, PairSpectra, BLOCK};
 
     const _: () = assert!(BLOCK == 8, "the transpositions below are for blocks of 8 maps");
@@ -225,33 +227,13 @@ mod avx2 {
     }
 
     /// Rows of 8 maps, each four complex values (one f64 lane each) → per column, the
-    /// values of maps (0, 1, 4, 5) and of maps (2, 3, 6, 7).
+    /// values of maps (0, 1, 4, 5) and of maps (2, 3, 6, 7): two 4 × 4 transpositions of
+    /// 64-bit lanes, of those rows.
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn transpose_pairs(rows: [__m256d; BLOCK]) -> [[__m256d; 2]; 4] {
-        // Columns 0 and 2 of rows (r, r + 1), and columns 1 and 3.
-        let low = |r: usize| _mm256_unpacklo_pd(rows[r], rows[r + 1]);
-        let high = |r: usize| _mm256_unpackhi_pd(rows[r], rows[r + 1]);
-        let (l01, l23, l45, l67) = (low(0), low(2), low(4), low(6));
-        let (h01, h23, h45, h67) = (high(0), high(2), high(4), high(6));
-        [
-            [
-                _mm256_permute2f128_pd::<0x20>(l01, l45),
-                _mm256_permute2f128_pd::<0x20>(l23, l67),
-            ],
-            [
-                _mm256_permute2f128_pd::<0x20>(h01, h45),
-                _mm256_permute2f128_pd::<0x20>(h23, h67),
-            ],
-            [
-                _mm256_permute2f128_pd::<0x31>(l01, l45),
-                _mm256_permute2f128_pd::<0x31>(l23, l67),
-            ],
-            [
-                _mm256_permute2f128_pd::<0x31>(h01, h45),
-                _mm256_permute2f128_pd::<0x31>(h23, h67),
-            ],
-        ]
+    fn transpose_pairs([r0, r1, r2, r3, r4, r5, r6, r7]: [__m256d; BLOCK]) -> [[__m256d; 2]; 4] {
+        let (x, y) = (transpose_f64([r0, r1, r4, r5]), transpose_f64([r2, r3, r6, r7]));
+        [0, 1, 2, 3].map(|column| [x[column], y[column]])
     }
 }
 
