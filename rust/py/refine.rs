@@ -29,6 +29,12 @@ fn contiguous<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
         .ok_or_else(|| PyValueError::new_err(format!("{name} must be C-contiguous")))
 }
 
+/// Sample indices as the fit takes them.
+fn row_indices(indices: &[i64]) -> PyResult<Vec<u32>> {
+    let converted: Option<Vec<u32>> = indices.iter().map(|&i| u32::try_from(i).ok()).collect();
+    converted.ok_or_else(|| PyValueError::new_err("rows must lie in 0 to 2³² − 1"))
+}
+
 #[pymethods]
 impl WeightFit {
     /// `tensors`: float32 weights `(out, in)` and biases `(out,)` of each layer in order,
@@ -96,15 +102,32 @@ impl WeightFit {
         let (rows, batch) = match &rows {
             None => (None, 0),
             Some(array) => {
-                let indices = contiguous("rows", array)?;
-                let converted: Option<Vec<u32>> = indices.iter().map(|&i| u32::try_from(i).ok()).collect();
-                let converted = converted.ok_or_else(|| PyValueError::new_err("rows must lie in 0 to 2³² − 1"))?;
-                (Some(converted), array.shape()[1])
+                (Some(row_indices(contiguous("rows", array)?)?), array.shape()[1])
             }
         };
         let inner = &mut self.inner;
         let losses = py.detach(|| inner.run(rates, rows.as_deref(), batch))?;
         Ok(to_numpy(py, losses.len(), losses))
+    }
+
+    /// The loss on `rows` (int64 `(batch,)` sample indices, or None for every sample) and
+    /// its gradient (float32, flat), at the flat float32 `weights` (each tensor in the
+    /// order given, flattened), which become the fit's weights; Adam's state is untouched.
+    #[pyo3(signature = (weights, rows=None))]
+    fn gradient<'py>(
+        &mut self,
+        py: Python<'py>,
+        weights: PyReadonlyArray1<'py, f32>,
+        rows: Option<PyReadonlyArray1<'py, i64>>,
+    ) -> PyResult<(f64, Bound<'py, PyArray1<f32>>)> {
+        let weights = contiguous("weights", &weights)?;
+        let rows = match &rows {
+            None => None,
+            Some(array) => Some(row_indices(contiguous("rows", array)?)?),
+        };
+        let inner = &mut self.inner;
+        let (loss, gradient) = py.detach(|| inner.gradient_at(weights, rows.as_deref()))?;
+        Ok((loss, to_numpy(py, gradient.len(), gradient)))
     }
 
     /// Each tensor's values, flat (float32), in the order given.

@@ -211,6 +211,28 @@ impl WeightFit {
         })
     }
 
+    /// The loss on `rows` (`None`: every sample) and its gradient, at the flat `weights`
+    /// (every layer's weights then biases, as [`WeightFit::new`] lays them out), which
+    /// become the fit's weights; Adam's state is untouched. The latent stage of refinement
+    /// chains this gradient through the decoder to the latent.
+    pub fn gradient_at(&mut self, weights: &[f32], rows: Option<&[u32]>) -> Result<(f64, Vec<f32>)> {
+        if weights.len() != self.params.len() {
+            return invalid_argument!("expected {} weights, got {}", self.params.len(), weights.len());
+        }
+        if weights.iter().any(|w| !w.is_finite()) {
+            return invalid_argument!("the NBRDF's weights hold NaN or inf");
+        }
+        if let Some(row) = rows.and_then(|r| r.iter().find(|&&r| r as usize >= self.cos_in.len())) {
+            return invalid_argument!("row {row} is out of range for {} samples", self.cos_in.len());
+        }
+        if rows.is_some_and(|r| r.is_empty()) {
+            return invalid_argument!("expected at least one row");
+        }
+        self.params.copy_from_slice(weights);
+        self.transpose();
+        Ok(in_pool(|| self.gradient(rows.unwrap_or(&self.all_rows))))
+    }
+
     /// The loss and its gradient on `rows`, summed part by part in order.
     fn gradient(&self, rows: &[u32]) -> (f64, Vec<f32>) {
         let scale = 1.0 / (N_OUTPUTS * rows.len()) as f32;
@@ -361,6 +383,24 @@ pub(super) mod tests {
             (losses, fit.tensors())
         };
         assert_eq!(steps(1), steps(3));
+    }
+
+    #[test]
+    fn gradient_at_given_weights_is_the_fits_gradient_there() {
+        let mut fit = example(600, Loss::L1);
+        fit.run(&[1e-2; 5], None, 0).unwrap();
+        let (weights, rows) = (fit.params.clone(), [3, 5, 599, 5]);
+        let expected = fit.gradient(&rows);
+        let mut other = example(600, Loss::L1);
+        assert_eq!(other.gradient_at(&weights, Some(&rows)).unwrap(), expected);
+        assert_eq!(other.gradient_at(&weights, None).unwrap(), fit.gradient(&fit.all_rows.clone()));
+        let error = |r: Result<(f64, Vec<f32>)>| r.unwrap_err().to_string();
+        assert!(error(other.gradient_at(&weights[1..], None)).contains("weights"));
+        assert!(error(other.gradient_at(&weights, Some(&[600]))).contains("out of range"));
+        assert!(error(other.gradient_at(&weights, Some(&[]))).contains("at least one row"));
+        let mut nan = weights.clone();
+        nan[4] = f32::NAN;
+        assert!(error(other.gradient_at(&nan, None)).contains("NaN"));
     }
 
     #[test]

@@ -52,7 +52,7 @@ from tqdm.auto import tqdm
 from .. import _native
 from ..io.sampling import bin_directions
 from .coverage import MAX_K, coverage_weights, uncovered_bins
-from .losses import LossConfig, reconstruction_loss, samples_loss
+from .losses import LossConfig, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
     NBRDF,
@@ -229,12 +229,6 @@ class _Samples:
     def __len__(self) -> int:
         return self.coords.shape[1]
 
-    def batch(self, size: int, generator: torch.Generator) -> _Samples:
-        if len(self) <= size:
-            return self
-        rows = torch.randint(len(self), (size,), generator=generator)
-        return _Samples(self.coords[:, rows], self.values[:, rows], self.cos_in[:, rows])
-
 
 def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full") -> Reconstruction:
     """Encodes one material's samples and refines the result at test time (see the module docstring).
@@ -326,28 +320,50 @@ def _anchor_samples(wi: np.ndarray, wo: np.ndarray) -> _Samples | None:
 def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples | None, loss: LossConfig,
                    config: RefineConfig, record: _Record) -> tuple[torch.Tensor, float]:
     """Stage 1 from one start: z after its steps, and the loss of its decoding on all samples. ``anchors``
-    (:func:`_anchor_samples`) hold the start's decoding far from the samples, with weight ``config.anchor``."""
+    (:func:`_anchor_samples`) hold the start's decoding far from the samples, with weight ``config.anchor``.
+
+    Each step decodes z in torch and takes the decoded NBRDF's loss gradient from the native core
+    (:meth:`frenbrdf._native.WeightFit.gradient`, the weight stage's forward and backward passes), then carries it
+    back through the decoder to z: the NBRDF's passes over thousands of samples were most of a step's time in torch
+    (research/performance.md)."""
+    decoder = model.network.decoder
+    with torch.no_grad():
+        start = decoder(z)
+    fit = _gradient_fit(start, samples, loss.kind)
+    held = None
     if anchors is not None:
-        with torch.no_grad():
-            start = nbrdf_forward(model.network.decoder(z), anchors.coords)
-        anchors = _Samples(anchors.coords, start, anchors.cos_in)
+        held = _gradient_fit(start, _Samples(anchors.coords, nbrdf_forward(start, anchors.coords), anchors.cos_in),
+                             loss.kind)
     z = z.clone().requires_grad_(True)
 
-    def latent_objective(batch: _Samples) -> torch.Tensor:
-        params = model.network.decoder(z)
-        value = reconstruction_loss(nbrdf_forward(params, batch.coords), batch.values, batch.cos_in, loss.kind)
-        if anchors is not None:
-            held = reconstruction_loss(nbrdf_forward(params, anchors.coords), anchors.values, anchors.cos_in, loss.kind)
-            value = value + config.anchor * held
+    def latent_step(rows: np.ndarray | None) -> float:
+        """The loss on ``rows`` at z, with its gradient left in ``z.grad``."""
+        flat = torch.cat([p.reshape(-1) for p in decoder(z)])
+        weights = flat.detach().numpy()
+        if not np.isfinite(weights).all():
+            return math.nan
+        value, gradient = fit.gradient(weights, rows)
+        if held is not None:
+            held_value, held_gradient = held.gradient(weights)
+            value, gradient = value + config.anchor * held_value, gradient + config.anchor * held_gradient
+        flat.backward(torch.from_numpy(gradient))
         return value
 
     with _frozen(model.network):
         latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
-        _optimise("latent", [z], [latent_decay], latent_objective, config.latent_steps, config.latent_lr, samples,
+        _optimise("latent", [z], [latent_decay], latent_step, config.latent_steps, config.latent_lr, len(samples),
                   config, record)
     z = z.detach()
     with torch.no_grad():
-        return z, _sample_loss(model.network.decoder(z), samples, loss.kind)
+        return z, _sample_loss(decoder(z), samples, loss.kind)
+
+
+def _gradient_fit(params: list[torch.Tensor], samples: _Samples, kind: str):
+    """A native :class:`frenbrdf._native.WeightFit` on ``samples`` for its loss gradient (no decay: stage 1's
+    penalty is on z), shaped as the NBRDF ``params`` (with their leading batch of 1)."""
+    return _native.WeightFit([np.ascontiguousarray(p[0].numpy(), dtype=np.float32) for p in params],
+                             [0.0] * len(params), samples.coords[0].numpy(), samples.values[0].numpy(),
+                             samples.cos_in[0].numpy(), kind)
 
 
 def _loss_config(model) -> LossConfig:
@@ -365,13 +381,14 @@ def _weight_decays(params: list[torch.Tensor], loss: LossConfig) -> list[float]:
 
 
 def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
-              objective: Callable[[_Samples], torch.Tensor], steps: int, lr: float, samples: _Samples,
+              step: Callable[[np.ndarray | None], float], steps: int, lr: float, count: int,
               config: RefineConfig, record: _Record) -> None:
     """Adam on ``parameters`` for ``steps`` steps or ``config.seconds``; records the time and steps taken.
 
-    The stage's penalty (a mean square of each tensor, times λ) is not in ``objective``: it enters as Adam's
-    weight decay, ``decays`` per tensor (its gradient 2·λ·p / n is the decay times p), the same steps as
-    differentiating it for ~30 fewer small ops a step (research/performance.md)."""
+    ``step(rows)`` returns the loss on those of the ``count`` samples (None: all of them, where they fit in one
+    batch) and leaves its gradient in the parameters' ``.grad``. The stage's penalty (a mean square of each tensor,
+    times λ) is not in it: it enters as Adam's weight decay, ``decays`` per tensor (its gradient 2·λ·p / n is the
+    decay times p), the same steps as differentiating it for ~30 fewer small ops a step (research/performance.md)."""
     groups = [{"params": [p], "weight_decay": decay} for p, decay in zip(parameters, decays, strict=True)]
     optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel per group (research/performance.md)
     rates = _learning_rates(lr, steps, config.schedule)
@@ -380,13 +397,13 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
     for rate in tqdm(rates, desc=f"refine {stage}", disable=not config.progress, leave=False):
         if config.seconds is not None and time.perf_counter() - start > config.seconds:
             break
-        value = objective(samples.batch(config.batch, generator))
-        if not torch.isfinite(value):  # finite at the start (checked), so the steps made it so
-            raise _diverged(stage, taken, lr, float(value))
+        rows = None if count <= config.batch else torch.randint(count, (config.batch,), generator=generator).numpy()
+        optimizer.zero_grad(set_to_none=True)
+        value = step(rows)
+        if not math.isfinite(value):  # finite at the start (checked), so the steps made it so
+            raise _diverged(stage, taken, lr, value)
         for group in optimizer.param_groups:
             group["lr"] = float(rate)
-        optimizer.zero_grad(set_to_none=True)
-        value.backward()
         optimizer.step()
         taken += 1
     record.timings[stage] = record.timings.get(stage, 0.0) + time.perf_counter() - start  # summed over starts
