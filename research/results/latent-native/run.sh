@@ -24,6 +24,9 @@ compare families-random "${shipped[@]}" "${budgets[@]}" --tables "$FAMILIES"/*.b
 compare families-devices "${shipped[@]}" "${budgets[@]}" --tables "$FAMILIES"/*.binary "${devices[@]}"
 compare tables-random "${shipped[@]}" "${budgets[@]}" --held-out release/shipped_model.json "$TABLES" --samples 4000
 compare tables-devices "${shipped[@]}" "${budgets[@]}" --held-out release/shipped_model.json "$TABLES" "${devices[@]}"
+for run in "$RUNS"/mf-f{0,1,2}-s0; do
+    grep -q "best epoch" "$run.log" || { echo "$run has not finished (its log has no best epoch)" >&2; exit 1; }
+done
 trained_on=()
 for fold in 0 1 2; do for m in $($folds others "$fold"); do trained_on+=("f$fold=$m"); done; done
 compare measured --models "$RUNS"/mf-f0-s0 "$RUNS"/mf-f1-s0 "$RUNS"/mf-f2-s0 --labels f0 f1 f2 \
