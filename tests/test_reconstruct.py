@@ -230,6 +230,48 @@ def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind, hidd
         np.testing.assert_allclose(got, want.detach().reshape(-1).numpy(), rtol=1e-4, atol=1e-6)
 
 
+@pytest.mark.parametrize("anchor", [0.0, 0.5])
+def test_the_latent_steps_are_torch_adams_through_the_decoder(model, material, anchor):
+    """Stage 1 takes the decoded NBRDF's gradient from the native core: the same steps as differentiating the
+    whole objective in torch, on the same batches (and the anchor's second loss, where there is one)."""
+    from frenbrdf.models import reconstruct as stage
+    from frenbrdf.models.losses import reconstruction_loss
+    from frenbrdf.models.nbrdf import mapped_samples, nbrdf_forward
+
+    config = RefineConfig(latent_steps=15, latent_lr=0.05, batch=700, anchor=anchor, schedule="cosine")
+    result = reconstruct(model, material.values, (material.wi, material.wo), refine=config)
+
+    mapped, coords, cos_in = (torch.from_numpy(np.asarray(a, dtype=np.float32))[None]
+                              for a in mapped_samples(model.mapping, material.values, (material.wi, material.wo)))
+    kind, decoder = model.loss["kind"], model.network.decoder
+    start = model.encoding(material.values, (material.wi, material.wo)).z
+    z = torch.from_numpy(start.astype(np.float32))[None]
+    anchors = stage._anchor_samples(material.wi, material.wo) if anchor else None
+    if anchors is not None:
+        with torch.no_grad():
+            held = nbrdf_forward(decoder(z), anchors.coords)
+    z.requires_grad_(True)
+    optimizer = torch.optim.Adam([z], weight_decay=2 * stage._loss_config(model).lambda_latent / z.numel())
+    generator = torch.Generator().manual_seed(config.seed + stage.STAGES.index("latent"))
+    decoder.requires_grad_(False)
+    try:
+        for rate in stage._learning_rates(config.latent_lr, config.latent_steps, config.schedule):
+            rows = torch.randint(coords.shape[1], (config.batch,), generator=generator)
+            params = decoder(z)
+            value = reconstruction_loss(nbrdf_forward(params, coords[:, rows]), mapped[:, rows], cos_in[:, rows], kind)
+            if anchors is not None:
+                value = value + anchor * reconstruction_loss(nbrdf_forward(params, anchors.coords), held,
+                                                             anchors.cos_in, kind)
+            optimizer.param_groups[0]["lr"] = float(rate)
+            optimizer.zero_grad()
+            value.backward()
+            optimizer.step()
+    finally:
+        decoder.requires_grad_(True)
+    assert not np.allclose(result.z, start, atol=1e-3)  # z moved: the test compares steps
+    np.testing.assert_allclose(result.z, z.detach()[0].numpy(), rtol=1e-4, atol=1e-5)
+
+
 @pytest.mark.parametrize("change, message", [
     ({"coords": np.zeros((4, 5), np.float32)}, "coords must have shape (N, 6)"),
     ({"values": np.full((4, 3), np.nan, np.float32)}, "values hold NaN or inf"),

@@ -52,7 +52,7 @@ from tqdm.auto import tqdm
 from .. import _native
 from ..io.sampling import bin_directions
 from .coverage import MAX_K, coverage_weights, uncovered_bins
-from .losses import LossConfig, samples_loss
+from .losses import LossConfig, reconstruction_loss, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
     NBRDF,
@@ -330,24 +330,24 @@ def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples 
     with torch.no_grad():
         start = decoder(z)
     fit = _gradient_fit(start, samples, loss.kind)
-    held = None
-    if anchors is not None:
-        held = _gradient_fit(start, _Samples(anchors.coords, nbrdf_forward(start, anchors.coords), anchors.cos_in),
-                             loss.kind)
+    if anchors is not None:  # in torch: its errors start at exactly 0, where the native passes' rounding would not
+        anchors = _Samples(anchors.coords, nbrdf_forward(start, anchors.coords), anchors.cos_in)
     z = z.clone().requires_grad_(True)
 
     def latent_step(rows: np.ndarray | None) -> float:
         """The loss on ``rows`` at z, with its gradient left in ``z.grad``."""
-        flat = torch.cat([p.reshape(-1) for p in decoder(z)])
+        params = decoder(z)
+        flat = torch.cat([p.reshape(-1) for p in params])
         weights = flat.detach().numpy()
         if not np.isfinite(weights).all():
             return math.nan
         value, gradient = fit.gradient(weights, rows)
-        if held is not None:
-            held_value, held_gradient = held.gradient(weights)
-            value, gradient = value + config.anchor * held_value, gradient + config.anchor * held_gradient
-        flat.backward(torch.from_numpy(gradient))
-        return value
+        if anchors is None:
+            flat.backward(torch.from_numpy(gradient))
+            return value
+        held = reconstruction_loss(nbrdf_forward(params, anchors.coords), anchors.values, anchors.cos_in, loss.kind)
+        torch.autograd.backward([flat, config.anchor * held], [torch.from_numpy(gradient), None])
+        return value + config.anchor * float(held)
 
     with _frozen(model.network):
         latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
