@@ -60,7 +60,7 @@ def tensors(model, drawn) -> _Samples:
 
 def refined(model, start: np.ndarray, samples: _Samples, config) -> np.ndarray:
     """Stage 1 of `latent` (the shipped budget) from ``start`` on ``samples``."""
-    z, _ = _refine_latent(model, torch.from_numpy(start.astype(np.float32))[None], samples, _loss_config(model),
+    z, _ = _refine_latent(model, torch.from_numpy(start.astype(np.float32))[None], samples, None, _loss_config(model),
                           config, _Record())
     return z[0].numpy().astype(np.float64)
 

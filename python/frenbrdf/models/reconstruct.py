@@ -5,7 +5,9 @@
 0. **encode** — the set encoder's latent z of the samples (:meth:`frenbrdf.Model.encode`).
 1. **latent** — z optimised on the samples with the model's training objective: the
    cos θ_i-weighted reconstruction loss in the mapped space (L1 or MSE, as the model was
-   trained) + λ2 · the latent penalty; the decoder stays fixed.
+   trained) + λ2 · the latent penalty; the decoder stays fixed. Each step decodes z in torch
+   and takes the decoded NBRDF's gradient on the samples from the native core (the weight
+   stage's passes), about twice as fast as torch alone.
 2. **weights** — the decoded NBRDF's own weights optimised, starting from the decoder's
    output (a per-material fit that starts where the encoder left off), with the same
    reconstruction loss + λ1 · the weight penalty. Where the samples hold both orders of

@@ -131,9 +131,16 @@ def refine(model, start: torch.Tensor, samples: _Samples, variant: Variant) -> t
         value = reconstruction_loss(predicted, batch.values, batch.cos_in, loss.kind)
         return value + variant.anchor * torch.mean((z - anchor) ** 2) if variant.anchor else value
 
+    def step(rows) -> float:  # _optimise's step: the loss on the rows, its gradient left in z.grad
+        value = objective(samples if rows is None else
+                          _Samples(samples.coords[:, rows], samples.values[:, rows], samples.cos_in[:, rows]))
+        value.backward()
+        return float(value.detach())
+
     with _frozen(model.network):
         decay = variant.prior * 2 * loss.lambda_latent / z.numel()
-        _optimise("latent", [z], [decay], objective, config.latent_steps, config.latent_lr, samples, config, _Record())
+        _optimise("latent", [z], [decay], step, config.latent_steps, config.latent_lr, len(samples), config,
+                  _Record())
     return z.detach()
 
 
