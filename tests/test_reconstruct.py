@@ -230,6 +230,22 @@ def test_the_native_weight_steps_are_torch_adams_on_the_given_batches(kind, hidd
         np.testing.assert_allclose(got, want.detach().reshape(-1).numpy(), rtol=1e-4, atol=1e-6)
 
 
+@pytest.mark.parametrize("hidden", [(16,), (16, 12), (8, 8, 8)])
+def test_the_frozen_decoder_decodes_and_pulls_back_as_autograd(hidden):
+    from frenbrdf.models.hypernetwork import DecoderConfig, FrozenDecoder, HyperNetwork
+    from frenbrdf.models.nbrdf import NBRDFConfig
+
+    torch.manual_seed(0)
+    decoder = HyperNetwork(5, NBRDFConfig((7, 9)).shapes(), DecoderConfig(hidden))
+    frozen = FrozenDecoder(decoder)
+    z = torch.randn(1, 5, requires_grad=True)
+    flat = torch.cat([p.reshape(-1) for p in decoder(z)])
+    torch.testing.assert_close(frozen.weights(z.detach()), flat.detach())
+    gradient = torch.randn(flat.shape)
+    flat.backward(gradient)
+    torch.testing.assert_close(frozen.pullback(gradient), z.grad, rtol=1e-5, atol=1e-6)
+
+
 @pytest.mark.parametrize("anchor", [0.0, 0.5])
 def test_the_latent_steps_are_torch_adams_through_the_decoder(model, material, anchor):
     """Stage 1 takes the decoded NBRDF's gradient from the native core: the same steps as differentiating the

@@ -54,6 +54,7 @@ from tqdm.auto import tqdm
 from .. import _native
 from ..io.sampling import bin_directions
 from .coverage import MAX_K, coverage_weights, uncovered_bins
+from .hypernetwork import FrozenDecoder
 from .losses import LossConfig, reconstruction_loss, samples_loss
 from .nbrdf import (
     MAX_WIDTH,
@@ -324,32 +325,31 @@ def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples 
     """Stage 1 from one start: z after its steps, and the loss of its decoding on all samples. ``anchors``
     (:func:`_anchor_samples`) hold the start's decoding far from the samples, with weight ``config.anchor``.
 
-    Each step decodes z in torch and takes the decoded NBRDF's loss gradient from the native core
-    (:meth:`frenbrdf._native.WeightFit.gradient`, the weight stage's forward and backward passes), then carries it
-    back through the decoder to z: the NBRDF's passes over thousands of samples were most of a step's time in torch
-    (research/performance.md)."""
+    Each step decodes z (:class:`~frenbrdf.models.hypernetwork.FrozenDecoder`), takes the decoded NBRDF's loss
+    gradient from the native core (:meth:`frenbrdf._native.WeightFit.gradient`, the weight stage's forward and
+    backward passes) and carries it back to z: in torch's autograd the NBRDF's passes over thousands of samples and
+    the decoder's small operations were most of a step's time (research/performance.md)."""
     decoder = model.network.decoder
     with torch.no_grad():
         start = decoder(z)
-    fit = _gradient_fit(start, samples, loss.kind)
+    fit, frozen = _gradient_fit(start, samples, loss.kind), FrozenDecoder(decoder)
     if anchors is not None:  # in torch: its errors start at exactly 0, where the native passes' rounding would not
         anchors = _Samples(anchors.coords, nbrdf_forward(start, anchors.coords), anchors.cos_in)
     z = z.clone().requires_grad_(True)
 
     def latent_step(rows: np.ndarray | None) -> float:
         """The loss on ``rows`` at z, with its gradient left in ``z.grad``."""
-        params = decoder(z)
-        flat = torch.cat([p.reshape(-1) for p in params])
-        weights = flat.detach().numpy()
+        weights = frozen.weights(z.detach()).numpy()
         if not np.isfinite(weights).all():
             return math.nan
         value, gradient = fit.gradient(weights, rows)
-        if anchors is None:
-            flat.backward(torch.from_numpy(gradient))
-            return value
-        held = reconstruction_loss(nbrdf_forward(params, anchors.coords), anchors.values, anchors.cos_in, loss.kind)
-        torch.autograd.backward([flat, config.anchor * held], [torch.from_numpy(gradient), None])
-        return value + config.anchor * float(held)
+        z.grad = frozen.pullback(torch.from_numpy(gradient))
+        if anchors is not None:
+            held = reconstruction_loss(nbrdf_forward(decoder(z), anchors.coords), anchors.values, anchors.cos_in,
+                                       loss.kind)
+            z.grad += torch.autograd.grad(config.anchor * held, z)[0]
+            value += config.anchor * float(held)
+        return value
 
     with _frozen(model.network):
         latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
