@@ -131,5 +131,8 @@ class WeightFit:
     def run(self, learning_rates: _F32, rows: _I64 | None = None) -> _F64:
         """One step per rate on the ``(steps, batch)`` rows (None: every sample); each step's loss before its
         update, stopping after the first that is not finite."""
+    def gradient(self, weights: _F32, rows: _I64 | None = None) -> tuple[float, _F32]:
+        """The loss on the ``(batch,)`` rows (None: every sample) and its gradient, flat, at the flat ``weights``
+        (each tensor in order), which become the fit's; Adam's state is untouched."""
     def tensors(self) -> list[_F32]:
         """Each tensor's values, flat, in the order given."""

@@ -48,7 +48,7 @@ from tqdm import tqdm
 from ..io.keras import N_INPUTS, N_OUTPUTS, Layer, keras_weights, read_keras_nbrdf
 from ..io.merl import FILE_BYTES, write_merl
 from ..io.outputs import OutputFolder, check_free_space
-from ..models.nbrdf import NBRDF, nbrdf_forward, nbrdf_merl_table
+from ..models.nbrdf import NBRDF, nbrdf_forward, nbrdf_merl_table, one_torch_thread
 from .fitting import EXP_MINUS_ONE
 
 # Rows evaluated at once: small blocks stay in cache (and bound the memory).
@@ -91,17 +91,11 @@ def _forward(layers: list[Layer], x: np.ndarray) -> np.ndarray:
               for array in (kernel.T, bias)]
     x = np.asarray(x, dtype=np.float64)
     out = np.empty((len(x), N_OUTPUTS))
-    # One thread: torch's threads cost far more than they save on these thin products
-    # (measured 3-10x slower on 2 busy cores; single-threaded it matches numpy).
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with torch.inference_mode():
-            for start in range(0, len(x), _CHUNK_ROWS):
-                rows = torch.from_numpy(np.array(x[start:start + _CHUNK_ROWS]))  # a writable copy, in cache
-                out[start:start + _CHUNK_ROWS] = torch.expm1(nbrdf_forward(params, rows[None]))[0].numpy()
-    finally:
-        torch.set_num_threads(threads)
+    # One thread: measured 3-10x faster than torch's threads on 2 busy cores; single-threaded it matches numpy.
+    with one_torch_thread(), torch.inference_mode():
+        for start in range(0, len(x), _CHUNK_ROWS):
+            rows = torch.from_numpy(np.array(x[start:start + _CHUNK_ROWS]))  # a writable copy, in cache
+            out[start:start + _CHUNK_ROWS] = torch.expm1(nbrdf_forward(params, rows[None]))[0].numpy()
     return out
 
 

@@ -8,6 +8,7 @@ mapping back to reflectance.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 from dataclasses import dataclass
@@ -239,6 +240,19 @@ def _describe(params) -> str:
         return "[" + ", ".join(f"{tuple(p.shape)} {p.dtype}" if isinstance(p, torch.Tensor) else type(p).__name__
                                for p in params[:8]) + ("…" * (len(params) > 8)) + "]"
     return type(params).__name__
+
+
+@contextlib.contextmanager
+def one_torch_thread():
+    """Torch on one thread inside the block (restored after): on the thin products of one small NBRDF or decoder,
+    its threads cost far more than they save, and between operations they spin on the cores that the native core's
+    threads need (research/performance.md)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
 
 
 def nbrdf_forward(params: list[torch.Tensor], coords: torch.Tensor) -> torch.Tensor:

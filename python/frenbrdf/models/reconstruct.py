@@ -63,6 +63,7 @@ from .nbrdf import (
     mapped_samples,
     nbrdf_coordinates,
     nbrdf_forward,
+    one_torch_thread,
     pair_order,
     widen_params,
 )
@@ -351,7 +352,7 @@ def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples 
             value += config.anchor * float(held)
         return value
 
-    with _frozen(model.network):
+    with _frozen(model.network), one_torch_thread():
         latent_decay = 2 * loss.lambda_latent / z.numel()  # λ2 · latent_penalty(z) = λ2 · mean(z²)
         _optimise("latent", [z], [latent_decay], latent_step, config.latent_steps, config.latent_lr, len(samples),
                   config, record)
