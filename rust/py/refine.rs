@@ -101,9 +101,7 @@ impl WeightFit {
         let rates = contiguous("learning_rates", &learning_rates)?;
         let (rows, batch) = match &rows {
             None => (None, 0),
-            Some(array) => {
-                (Some(row_indices(contiguous("rows", array)?)?), array.shape()[1])
-            }
+            Some(array) => (Some(row_indices(contiguous("rows", array)?)?), array.shape()[1]),
         };
         let inner = &mut self.inner;
         let losses = py.detach(|| inner.run(rates, rows.as_deref(), batch))?;

@@ -393,7 +393,10 @@ pub(super) mod tests {
         let expected = fit.gradient(&rows);
         let mut other = example(600, Loss::L1);
         assert_eq!(other.gradient_at(&weights, Some(&rows)).unwrap(), expected);
-        assert_eq!(other.gradient_at(&weights, None).unwrap(), fit.gradient(&fit.all_rows.clone()));
+        assert_eq!(
+            other.gradient_at(&weights, None).unwrap(),
+            fit.gradient(&fit.all_rows.clone())
+        );
         let error = |r: Result<(f64, Vec<f32>)>| r.unwrap_err().to_string();
         assert!(error(other.gradient_at(&weights[1..], None)).contains("weights"));
         assert!(error(other.gradient_at(&weights, Some(&[600]))).contains("out of range"));

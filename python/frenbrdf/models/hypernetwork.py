@@ -72,7 +72,7 @@ class FrozenDecoder:
     (research/performance.md). The weights are copied once: the decoder must not change while this is in use."""
 
     def __init__(self, decoder: HyperNetwork):
-        linears = [[layer for layer in head if isinstance(layer, nn.Linear)] for head in decoder.heads]
+        linears = [[layer for layer in head.children() if isinstance(layer, nn.Linear)] for head in decoder.heads]
         with torch.no_grad():
             self.first = (torch.cat([head[0].weight for head in linears]), torch.cat([head[0].bias for head in linears]))
             self.hidden = [(torch.stack([head[i].weight for head in linears]),

@@ -71,12 +71,15 @@ def judged(out: Path, prefix: str) -> dict[str, dict]:
 def measured(out: Path) -> None:
     """The 19 by their fold runs: each budget's mean, the change per measurement, by kind, hue lost."""
     rows = rows_of(out / "measured")
-    groups = sorted({row["group"] for row in rows} - {"measured"})
-    for group in ["measured", *groups]:
-        psnr, delta_e = by_budget(rows, "psnr", group), by_budget(rows, "delta_e", group)
-        means = "  ".join(f"{budget} {np.mean(list(psnr[budget].values())):.2f} / "
-                          f"{np.mean(list(delta_e[budget].values())):.2f}" for budget in ("none", BASE, CANDIDATE))
-        print(f"{group} (n {len(psnr[BASE])}): {means}")
+    kinds = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json")
+                       .read_text())["kinds"]
+    psnr, delta_e = by_budget(rows, "psnr", "measured"), by_budget(rows, "delta_e", "measured")
+    def mean(scores: dict, names: list[str] | None) -> float:
+        return float(np.mean([v for (_, m), v in scores.items() if names is None or m in names]))
+
+    for kind, names in {"all 19": None, **kinds}.items():
+        print(f"{kind}: " + "  ".join(f"{budget} {mean(psnr[budget], names):.2f} / {mean(delta_e[budget], names):.2f}"
+                                      for budget in ("none", BASE, CANDIDATE)))
     for metric in ("psnr", "delta_e"):
         print(f"measured, random bins, {metric}: "
               f"{interval_text(list(changes(rows, metric, 'measured')['merl-bins'].values()))}")

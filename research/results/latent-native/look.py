@@ -44,7 +44,7 @@ def main(out: str, runs: str, families: str, figure: str) -> None:
     grid = []
     measured = json.loads((Path(out) / "measured" / "compare.json").read_text())["rows"]
     for label, material, change in largest_changes(measured, "measured", "merl-bins"):
-        model = load_model(Path(runs) / f"mf-{label}-s0")
+        model = load_model(Path(runs) / f"mf-{label.split('/')[-1]}-s0")  # label mf/fF
         grid.append((f"random bins ({change:+.1f} dB)\n{material[:24]}",
                      measurement_row(material, columns(model), scene, mask)))
     shipped = load_model("pretrained")

@@ -28,8 +28,8 @@ for run in "$RUNS"/mf-f{0,1,2}-s0; do
     grep -q "best epoch" "$run.log" || { echo "$run has not finished (its log has no best epoch)" >&2; exit 1; }
 done
 trained_on=()
-for fold in 0 1 2; do for m in $($folds others "$fold"); do trained_on+=("f$fold=$m"); done; done
-compare measured --models "$RUNS"/mf-f0-s0 "$RUNS"/mf-f1-s0 "$RUNS"/mf-f2-s0 --labels f0 f1 f2 \
+for fold in 0 1 2; do for m in $($folds others "$fold"); do trained_on+=("mf/f$fold=$m"); done; done
+compare measured --models "$RUNS"/mf-f0-s0 "$RUNS"/mf-f1-s0 "$RUNS"/mf-f2-s0 --labels mf/f0 mf/f1 mf/f2 \
     --trained-on "${trained_on[@]}" --measurements ../shared/data/rgl-measured/*.bsdf --samples 4000 \
     --budgets none latent latent@latent_steps=1200 --group $($folds groups)
 python "$HERE/decide.py" "$OUT" > "$OUT/decision.txt"
