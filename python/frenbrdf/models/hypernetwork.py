@@ -62,7 +62,6 @@ class HyperNetwork(nn.Module):
         return [head(z).reshape(z.shape[0], *shape) for head, shape in zip(self.heads, self.shapes, strict=True)]
 
 
-
 class FrozenDecoder:
     """A frozen :class:`HyperNetwork`'s forward pass and its pullback to z, written out: the heads' first layers as
     one matrix product (they all read z), each hidden layer after it as one batched product, the last layers one
