@@ -333,7 +333,8 @@ def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples 
     decoder = model.network.decoder
     with torch.no_grad():
         start = decoder(z)
-    fit, frozen = _gradient_fit(start, samples, loss.kind), FrozenDecoder(decoder)
+    # Only the fit's gradient is used: stage 1's penalty is on z, so no decay.
+    fit, frozen = _native_fit(start, samples, [0.0] * len(start), loss.kind), FrozenDecoder(decoder)
     if anchors is not None:  # in torch: its errors start at exactly 0, where the native passes' rounding would not
         anchors = _Samples(anchors.coords, nbrdf_forward(start, anchors.coords), anchors.cos_in)
     z = z.clone().requires_grad_(True)
@@ -361,12 +362,11 @@ def _refine_latent(model, z: torch.Tensor, samples: _Samples, anchors: _Samples 
         return z, _sample_loss(decoder(z), samples, loss.kind)
 
 
-def _gradient_fit(params: list[torch.Tensor], samples: _Samples, kind: str):
-    """A native :class:`frenbrdf._native.WeightFit` on ``samples`` for its loss gradient (no decay: stage 1's
-    penalty is on z), shaped as the NBRDF ``params`` (with their leading batch of 1)."""
-    return _native.WeightFit([np.ascontiguousarray(p[0].numpy(), dtype=np.float32) for p in params],
-                             [0.0] * len(params), samples.coords[0].numpy(), samples.values[0].numpy(),
-                             samples.cos_in[0].numpy(), kind)
+def _native_fit(params: list[torch.Tensor], samples: _Samples, decays: list[float], kind: str):
+    """A native :class:`frenbrdf._native.WeightFit` on ``samples``, shaped as the NBRDF ``params`` (with their
+    leading batch of 1), with Adam's weight decay ``decays`` per tensor."""
+    return _native.WeightFit([np.ascontiguousarray(p[0].numpy(), dtype=np.float32) for p in params], decays,
+                             samples.coords[0].numpy(), samples.values[0].numpy(), samples.cos_in[0].numpy(), kind)
 
 
 def _loss_config(model) -> LossConfig:
@@ -417,9 +417,7 @@ def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossCon
                     record: _Record) -> list[torch.Tensor]:
     """Stage 2 in the native loop (:class:`frenbrdf._native.WeightFit`): Adam's steps as :func:`_optimise` takes
     them, with the penalties as weight decay, over :data:`NATIVE_STEPS` steps a call; the refined tensors."""
-    fit = _native.WeightFit([np.ascontiguousarray(p[0].numpy(), dtype=np.float32) for p in params],
-                            _weight_decays(params, loss), samples.coords[0].numpy(), samples.values[0].numpy(),
-                            samples.cos_in[0].numpy(), loss.kind)
+    fit = _native_fit(params, samples, _weight_decays(params, loss), loss.kind)
     rates = _learning_rates(config.weight_lr, config.weight_steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index("weights"))
     start, taken = time.perf_counter(), 0
