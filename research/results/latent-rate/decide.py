@@ -1,7 +1,7 @@
-"""The latent-rate study's two readings (README.md).
+"""The latent-rate study's exploration (README.md): which rate would be judged. (Its judging readings and rule,
+commit c4b7ef2, were removed unrun: no rate read better than 3e-2.)
 
-    python research/results/latent-rate/decide.py explore OUT   # the candidate: OUT/{families,tables}-{random,devices}
-    python research/results/latent-rate/decide.py judge OUT RATE   # the rule, RATE the candidate; OUT/measured too
+    python research/results/latent-rate/decide.py explore OUT   # OUT/{families,tables}-{random,devices}
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from budget_readings import changes, devices_mean, judged, measured, plain_group, rows_of  # noqa: E402
+from budget_readings import changes, devices_mean, plain_group, rows_of  # noqa: E402
 
 BASE = "latent"
 RATES = ["0.015", "0.06", "0.1"]
@@ -41,28 +41,10 @@ def explore(out: Path) -> None:
     print(f"candidate: {best}" if means[best] > 0 else "no rate reads better than 3e-2: nothing is judged")
 
 
-def judge(out: Path, rate: str) -> None:
-    tests = {prefix: judged(out, prefix, BASE, candidate(rate)) for prefix in ("families", "tables")}
-    rule = {"(a) families, random bins, above 0": tests["families"]["random psnr"]["low"] > 0,
-            "(b) families, the devices' mean, not wholly below 0": tests["families"]["devices psnr"]["high"] > 0,
-            "(c) tables, random bins, not wholly below 0": tests["tables"]["random psnr"]["high"] > 0,
-            "(d) tables, the devices' mean, not wholly below 0": tests["tables"]["devices psnr"]["high"] > 0}
-    if (out / "measured" / "compare.json").exists():
-        rule["(e) the 19 measurements, not wholly below 0"] = measured(
-            out, ["none", BASE, candidate(rate)], BASE, candidate(rate))["high"] > 0
-    for name, passed in rule.items():
-        print(f"{name}: {'passes' if passed else 'FAILS'}")
-    verdict = all(rule.values()) and len(rule) == 5
-    print(f"decision: {'the rate becomes ' + rate if verdict else 'the rate stays 3e-2'}")
-
-
 def main(argv: list[str]) -> int:
-    if len(argv) == 2 and argv[0] == "explore":
-        explore(Path(argv[1]))
-    elif len(argv) == 3 and argv[0] == "judge":
-        judge(Path(argv[1]), argv[2])
-    else:
+    if len(argv) != 2 or argv[0] != "explore":
         sys.exit(__doc__)
+    explore(Path(argv[1]))
     return 0
 
 
