@@ -15,7 +15,6 @@ budgets=(--budgets latent latent@latent_lr=0.015 latent@latent_lr=0.06 latent@la
 read_set() {  # NAME, then the materials
     local name=$1; shift
     for reading in "random --samples 4000" "devices --patterns uniform in-plane gonioreflectometer image-based specular --samples 1500"; do
-        set -- "$@"
         local kind=${reading%% *} how=${reading#* }
         [[ -f "$OUT/$name-$kind/compare.json" ]] && continue
         # shellcheck disable=SC2086
