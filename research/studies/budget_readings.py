@@ -52,9 +52,9 @@ def plain_group(rows: list[dict]) -> str:
     return {row["group"] for row in rows if "@" not in row["group"]}.pop()
 
 
-def devices_mean(rows: list[dict], metric: str, base: str, candidate: str) -> dict[str, float]:
-    """``{material: the change averaged over the device patterns}``, over the materials every pattern read."""
-    per_pattern = changes(rows, metric, plain_group(rows), base, candidate)
+def devices_mean(per_pattern: dict[str, dict[str, float]]) -> dict[str, float]:
+    """``{material: the change averaged over the device patterns}`` of :func:`changes`' ``{pattern: {material:
+    change}}``, over the materials every pattern read."""
     materials = sorted(set.intersection(*(set(p) for p in per_pattern.values())))
     return {m: float(np.mean([p[m] for p in per_pattern.values()])) for m in materials}
 
@@ -68,10 +68,11 @@ def judged(out: Path, prefix: str, base: str, candidate: str) -> dict[str, dict]
         for _pattern, by_material in changes(random, metric, plain_group(random), base, candidate).items():
             print(f"{prefix}, random bins, {metric}: {interval_text(list(by_material.values()))}")
             tests[f"random {metric}"] = paired_interval(list(by_material.values()))
-        mean = list(devices_mean(devices, metric, base, candidate).values())
+        per_pattern = changes(devices, metric, plain_group(devices), base, candidate)
+        mean = list(devices_mean(per_pattern).values())
         print(f"{prefix}, five devices' mean, {metric}: {interval_text(mean)}")
         tests[f"devices {metric}"] = paired_interval(mean)
-        for pattern, by_material in sorted(changes(devices, metric, plain_group(devices), base, candidate).items()):
+        for pattern, by_material in sorted(per_pattern.items()):
             print(f"{prefix}, {pattern}, {metric}: {interval_text(list(by_material.values()))}")
     return tests
 
@@ -89,10 +90,11 @@ def measured(out: Path, budgets: list[str], base: str, candidate: str) -> dict:
     for kind, names in {"all 19": None, **kinds}.items():
         print(f"{kind}: " + "  ".join(f"{budget} {mean(psnr[budget], names):.2f} / {mean(delta_e[budget], names):.2f}"
                                       for budget in budgets))
-    for metric in ("psnr", "delta_e"):
-        change = list(changes(rows, metric, "measured", base, candidate)["merl-bins"].values())
-        print(f"measured, random bins, {metric}: {interval_text(change)}")
+    change = {metric: list(changes(rows, metric, "measured", base, candidate)["merl-bins"].values())
+              for metric in ("psnr", "delta_e")}
+    for metric, values in change.items():
+        print(f"measured, random bins, {metric}: {interval_text(values)}")
     for budget, scores in delta_e.items():
         lost = {material: round(value, 2) for (_, material), value in scores.items() if value > HUE_LOST}
         print(f"ΔE > {HUE_LOST:g} with {budget}: {lost or 'none'}")
-    return paired_interval(list(changes(rows, "psnr", "measured", base, candidate)["merl-bins"].values()))
+    return paired_interval(change["psnr"])

@@ -32,8 +32,9 @@ def explore(out: Path) -> None:
             random = rows_of(out / f"{prefix}-random")
             change = changes(random, "psnr", plain_group(random), BASE, candidate(rate))["merl-bins"]
             four.append(float(np.mean(list(change.values()))))
-            four.append(float(np.mean(list(devices_mean(rows_of(out / f"{prefix}-devices"), "psnr", BASE,
-                                                         candidate(rate)).values()))))
+            devices = rows_of(out / f"{prefix}-devices")
+            per_pattern = changes(devices, "psnr", plain_group(devices), BASE, candidate(rate))
+            four.append(float(np.mean(list(devices_mean(per_pattern).values()))))
         means[rate] = float(np.mean(four))
         print(f"rate {rate}: families random {four[0]:+.2f}, devices {four[1]:+.2f}; tables random {four[2]:+.2f}, "
               f"devices {four[3]:+.2f}; mean {means[rate]:+.3f}")

@@ -8,8 +8,7 @@ set -euo pipefail
 OUT=${1:?OUT folder}
 HERE=$(dirname "$0")
 FAMILIES=local/c4/families22
-TABLES=$(python -c "import json, sys; print(' '.join(f'local/fv8/data/{n}.binary' for n in json.load(open(sys.argv[1]))['holdout'][:20]))" \
-    "$HERE/../folds-v8/config-v8.json")
+TABLES=$(python "$HERE/../../studies/split_names.py" held-out "$HERE/../folds-v8/config-v8.json" local/fv8/data 0 20)
 [ -d "$FAMILIES" ] || frenbrdf synth "$FAMILIES" --n 15 --seed 22 --mix families
 budgets=(--budgets latent latent@latent_lr=0.015 latent@latent_lr=0.06 latent@latent_lr=0.1)
 read_set() {  # NAME, then the materials

@@ -8,8 +8,7 @@ OUT=${1:?OUT folder}
 HERE=$(dirname "$0")
 READ="python $HERE/../../studies/repeated_look.py"
 FAMILIES=local/c4/families19
-TABLES=$(python -c "import json, sys; print(' '.join(f'local/fv8/data/{n}.binary' for n in json.load(open(sys.argv[1]))['holdout'][20:40]))" \
-    "$HERE/../folds-v8/config-v8.json")
+TABLES=$(python "$HERE/../../studies/split_names.py" held-out "$HERE/../folds-v8/config-v8.json" local/fv8/data 20 40)
 mkdir -p "$OUT"
 [ -d "$FAMILIES" ] || frenbrdf synth "$FAMILIES" --n 45 --seed 19 --mix families
 read_set() {  # $1 name, then the materials

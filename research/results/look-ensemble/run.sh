@@ -7,8 +7,7 @@ set -euo pipefail
 OUT=${1:?OUT folder}
 HERE=$(dirname "$0")
 FAMILIES=local/c4/families20
-TABLES=$(python -c "import json, sys; print(' '.join(f'local/fv8/data/{n}.binary' for n in json.load(open(sys.argv[1]))['holdout'][20:40]))" \
-    "$HERE/../folds-v8/config-v8.json")
+TABLES=$(python "$HERE/../../studies/split_names.py" held-out "$HERE/../folds-v8/config-v8.json" local/fv8/data 20 40)
 mkdir -p "$OUT"
 [ -d "$FAMILIES" ] || frenbrdf synth "$FAMILIES" --n 45 --seed 20 --mix families
 OMP_NUM_THREADS=1 python "$HERE/read.py" "$FAMILIES"/*.binary --out "$OUT/families" > "$OUT/families.log" 2>&1 &

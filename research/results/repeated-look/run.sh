@@ -12,8 +12,7 @@ OPTIONS="--steps 1 2 --draws 0 1"
 FAMILIES=local/c4/families17
 HOLDOUT="$HERE/../folds-v8/config-v8.json"
 tables() {  # the held-out tables $1 … $2 of folds-v8's list
-    python -c "import json, sys; print(' '.join(f'local/fv8/data/{n}.binary' for n in json.load(open(sys.argv[1]))['holdout'][int(sys.argv[2]):int(sys.argv[3])]))" \
-        "$HOLDOUT" "$1" "$2"
+    python "$HERE/../../studies/split_names.py" held-out "$HOLDOUT" local/fv8/data "$1" "$2"
 }
 mkdir -p "$OUT"
 [ -d "$FAMILIES" ] || frenbrdf synth "$FAMILIES" --n 45 --seed 17 --mix families

@@ -18,8 +18,7 @@ train() {
 }
 train 1 & train 2 & train 3 & wait
 [ -d "$FAMILIES" ] || frenbrdf synth "$FAMILIES" --n 45 --seed 18 --mix families
-TABLES=$(python -c "import json, sys; print(' '.join(f'local/fv8/data/{n}.binary' for n in json.load(open(sys.argv[1]))['holdout'][20:40]))" \
-    "$HERE/../folds-v8/config-v8.json")
+TABLES=$(python "$HERE/../../studies/split_names.py" held-out "$HERE/../folds-v8/config-v8.json" local/fv8/data 20 40)
 read_set() {  # $1 name, $2 label, then the model options; the materials from $MATERIALS
     OMP_NUM_THREADS=1 python "$STUDIES/repeated_look.py" $MATERIALS --steps 2 --draws 0 1 "${@:3}" \
         --out "$OUT/$1/$2" > "$OUT/$1-$2.log" 2>&1
