@@ -20,8 +20,9 @@ from frenbrdf.io.sampling import bin_directions
 from frenbrdf.models.autoencoder import AutoEncoder
 from frenbrdf.models.losses import FrequencyLoss, FrequencyLossConfig, FrequencyTruth
 from frenbrdf.models.mapping import LogRelativeMapping, MappingConfig
+from frenbrdf.models.nbrdf import bin_geometry
 from frenbrdf.training import config_for, loss_terms
-from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, draw_gains, hue_turn
+from frenbrdf.training.augment import GAIN, MIX, PROCEDURAL, TABLE, BatchDrawer, HueTurn, draw_gains, hue_turn
 from frenbrdf.training.config import AugmentConfig
 from frenbrdf.training.procedural import NodeTruth, draw_procedural
 
@@ -195,6 +196,46 @@ def test_turned_tables_change_hue_stay_physical_and_earlier_batches_are_unchange
     assert torch.stack(hues).std(0).max() > 0.02, hues  # the drawn angles give different hues
 
 
+def test_a_turn_that_shifts_with_angle_is_the_plain_turn_at_each_direction_and_its_bound_holds():
+    geometry = bin_geometry()
+    bins = torch.randperm(len(geometry.half_diff), generator=torch.Generator().manual_seed(0))[:300]
+    coords, colours = geometry.half_diff[bins], torch.rand(300, 3, generator=torch.Generator().manual_seed(1))
+    turn = HueTurn(0.4, shift_h=2.5, shift_d=-1.2)
+    turned = turn.apply(colours, coords)
+    plain = torch.stack([colours[i] @ hue_turn(float(angle)).T for i, angle in enumerate(turn.angles(coords))])
+    np.testing.assert_allclose(turned, plain, atol=1e-5)
+    # The angle moves with θ_h and θ_d as documented: the highlight (cos θ_h = 1) at normal incidence keeps `angle`.
+    at_peak = torch.tensor([[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]])
+    assert float(turn.angles(at_peak)) == pytest.approx(0.4)
+    assert float((turned.sum(1) - colours.sum(1)).abs().max()) < 1e-4  # a turn keeps the grey level
+    # largest() @ c bounds every turned channel of a non-negative colour, wherever the angle lands.
+    assert (turned <= colours @ turn.largest().T + 1e-5).all()
+    assert torch.equal(HueTurn(0.4).apply(colours, coords), colours @ hue_turn(0.4).T)
+
+
+def test_hue_shift_draws_colour_that_changes_with_angle_and_leaves_earlier_batches_unchanged(prepared):
+    _, data = prepared
+    settings = dict(gain=1.0, mix=0.0, procedural=0.0, hue_turn=1.0, gain_range=(1.0, 1.0))
+    still, shifting = (_drawer(prepared, hue_shift=shift, **settings)[0] for shift in (0.0, 0.5))
+    plain = _drawer(prepared, **settings)[0]
+    for first, second in zip(plain.gained(0, 500, torch.Generator().manual_seed(4)),
+                             still.gained(0, 500, torch.Generator().manual_seed(4)), strict=True):
+        assert torch.equal(first, second)
+    turns = [shifting.draw_turn(torch.Generator().manual_seed(seed)) for seed in range(20)]
+    assert all(abs(t.shift_h) <= np.pi and abs(t.shift_d) <= np.pi for t in turns)
+    assert max(abs(t.shift_h) for t in turns) > 1.0 and max(abs(t.shift_d) for t in turns) > 1.0
+    chroma = [(lambda c: float((c.max() - c.min()) / c.max()))(plain.reflectance(m, data.bank.valid_bins(m)).mean(0))
+              for m in range(data.n_train)]
+    material, generator = int(np.argmax(chroma)), torch.Generator().manual_seed(6)
+    bins, values = shifting.gained(material, 4000, generator)
+    colours = data.mapping.inverse(values, shifting.reference[bins]).double()
+    assert torch.isfinite(values).all() and colours.min() >= 0
+    # Near the highlight and far from it the hue differs within one material (it does not for a plain turn).
+    cos_h = bin_geometry().half_diff[bins, 2]
+    near, far = (colours[mask].sum(0) / colours[mask].sum() for mask in (cos_h > 0.99, cos_h < 0.9))
+    assert float((near - far).abs().max()) > 0.02, (near, far)
+
+
 @pytest.mark.parametrize("kind", ["diffuse", "metal"])
 def test_exact_node_truth_agrees_with_the_knn_truth_of_the_table(kind):
     material = synth.draw_material(np.random.default_rng(1), kind)
@@ -217,6 +258,10 @@ def test_augment_config_refuses_bad_values():
         AugmentConfig(hue_turn=float("nan"))
     with pytest.raises(ValueError, match="hue_turn 0.5 turns gained tables, but gain is 0"):
         AugmentConfig(gain=0.0, hue_turn=0.5)
+    with pytest.raises(ValueError, match="hue_shift must lie"):
+        AugmentConfig(hue_turn=0.5, hue_shift=float("nan"))
+    with pytest.raises(ValueError, match="hue_shift 0.2 changes hue turns with angle, but hue_turn is 0"):
+        AugmentConfig(hue_shift=0.2)
     paper = AugmentConfig(mix=0.0, gain=0.0)
     assert not paper.active and dataclasses.replace(paper, procedural=0.1).active
     # The default is the 'augmented' preset; 'paper' switches every kind off.

@@ -8,7 +8,8 @@ materials of the batch (docs/data.md gives the physical argument for each):
   un-mapped to reflectance with f_ref at its bin, mixed, and mapped again;
 - a *gained* table g_c · f, the gains scaled so that the material's largest directional albedo
   (:func:`frenbrdf.data.folders.max_directional_albedo`, computed once in ``prepare``) stays ≤ 1;
-  some of them (``hue_turn``) with their colour first turned about the grey axis (:func:`hue_turn`);
+  some of them (``hue_turn``) with their colour first turned about the grey axis (:func:`hue_turn`), by an
+  angle that changes with direction where ``hue_shift`` says (:class:`HueTurn`);
 - a *procedural* material (:mod:`.procedural`), evaluated exactly at the sampled bins, with
   its L_fre truth evaluated exactly at the SHT nodes.
 
@@ -196,24 +197,68 @@ class BatchDrawer:
     def gained(self, a: int, n: int, generator: torch.Generator,
                pattern: str | None = None) -> tuple[torch.Tensor, torch.Tensor]:
         """Bins and mapped values of material ``a`` in another colour: its hue turned (for a share
-        ``hue_turn`` of them), then per-channel gains (:func:`draw_gains`); the context part of the bins read
-        through ``pattern`` (:meth:`role_bins`)."""
+        ``hue_turn`` of them, by an angle that may change with direction: :class:`HueTurn`), then per-channel gains
+        (:func:`draw_gains`); the context part of the bins read through ``pattern`` (:meth:`role_bins`)."""
         turn = self.draw_turn(generator)
         # A turned colour's channel is at most the turn's |row| times the channels: so is its albedo.
-        albedo = self.data.albedo[a] if turn is None else turn.abs() @ self.data.albedo[a]
+        albedo = self.data.albedo[a] if turn is None else turn.largest() @ self.data.albedo[a]
         gains = draw_gains(albedo, self.augment.gain_range, generator)
         bins = self.role_bins(self.data.bank.valid_bins(a), lambda: self.data.bank.valid[a], n, generator, pattern)
         colours = self.reflectance(a, bins)
         if turn is not None:
-            colours = (colours @ turn.T).clamp_min(0)
+            colours = turn.apply(colours, bin_geometry().half_diff[bins]).clamp_min(0)
         return bins, self.data.mapping.forward(gains * colours, self.reference[bins])
 
-    def draw_turn(self, generator: torch.Generator) -> torch.Tensor | None:
-        """A hue turn for a gained table, or None; draws nothing when ``hue_turn`` is 0 (earlier runs' batches)."""
+    def draw_turn(self, generator: torch.Generator) -> HueTurn | None:
+        """A hue turn for a gained table, or None; draws nothing when ``hue_turn`` is 0, and no change with angle
+        when ``hue_shift`` is 0 (earlier runs' batches, bit for bit)."""
         if self.augment.hue_turn == 0:
             return None
         chance, angle = torch.rand(2, generator=generator, dtype=torch.float64).tolist()
-        return hue_turn(2 * math.pi * angle) if chance < self.augment.hue_turn else None
+        if chance >= self.augment.hue_turn:
+            return None
+        shift_h = shift_d = 0.0
+        if self.augment.hue_shift > 0:
+            u_h, u_d = torch.rand(2, generator=generator, dtype=torch.float64).tolist()
+            shift_h, shift_d = ((2 * u - 1) * self.augment.hue_shift for u in (u_h, u_d))
+        return HueTurn(2 * math.pi * angle, 2 * math.pi * shift_h, 2 * math.pi * shift_d)
+
+
+@dataclass(frozen=True)
+class HueTurn:
+    """A turn of colour about the grey axis whose angle changes with direction:
+    ``angle + shift_h · θ_h / 90° + shift_d · θ_d / 90°`` (radians), so that the hue moves from the highlight
+    outwards and towards grazing, as it does on thin films and colour-shift wraps. With both shifts 0 it is one
+    :func:`hue_turn` for every direction."""
+
+    angle: float
+    shift_h: float = 0.0
+    shift_d: float = 0.0
+
+    def angles(self, coords: torch.Tensor) -> torch.Tensor:
+        """The turn's angle ``(n,)`` at NBRDF inputs ``(n, 6)`` (H then D: cos θ_h and cos θ_d are their z)."""
+        theta_h, theta_d = (torch.arccos(coords[:, axis].double().clamp(-1, 1)) / (math.pi / 2) for axis in (2, 5))
+        return self.angle + self.shift_h * theta_h + self.shift_d * theta_d
+
+    def apply(self, colours: torch.Tensor, coords: torch.Tensor) -> torch.Tensor:
+        """``colours`` ``(n, 3)`` turned by the angle at each of the NBRDF inputs ``coords`` ``(n, 6)``
+        (Rodrigues' formula, as :func:`hue_turn`)."""
+        if self.shift_h == 0 and self.shift_d == 0:
+            return colours @ hue_turn(self.angle).T
+        theta = self.angles(coords).double().unsqueeze(1)
+        axis = torch.full((3,), 1 / math.sqrt(3), dtype=torch.float64)
+        c = colours.double()
+        turned = (torch.cos(theta) * c + torch.sin(theta) * torch.linalg.cross(axis.expand_as(c), c)
+                  + (1 - torch.cos(theta)) * (c @ axis).unsqueeze(1) * axis)
+        return turned.to(colours.dtype)
+
+    def largest(self, steps: int = 33) -> torch.Tensor:
+        """``(3, 3)``: each entry's largest magnitude over the angles the turn takes (sampled in ``steps``), so that
+        ``largest() @ albedo`` bounds the turned material's albedo per channel."""
+        low = self.angle + min(self.shift_h, 0.0) + min(self.shift_d, 0.0)
+        high = self.angle + max(self.shift_h, 0.0) + max(self.shift_d, 0.0)
+        turns = torch.stack([hue_turn(float(t)).abs() for t in np.linspace(low, high, steps if high > low else 1)])
+        return turns.amax(dim=0)
 
 
 def hue_turn(angle: float) -> torch.Tensor:

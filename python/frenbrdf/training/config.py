@@ -46,6 +46,10 @@ def selection_score(entry: dict, rule: str) -> float | None:
     return -entry["val_psnr"] if "val_psnr" in entry else None
 
 
+#: The most turns of hue a material's colour may go through from θ = 0 to 90° (:attr:`AugmentConfig.hue_shift`).
+MAX_HUE_SHIFT = 4.0
+
+
 @dataclass
 class AugmentConfig:
     """Materials the training batches hold beyond the tables (docs/data.md). The defaults are the
@@ -71,6 +75,12 @@ class AugmentConfig:
     """Fraction of the gained tables whose colour is first turned about the grey axis by an angle drawn
     uniformly (:func:`frenbrdf.training.augment.hue_turn`): a red car paint becomes a yellow or a blue one,
     greys stay grey. Channels the turn takes below 0 are clipped to 0."""
+    hue_shift: float = 0.0
+    """With hue turns: how far, in turns, a turn may change with angle. Each turned table's angle becomes
+    a + s_h · θ_h / 90° + s_d · θ_d / 90°, with s_h, s_d drawn uniformly in [−hue_shift, hue_shift] turns: a
+    material whose colour shifts from the highlight outwards and towards grazing, as thin films, interference
+    pigments and colour-shift wraps do (:func:`frenbrdf.training.augment.shifting_hue_turn`). 0 (the default):
+    one angle for all directions, drawn exactly as before this option."""
     procedural: float = 0.0
     """Fraction of batch materials drawn afresh every step from the analytic families of
     :mod:`frenbrdf.data.synth` and evaluated exactly at the sampled bins."""
@@ -89,6 +99,10 @@ class AugmentConfig:
             problems.append(f"mix + gain + procedural must be ≤ 1, got {self.mix + self.gain + self.procedural:g}")
         if self.hue_turn > 0 and self.gain == 0:
             problems.append(f"hue_turn {self.hue_turn:g} turns gained tables, but gain is 0: there are none")
+        if not 0.0 <= self.hue_shift <= MAX_HUE_SHIFT:
+            problems.append(f"hue_shift must lie in [0, {MAX_HUE_SHIFT}] turns, got {self.hue_shift}")
+        elif self.hue_shift > 0 and self.hue_turn == 0:
+            problems.append(f"hue_shift {self.hue_shift:g} changes hue turns with angle, but hue_turn is 0: there are none")
         if len(low_high) != 2 or not (0 < low_high[0] <= low_high[1] and math.isfinite(low_high[1])):
             problems.append(f"gain_range must be two finite numbers 0 < low ≤ high, got {low_high}")
         if problems:
