@@ -79,7 +79,7 @@ class AugmentConfig:
     """With hue turns: how far, in turns, a turn may change with angle. Each turned table's angle becomes
     a + s_h · θ_h / 90° + s_d · θ_d / 90°, with s_h, s_d drawn uniformly in [−hue_shift, hue_shift] turns: a
     material whose colour shifts from the highlight outwards and towards grazing, as thin films, interference
-    pigments and colour-shift wraps do (:func:`frenbrdf.training.augment.shifting_hue_turn`). 0 (the default):
+    pigments and colour-shift wraps do (:class:`frenbrdf.training.augment.HueTurn`). 0 (the default):
     one angle for all directions, drawn exactly as before this option."""
     procedural: float = 0.0
     """Fraction of batch materials drawn afresh every step from the analytic families of
