@@ -26,6 +26,7 @@ valid bins. With the ``paper`` sampling the generator is used exactly as before 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -235,39 +236,56 @@ class HueTurn:
     shift_h: float = 0.0
     shift_d: float = 0.0
 
+    @property
+    def shifts(self) -> bool:
+        return self.shift_h != 0 or self.shift_d != 0
+
+    @functools.cached_property
+    def plain(self) -> torch.Tensor:
+        """The ``(3, 3)`` turn by ``angle`` alone."""
+        return hue_turn(self.angle)
+
     def angles(self, coords: torch.Tensor) -> torch.Tensor:
         """The turn's angle ``(n,)`` at NBRDF inputs ``(n, 6)`` (H then D: cos θ_h and cos θ_d are their z)."""
         theta_h, theta_d = (torch.arccos(coords[:, axis].double().clamp(-1, 1)) / (math.pi / 2) for axis in (2, 5))
         return self.angle + self.shift_h * theta_h + self.shift_d * theta_d
 
     def apply(self, colours: torch.Tensor, coords: torch.Tensor) -> torch.Tensor:
-        """``colours`` ``(n, 3)`` turned by the angle at each of the NBRDF inputs ``coords`` ``(n, 6)``
-        (Rodrigues' formula, as :func:`hue_turn`)."""
-        if self.shift_h == 0 and self.shift_d == 0:
-            return colours @ hue_turn(self.angle).T
-        theta = self.angles(coords).double().unsqueeze(1)
-        axis = torch.full((3,), 1 / math.sqrt(3), dtype=torch.float64)
-        c = colours.double()
-        turned = (torch.cos(theta) * c + torch.sin(theta) * torch.linalg.cross(axis.expand_as(c), c)
-                  + (1 - torch.cos(theta)) * (c @ axis).unsqueeze(1) * axis)
-        return turned.to(colours.dtype)
+        """``colours`` ``(n, 3)`` turned by the angle at each of the NBRDF inputs ``coords`` ``(n, 6)``."""
+        if not self.shifts:
+            return colours @ self.plain.T
+        turns = hue_turns(self.angles(coords))
+        return torch.einsum("nij,nj->ni", turns, colours.double()).to(colours.dtype)
 
     def largest(self, steps: int = 33) -> torch.Tensor:
         """``(3, 3)``: each entry's largest magnitude over the angles the turn takes (sampled in ``steps``), so that
         ``largest() @ albedo`` bounds the turned material's albedo per channel."""
+        if not self.shifts:
+            return self.plain.abs()
         low = self.angle + min(self.shift_h, 0.0) + min(self.shift_d, 0.0)
         high = self.angle + max(self.shift_h, 0.0) + max(self.shift_d, 0.0)
-        turns = torch.stack([hue_turn(float(t)).abs() for t in np.linspace(low, high, steps if high > low else 1)])
-        return turns.amax(dim=0)
+        return hue_turns(torch.linspace(low, high, steps, dtype=torch.float64)).abs().amax(dim=0).float()
 
 
 def hue_turn(angle: float) -> torch.Tensor:
     """The ``(3, 3)`` rotation of linear RGB about the grey axis by ``angle`` (radians, Rodrigues' formula):
     greys are kept, and a third of a turn takes red to green to blue."""
+    cos, sin = (torch.tensor(value, dtype=torch.float64) for value in (math.cos(angle), math.sin(angle)))
+    return _rodrigues(cos, sin).float()
+
+
+def hue_turns(angles: torch.Tensor) -> torch.Tensor:
+    """:func:`hue_turn` for each of ``angles`` ``(n,)``: ``(n, 3, 3)``, float64."""
+    angles = angles.double()[:, None, None]
+    return _rodrigues(torch.cos(angles), torch.sin(angles))
+
+
+def _rodrigues(cos: torch.Tensor, sin: torch.Tensor) -> torch.Tensor:
+    """The turn about the grey axis with these cosines and sines (broadcast against ``(3, 3)``), float64."""
     k = torch.full((3,), 1 / math.sqrt(3), dtype=torch.float64)
     cross = torch.tensor([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]], dtype=torch.float64)
-    turn = math.cos(angle) * torch.eye(3, dtype=torch.float64) + math.sin(angle) * cross
-    return (turn + (1 - math.cos(angle)) * torch.outer(k, k)).float()
+    turn = cos * torch.eye(3, dtype=torch.float64) + sin * cross
+    return turn + (1 - cos) * torch.outer(k, k)
 
 
 def draw_gains(albedo: torch.Tensor, gain_range: tuple[float, float], generator: torch.Generator) -> torch.Tensor:
