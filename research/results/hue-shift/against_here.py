@@ -8,17 +8,19 @@ difference and its 95 % t interval, encoder and `latent`, PSNR and ΔE.
 
 from __future__ import annotations
 
-import json
 import sys
+from pathlib import Path
 
 import numpy as np
-from scipy import stats
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+from budget_readings import interval_text, rows_of  # noqa: E402
 
 
 def readings(paths: list[str]) -> dict[tuple[str, str], tuple[float, float]]:
     """(material, budget) → (PSNR, ΔE) of the readings in compare.json files."""
     return {(row["material"], row["budget"]): (row["psnr"], row["delta_e"])
-            for path in paths for row in json.load(open(path))["rows"]}
+            for path in paths for row in rows_of(Path(path).parent)}
 
 
 def main(base_path: str, new_paths: list[str]) -> None:
@@ -26,11 +28,9 @@ def main(base_path: str, new_paths: list[str]) -> None:
     for budget in ("none", "latent"):
         materials = sorted(m for (m, b) in base if b == budget and (m, b) in new)
         for i, metric in enumerate(("PSNR", "ΔE")):
-            change = np.array([new[m, budget][i] - base[m, budget][i] for m in materials])
-            low, high = stats.t.interval(0.95, len(change) - 1, change.mean(), stats.sem(change))
-            print(f"{budget:6s} {metric:4s} n={len(change)}  here {np.mean([base[m, budget][i] for m in materials]):.2f}"
-                  f"  mfshift {np.mean([new[m, budget][i] for m in materials]):.2f}"
-                  f"  change {change.mean():+.2f} [{low:+.2f}, {high:+.2f}]")
+            change = [new[m, budget][i] - base[m, budget][i] for m in materials]
+            print(f"{budget:6s} {metric:4s} here {np.mean([base[m, budget][i] for m in materials]):.2f}"
+                  f"  mfshift {np.mean([new[m, budget][i] for m in materials]):.2f}  change {interval_text(change)}")
 
 
 if __name__ == "__main__":
