@@ -12,7 +12,8 @@ folder, all of it or nothing:
     Its MERL table.
 ``render.png``
     The reconstruction on the metric renderer's sphere; with a MERL input also
-    ``truth.png`` and ``comparison.png`` (truth | reconstruction); a ``.bsdf`` truth renders as measured.
+    ``truth.png`` and ``comparison.png`` (the truth beside the reconstruction, titled with the render PSNR and ΔE);
+    a ``.bsdf`` truth renders as measured.
 ``spectrum.png``
     With a MERL or ``.bsdf`` input: the per-degree power spectra of the truth and of the reconstruction and the
     error's, per θ_h slice (:mod:`frenbrdf.evaluation.spectrum`): where the reconstruction loses its frequencies.
@@ -130,7 +131,6 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
               "ordered": result.nbrdf.ordered, "coverage": coverage_summary(measurements.wi, measurements.wo)}
     if measurements.truth is not None and measurements.table is not None:  # a whole material, not scattered samples
         images["truth"] = render(measurements.truth, scene)
-        images["comparison"] = np.concatenate([images["truth"], images["render"]], axis=1)
         report["metrics"] = truth_metrics(loaded, result, measurements, images["truth"], images["render"], scene)
         from ..evaluation.spectrum import SpectrumSummary
 
@@ -138,7 +138,7 @@ def reconstruct_file(source: str | os.PathLike, out_dir: str | os.PathLike, *, m
         spectrum.add(measurements.table, {"reconstruction": result.nbrdf})
         report["spectrum"] = spectrum.summary()
     report["files"] = sorted(FILES[name] for name in ["nbrdf", "merl", "report", *images,
-                                                      *(["spectrum"] if "spectrum" in report else [])])
+                                                      *(["comparison", "spectrum"] if "truth" in images else [])])
     table = result.nbrdf.merl_table()
     _write_folder(out, result, table, images, report, spectrum if "spectrum" in report else None)
     return report
@@ -157,6 +157,24 @@ def truth_metrics(model: Model, result: Reconstruction, measurements: Measuremen
     metrics = image_metrics(truth_image, image, mask, highlight_mask(render_linear(measurements.truth, scene), mask))
     metrics["lfre"] = FrequencyMetric()(model, measurements.table, result.nbrdf)
     return metrics
+
+
+def save_comparison(path: str | os.PathLike, truth: np.ndarray, image: np.ndarray, metrics: dict) -> None:
+    """Writes the truth's render beside the reconstruction's, each titled, at their own pixel size."""
+    from matplotlib.figure import Figure
+
+    from ..render.renderer import save_figure
+
+    dpi, title_px = 100, 28
+    height, width = truth.shape[:2]
+    figure = Figure(figsize=(2 * width / dpi, (height + title_px) / dpi), dpi=dpi, facecolor="black")
+    titles = ["measured (truth)", f"reconstruction: {metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.2f}"]
+    for column, (shown, title) in enumerate(zip([truth, image], titles, strict=True)):
+        axes = figure.add_axes((column / 2, 0, 1 / 2, height / (height + title_px)))
+        axes.imshow(np.clip(shown, 0, 1), interpolation="nearest")
+        axes.set_axis_off()
+        axes.set_title(title, color="white", fontsize=9 if width >= 192 else 6, pad=4)
+    save_figure(figure, path, dpi=dpi)
 
 
 def check_out(source: str | os.PathLike, out_dir: str | os.PathLike, model: str | os.PathLike = "pretrained", *,
@@ -179,6 +197,8 @@ def _write_folder(out: OutputFolder, result: Reconstruction, table: np.ndarray, 
         write_material(staging / FILES["merl"], table)
         for name, image in images.items():
             save_png(staging / FILES[name], image)
+        if "truth" in images:  # a whole material, its truth rendered beside
+            save_comparison(staging / FILES["comparison"], images["truth"], images["render"], report["metrics"])
         if spectrum is not None:
             spectrum.write(staging / FILES["spectrum"])
         save_json(staging / FILES["report"], report)
