@@ -323,23 +323,6 @@ def _reconstruct(*args):
     return cli.main(["reconstruct", *map(str, args), "--quiet"])
 
 
-def test_the_comparison_shows_the_truth_left_and_the_reconstruction_right_under_titles(tmp_path):
-    import matplotlib.image
-
-    from frenbrdf.material.outputs import save_comparison
-
-    truth, image = np.zeros((64, 64, 3)), np.zeros((64, 64, 3))
-    truth[..., 0], image[..., 2] = 0.8, 0.6  # red beside blue
-    save_comparison(tmp_path / "c.png", truth, image, {"psnr": 31.25, "delta_e": 2.5})
-    written = matplotlib.image.imread(tmp_path / "c.png")[..., :3]
-    band = written.shape[0] - 64
-    assert written.shape[1] == 128 and band > 0
-    np.testing.assert_allclose(written[band:, :64].mean(axis=(0, 1)), [0.8, 0, 0], atol=0.01)
-    np.testing.assert_allclose(written[band:, 64:].mean(axis=(0, 1)), [0, 0, 0.6], atol=0.01)
-    for half in (written[:band, :64], written[:band, 64:]):  # each image has its title in the band above it
-        assert (half.min(axis=-1) > 0.5).sum() > 20
-
-
 def test_the_command_end_to_end(run_dir, toy_materials, tmp_path, capsys):
     source = sorted(toy_materials.glob("*.binary"))[1]
     out = tmp_path / "result"

@@ -10,9 +10,9 @@ folder, written whole or not at all (:class:`frenbrdf.io.outputs.OutputFolder`):
 ``t-0.250.binary``, ``t-0.250.png`` …
     Per position t, the material's MERL table and its render on the metric renderer's sphere.
 ``strip.png``
-    The renders side by side, t rising to the right; where an input is a whole material (a MERL ``.binary``, a
-    ``.bsdf``), its own render frames the strip on its side (a's on the left, b's on the right), set apart by a
-    white gap.
+    The renders side by side, t rising to the right, each titled with its t; where an input is a whole material (a
+    MERL ``.binary``, a ``.bsdf``), its own render frames the strip on its side (a's on the left, b's on the right,
+    titled "a, measured" and "b, measured"), set apart by a white gap.
 ``edit.json``
     The mode, the positions, the inputs, the model, the refinement, each reconstruction's latent, seconds and
     losses, and for a whole-material input the image metrics of the edit's end on its side against the input's
@@ -38,6 +38,7 @@ from ..io.samples import Measurements
 from ..models.autoencoder import load_model
 from ..models.editing import interpolate
 from ..models.reconstruct import refine_config
+from ..render.figures import titled_row
 from ..render.renderer import Scene, material_mask, render, render_linear, save_png
 
 #: The positions ``frenbrdf edit`` writes when none are given.
@@ -158,19 +159,21 @@ def edit_files(source_a: str | os.PathLike, source_b: str | os.PathLike, out_dir
                                           disable=not progress, leave=False):
             write_material(staging / f"{name}.binary", material.merl_table())
             save_png(staging / f"{name}.png", image)
-        save_png(staging / FILES["strip"], strip(renders, truths.get("a"), truths.get("b")))
+        save_png(staging / FILES["strip"], strip(renders, positions, truths.get("a"), truths.get("b")))
         save_json(staging / FILES["report"], report)
     return report
 
 
-def strip(renders: list[np.ndarray], truth_a: np.ndarray | None = None,
+def strip(renders: list[np.ndarray], positions: list[float], truth_a: np.ndarray | None = None,
           truth_b: np.ndarray | None = None) -> np.ndarray:
-    """The renders side by side, framed by the inputs' own renders where given, each set apart by a white gap of
-    a sixteenth of a render's width."""
+    """The renders side by side under their positions (:func:`frenbrdf.render.figures.titled_row`), framed by the
+    inputs' own renders where given, each set apart by a white gap of a sixteenth of a render's width."""
     gap = np.ones((renders[0].shape[0], max(1, renders[0].shape[1] // 16), 3), dtype=renders[0].dtype)
     parts = ([truth_a, gap] if truth_a is not None else []) + list(renders) + \
         ([gap, truth_b] if truth_b is not None else [])
-    return np.concatenate(parts, axis=1)
+    titles = (["a, measured", None] if truth_a is not None else []) + [f"t = {t:g}" for t in positions] + \
+        ([None, "b, measured"] if truth_b is not None else [])
+    return titled_row(parts, titles)
 
 
 def _end_metrics(measurement: Measurements, truth: np.ndarray, image: np.ndarray, scene: Scene) -> dict:

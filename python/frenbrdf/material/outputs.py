@@ -42,6 +42,7 @@ from ..io.samples import Measurements
 from ..models.autoencoder import Model, load_model
 from ..models.coverage import coverage_summary
 from ..models.reconstruct import Reconstruction, refine_config
+from ..render.figures import titled_row
 from ..render.renderer import Scene, material_mask, render, save_png
 
 #: The file names of the result folder.
@@ -159,24 +160,6 @@ def truth_metrics(model: Model, result: Reconstruction, measurements: Measuremen
     return metrics
 
 
-def save_comparison(path: str | os.PathLike, truth: np.ndarray, image: np.ndarray, metrics: dict) -> None:
-    """Writes the truth's render beside the reconstruction's, each titled, at their own pixel size."""
-    from matplotlib.figure import Figure
-
-    from ..render.renderer import save_figure
-
-    dpi, title_px = 100, 28
-    height, width = truth.shape[:2]
-    figure = Figure(figsize=(2 * width / dpi, (height + title_px) / dpi), dpi=dpi, facecolor="black")
-    titles = ["measured (truth)", f"reconstruction: {metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.2f}"]
-    for column, (shown, title) in enumerate(zip([truth, image], titles, strict=True)):
-        axes = figure.add_axes((column / 2, 0, 1 / 2, height / (height + title_px)))
-        axes.imshow(np.clip(shown, 0, 1), interpolation="nearest")
-        axes.set_axis_off()
-        axes.set_title(title, color="white", fontsize=9 if width >= 192 else 6, pad=4)
-    save_figure(figure, path, dpi=dpi)
-
-
 def check_out(source: str | os.PathLike, out_dir: str | os.PathLike, model: str | os.PathLike = "pretrained", *,
               overwrite: bool = False) -> OutputFolder:
     """Where :func:`reconstruct_file` may write, checked before any work (:class:`frenbrdf.io.outputs.OutputFolder`):
@@ -198,7 +181,9 @@ def _write_folder(out: OutputFolder, result: Reconstruction, table: np.ndarray, 
         for name, image in images.items():
             save_png(staging / FILES[name], image)
         if "truth" in images:  # a whole material, its truth rendered beside
-            save_comparison(staging / FILES["comparison"], images["truth"], images["render"], report["metrics"])
+            metrics = report["metrics"]
+            titles = ["measured (truth)", f"reconstruction: {metrics['psnr']:.1f} dB, ΔE {metrics['delta_e']:.2f}"]
+            save_png(staging / FILES["comparison"], titled_row([images["truth"], images["render"]], titles))
         if spectrum is not None:
             spectrum.write(staging / FILES["spectrum"])
         save_json(staging / FILES["report"], report)

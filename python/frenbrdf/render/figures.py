@@ -5,6 +5,8 @@
 - ``renders.png``: truth | each method (and its refined render beside it, when the evaluation refined),
   for the materials :func:`rendered_materials` picks.
 - ``interpolation.png``: the first edited pair at t = 0, the interior weights and 1.
+
+And :func:`titled_row`, the renders side by side under their titles that ``reconstruct`` and ``edit`` write.
 """
 
 from __future__ import annotations
@@ -14,6 +16,38 @@ from pathlib import Path
 import numpy as np
 
 from .renderer import Scene, render_linear, save_figure, tonemap
+
+#: The titles' largest and smallest font size (points at 100 dpi); a row too narrow for the smallest goes untitled.
+TITLE_POINTS = (9.0, 5.0)
+
+
+def titled_row(images: list[np.ndarray], titles: list[str | None]) -> np.ndarray:
+    """Images of one height side by side, each under its title (None: untitled, e.g. a gap), as one display image.
+
+    The pixels are the images' own; only the band of titles above them is drawn by matplotlib, so the row costs
+    little more memory than the images. The titles share one size, the largest at which each fits its column.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    row = np.concatenate(images, axis=1)
+    widths = [image.shape[1] for image in images]
+    # Text is about 0.55 em a character wide; an em is points × 100/72 pixels at 100 dpi.
+    size = min([TITLE_POINTS[0], *(0.95 * width / (0.55 * len(title) * 100 / 72)
+                                   for title, width in zip(titles, widths, strict=True) if title)])
+    if size < TITLE_POINTS[1] or not any(titles):
+        return row
+    band = int(np.ceil(2.2 * size * 100 / 72))
+    figure = Figure(figsize=(row.shape[1] / 100, band / 100), dpi=100, facecolor="black")
+    left = np.cumsum([0, *widths]) / row.shape[1]
+    for title, start, stop in zip(titles, left[:-1], left[1:], strict=True):
+        if title:
+            figure.text((start + stop) / 2, 0.45, title, color="white", fontsize=size, ha="center", va="center")
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    drawn = np.asarray(canvas.buffer_rgba())[:band, :row.shape[1], :3].astype(row.dtype) / 255
+    return np.concatenate([drawn, row], axis=0)
+
 
 #: Per-material metrics shown in ``histograms.png``, one column each.
 HISTOGRAM_METRICS = (("rmse", "RMSE"), ("psnr", "PSNR"), ("ssim", "SSIM"), ("delta_e", "ΔE"))
