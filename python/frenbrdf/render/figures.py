@@ -11,6 +11,7 @@ And :func:`titled_row`, the renders side by side under their titles that ``recon
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,7 @@ from .renderer import Scene, render_linear, save_figure, tonemap
 TITLE_POINTS = (9.0, 5.0)
 
 
-def titled_row(images: list[np.ndarray], titles: list[str | None]) -> np.ndarray:
+def titled_row(images: list[np.ndarray], titles: Sequence[str | None]) -> np.ndarray:
     """Images of one height side by side, each under its title (None: untitled, e.g. a gap), as one display image.
 
     The pixels are the images' own; only the band of titles above them is drawn by matplotlib, so the row costs
