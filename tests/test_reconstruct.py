@@ -319,6 +319,31 @@ def test_named_budgets_are_copies():
 # --------------------------------------------------------------------------- the command
 
 
+def test_the_latent_stages_adam_takes_torchs_adam_steps_to_the_bit():
+    """``_Adam`` (the latent stage's, to spare torch.optim's import of torch._dynamo) against torch's own
+    single-tensor Adam: two tensors with their own weight decay (one none), a falling rate."""
+    from frenbrdf.models.reconstruct import _Adam
+
+    generator = torch.Generator().manual_seed(0)
+    ours = [torch.randn(64, generator=generator), torch.randn(3, 5, generator=generator)]
+    theirs = [p.clone() for p in ours]
+    decays = [0.003, 0.0]
+    adam = _Adam(ours, decays)
+    reference = torch.optim.Adam([{"params": [p], "weight_decay": d} for p, d in zip(theirs, decays, strict=True)],
+                                 lr=1.0, foreach=False, fused=False)
+    for step in range(200):
+        rate = 0.03 * (1 + np.cos(np.pi * step / 200)) / 2
+        for mine, other in zip(ours, theirs, strict=True):
+            mine.grad = torch.randn(mine.shape, generator=generator)
+            other.grad = mine.grad.clone()
+        for group in reference.param_groups:
+            group["lr"] = rate
+        adam.step(rate)
+        reference.step()
+    for mine, other in zip(ours, theirs, strict=True):
+        assert torch.equal(mine, other)
+
+
 def _reconstruct(*args):
     return cli.main(["reconstruct", *map(str, args), "--quiet"])
 

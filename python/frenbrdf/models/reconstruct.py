@@ -392,8 +392,7 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
     batch) and leaves its gradient in the parameters' ``.grad``. The stage's penalty (a mean square of each tensor,
     times λ) is not in it: it enters as Adam's weight decay, ``decays`` per tensor (its gradient 2·λ·p / n is the
     decay times p), the same steps as differentiating it for ~30 fewer small ops a step (research/performance.md)."""
-    groups = [{"params": [p], "weight_decay": decay} for p, decay in zip(parameters, decays, strict=True)]
-    optimizer = torch.optim.Adam(groups, lr=lr, fused=True)  # one kernel per group (research/performance.md)
+    optimizer = _Adam(parameters, decays)
     rates = _learning_rates(lr, steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
     start, taken = time.perf_counter(), 0
@@ -401,16 +400,37 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
         if config.seconds is not None and time.perf_counter() - start > config.seconds:
             break
         rows = None if count <= config.batch else torch.randint(count, (config.batch,), generator=generator).numpy()
-        optimizer.zero_grad(set_to_none=True)
         value = step(rows)
         if not math.isfinite(value):  # finite at the start (checked), so the steps made it so
             raise _diverged(stage, taken, lr, value)
-        for group in optimizer.param_groups:
-            group["lr"] = float(rate)
-        optimizer.step()
+        optimizer.step(float(rate))
         taken += 1
     record.timings[stage] = record.timings.get(stage, 0.0) + time.perf_counter() - start  # summed over starts
     record.steps[stage] = record.steps.get(stage, 0) + taken
+
+
+class _Adam:
+    """``torch.optim.Adam``'s steps (its defaults, L2 weight decay per tensor), the same arithmetic as its
+    single-tensor form, on tensors whose ``.grad`` a step leaves. Not torch's own: constructing any ``torch.optim``
+    optimizer first imports ``torch._dynamo``, about 2 s, more than the whole latent stage (research/performance.md)."""
+
+    BETAS, EPS = (0.9, 0.999), 1e-8
+
+    def __init__(self, parameters: list[torch.Tensor], decays: list[float]):
+        self.parameters, self.decays, self.taken = parameters, decays, 0
+        self.moments = [(torch.zeros_like(p), torch.zeros_like(p)) for p in parameters]
+
+    @torch.no_grad()
+    def step(self, lr: float) -> None:
+        (beta1, beta2), self.taken = self.BETAS, self.taken + 1
+        step_size = lr / (1 - beta1 ** self.taken)
+        correction2 = math.sqrt(1 - beta2 ** self.taken)
+        for p, decay, (mean, square) in zip(self.parameters, self.decays, self.moments, strict=True):
+            assert p.grad is not None, "a step leaves the gradient in .grad"
+            grad = p.grad.add(p, alpha=decay) if decay else p.grad  # as torch's: one rounding, not two
+            mean.lerp_(grad, 1 - beta1)
+            square.mul_(beta2).addcmul_(grad, grad, value=1 - beta2)
+            p.addcdiv_(mean, (square.sqrt() / correction2).add_(self.EPS), value=-step_size)
 
 
 def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossConfig, config: RefineConfig,
