@@ -23,7 +23,10 @@ def one_line(error: BaseException) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:  # reading an option's limit imports its module (torch, about 2 s)
+        parser.exit(130, "frenbrdf: interrupted\n")
     try:
         return args.run(args)
     except (ValueError, OSError, TrainingDiverged) as error:  # bad input: a clear message, not a traceback

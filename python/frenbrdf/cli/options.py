@@ -97,6 +97,15 @@ def sample_count(text: str) -> int | None:
     return int(text)
 
 
+def bank_mix(text: str) -> str:
+    """An argparse type: the name of a bank's mix of kinds (:data:`frenbrdf.data.synth.MIXES`)."""
+    from ..data.synth import MIXES
+
+    if text not in MIXES:
+        raise argparse.ArgumentTypeError(f"expected a mix, one of {', '.join(MIXES)}; got {text!r}")
+    return text
+
+
 def pattern(text: str) -> str:
     """An argparse type: the name of a sampling pattern (:data:`frenbrdf.io.patterns.PATTERNS`)."""
     from ..io.patterns import PATTERNS

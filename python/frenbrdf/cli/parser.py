@@ -28,13 +28,11 @@ def _info(subparsers) -> None:
 
 
 def _synth(subparsers) -> None:
-    from ..data.synth import MIXES
-
     synth = subparsers.add_parser("synth", help="write the default bank of analytic materials as MERL files")
     synth.add_argument("out_dir", help="folder to write: a new or empty one, or an earlier bank, which is replaced")
     synth.add_argument("--n", type=options.bank_size, default=100, help="number of materials (default 100)")
     synth.add_argument("--seed", type=options.seed, default=0, help="random seed (default 0)")
-    synth.add_argument("--mix", choices=tuple(MIXES), default="default",
+    synth.add_argument("--mix", type=options.bank_mix, default="default", metavar="MIX",
                        help="default: paints, plastics, metals, fabrics, clear coats; features: what real "
                             "measurements show beyond those (car-paint flakes, retro-reflection, thin films, "
                             "sheen, coats over saturated bases); families: thin-film iridescence, pearlescent "

@@ -46,8 +46,9 @@ import torch
 from tqdm import tqdm
 
 from ..io.keras import N_INPUTS, N_OUTPUTS, Layer, keras_weights, read_keras_nbrdf
-from ..io.merl import FILE_BYTES, write_merl
+from ..io.merl import FILE_BYTES, TABLE_AXES, write_merl
 from ..io.outputs import OutputFolder, check_free_space
+from ..io.reflectance import check_reflectance
 from ..models.nbrdf import NBRDF, nbrdf_forward, nbrdf_merl_table, one_torch_thread
 from .fitting import EXP_MINUS_ONE
 
@@ -185,8 +186,9 @@ def import_nbrdf(weight_paths: Iterable[str | os.PathLike], out_dir: str | os.Pa
                    disable=not progress)
         for path, name, layers in bar:
             table = keras_merl_table(layers)
-            if not np.all(np.isfinite(table)):  # finite weights so large that exp(x) − 1 overflows
-                raise ValueError(f"{path}: the network's output is not finite at {np.sum(~np.isfinite(table)):,} "
-                                 "MERL bins (its weights are too large); not an NBRDF of a material")
+            # What the MERL reader would refuse is not written: finite weights so large that exp(x) − 1 overflows
+            # or passes any reflectance.
+            check_reflectance(table, path, what="network outputs at the MERL bins (not a material's NBRDF)",
+                              axes=TABLE_AXES)
             write_merl(staging / name, table)
     return [out.path / name for name in names]

@@ -455,9 +455,10 @@ def _compare_seeds(runs: list, groups: dict, staging: Path, data, config: Evalua
     """:func:`evaluate_seeds` with several seeds: each evaluated into ``staging/seed-S``, then compared."""
     reports = {seed: evaluate_runs(group, staging / f"seed-{seed}", data=data, config=config, materials=materials)
                for seed, group in sorted(groups.items())}
-    # A row without a finite value on every seed (editing of a single material) cannot be compared.
+    # A row without a value on every seed (editing of a single material: None) cannot be compared.
     keys = [key for key, _ in table_rows(config.refine, config.patterns)
-            if all(np.isfinite(v.get(key, np.nan)) for r in reports.values() for v in r["summary"].values())]
+            if all(v.get(key) is not None and np.isfinite(v[key]) for r in reports.values()
+                   for v in r["summary"].values())]
     comparison = compare_seeds({seed: r["summary"] for seed, r in reports.items()}, keys)
     methods = reports[min(reports)]["reconstruction"]
     all_rows = {m: [row for r in reports.values() for row in r["reconstruction"][m]] for m in methods}

@@ -19,6 +19,7 @@ from ..io.atomic import save_json, write_text
 from ..io.jsonfile import read_json
 from ..io.outputs import OutputFolder
 from ..training import TrainConfig
+from ..training.config import config_from_dict
 from .variants import MeasureSettings, SweepCaches, Variant, base_config, capacity_variants, run_variant, storage
 
 
@@ -59,13 +60,14 @@ def read_front(path: str | os.PathLike) -> dict:
         missing = [k for k in needed if not isinstance(row, dict) or k not in row]
         if missing:
             raise ValueError(f"{path}: row {i} lacks {missing}")
-        if not isinstance(row["psnr"], (int, float)) or math.isnan(row["psnr"]):
+        if isinstance(row["psnr"], bool) or not isinstance(row["psnr"], (int, float)) or not math.isfinite(row["psnr"]):
             raise ValueError(f"{path}: row {i} ({row['name']!r:.40}) has no valid PSNR: {row['psnr']!r:.40}")
         for key in ("bytes_per_material", "latent_bytes"):
             if isinstance(row[key], bool) or not isinstance(row[key], int) or row[key] < 0:
                 raise ValueError(f"{path}: row {i}: {key} must be a whole number ≥ 0, got {row[key]!r:.40}")
         if not isinstance(row["name"], str) or not isinstance(row["config"], dict):
             raise ValueError(f"{path}: row {i}: name must be a string and config a JSON object (a training config)")
+        config_from_dict(dict(row["config"]), f"{path}: row {i}'s config")  # what select writes, train must read
     if not chart["rows"]:
         raise ValueError(f"{path}: holds no measured configuration")
     return chart

@@ -64,9 +64,9 @@ def table_rows(refine: str = "none", patterns=()) -> list[tuple[str, str]]:
               for key, label in reconstruction), *(row for row in rows if row[0].startswith("edit_"))]
 
 
-def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
+def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float | None]:
     """The table's numbers of one method: means over its reconstruction ``rows`` and its ``edit_rows``
-    (NaN without edits); the refined ones too when the rows hold them, and each further sampling pattern's
+    (None without edits: ``null`` in ``evaluation.json``); the refined ones too when the rows hold them, and each further sampling pattern's
     (row keys ``<key>@<pattern>``: summary keys ``<summary key>@<pattern>``)."""
     summary = _summary(rows, edit_rows)
     suffixes = dict.fromkeys("@" + key.partition("@")[2] for key in (rows[0] if rows else {}) if "@" in key)
@@ -78,10 +78,10 @@ def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
     return summary
 
 
-def _summary(rows: list[dict], edit_rows: list[dict]) -> dict[str, float]:
+def _summary(rows: list[dict], edit_rows: list[dict]) -> dict[str, float | None]:
     """:func:`summarise` of one pattern's rows (plain keys)."""
     def mean(values, key, scale=1.0):
-        return scale * float(np.mean([r[key] for r in values])) if values else float("nan")
+        return scale * float(np.mean([r[key] for r in values])) if values else None
 
     summary = {"rmse_x100": mean(rows, "rmse", 100), "psnr": mean(rows, "psnr"), "ssim_x10": mean(rows, "ssim", 10),
                "lfre": mean(rows, "lfre"), "delta_e": mean(rows, "delta_e"), "edit_psnr": mean(edit_rows, "psnr"),
@@ -242,7 +242,7 @@ def markdown_table(summary: dict, n_materials: int, n_edits: int, materials: str
         if key.partition("@")[0] in HIGHLIGHT_KEYS and any(key not in summary[m] for m in methods):
             continue  # a report from before the highlight metrics
         if key.startswith("edit_") and not n_edits:
-            continue  # a single material: nothing to interpolate, every value NaN
+            continue  # a single material: nothing to interpolate, every value None
         ours = " | ".join(f"{summary[m][key]:.3g}" for m in methods)
         paper = " | ".join(f"{PAPER[m].get(key, '–')}" for m in PAPER)
         lines.append(f"| {label} | {ours} | {paper} |")

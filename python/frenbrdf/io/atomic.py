@@ -14,6 +14,7 @@ import contextlib
 import csv
 import io
 import json
+import math
 import os
 import uuid
 from collections.abc import Iterator
@@ -110,8 +111,20 @@ def write_text(path: str | os.PathLike, text: str) -> None:
 
 
 def save_json(path: str | os.PathLike, data) -> None:
-    """Writes JSON (indented, newline-terminated) atomically."""
-    write_text(path, json.dumps(data, indent=2) + "\n")
+    """Writes JSON (indented, newline-terminated) atomically. JSON has no NaN nor infinity: a float that is not
+    finite is written as ``null`` (no value), so that every JSON reader reads the file."""
+    write_text(path, json.dumps(_finite_or_none(data), indent=2, allow_nan=False) + "\n")
+
+
+def _finite_or_none(value):
+    """``value`` with every float that is not finite replaced by None, in copies of its dicts, lists and tuples."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: _finite_or_none(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_none(item) for item in value]
+    return value
 
 
 def save_csv(path: str | os.PathLike, rows: list[dict]) -> None:

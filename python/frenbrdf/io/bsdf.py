@@ -77,7 +77,11 @@ class MeasuredBSDF:
         wo_rows, leading_o = rows("wo", wo, 3)
         if leading != leading_o:
             raise ValueError(f"wi and wo must have the same shape, got {np.shape(wi)} and {np.shape(wo)}")
-        return self._native.eval(wi_rows, wo_rows, double).reshape(*leading, 3)
+        values = self._native.eval(wi_rows, wo_rows, double)
+        # Every value the measurement gives is checked as its table's are: a file may hold fields (sigma, the
+        # warps) that scale an accepted rgb past any reflectance.
+        check_reflectance(values, self.path, what="values it evaluates to", error=BsdfFormatError)
+        return values.reshape(*leading, 3)
 
     def table(self, *, double: bool = False) -> np.ndarray:
         """The measurement at every MERL bin (float32 arithmetic unless ``double``): a table

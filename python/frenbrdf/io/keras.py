@@ -4,7 +4,8 @@ Sztrajman, Rainer, Ritschel and Weyrich ("Neural BRDF Representation and Importa
 Forum 2021) fitted one small MLP per MERL material and published the weights as Keras ``.h5`` files (MIT licence).
 Dense layers are stored as ``dense_<n>/dense_<n>/kernel:0`` (shape ``(in, out)``) and ``.../bias:0`` (shape
 ``(out,)``), applied in order of ``n``; ReLU after every layer but the last, then ``exp(x) − 1``. The published fits
-are 6→21→21→3; any number and width of hidden layers is accepted (at most :data:`~frenbrdf.io.nbrdf.MAX_WIDTH`).
+are 6→21→21→3; any number of hidden layers up to :data:`~frenbrdf.io.nbrdf.MAX_LAYERS`, each up to
+:data:`~frenbrdf.io.nbrdf.MAX_WIDTH` wide, is accepted.
 
 :func:`read_keras_nbrdf` reads and checks the layers (float64, as the file holds them); :func:`keras_weights` gives
 them as an NBRDF's weights (:class:`~frenbrdf.io.nbrdf.NBRDFWeights`, float32, mapping ``exp(x) − 1``: f_ref 0,
@@ -21,7 +22,7 @@ import h5py
 import numpy as np
 import torch
 
-from .nbrdf import MAX_WIDTH, N_INPUTS, N_OUTPUTS, NBRDFWeights
+from .nbrdf import MAX_LAYERS, MAX_WIDTH, N_INPUTS, N_OUTPUTS, NBRDFWeights
 from .paths import input_file
 
 #: One Dense layer: kernel ``(in, out)`` and bias ``(out,)``, float64.
@@ -152,7 +153,10 @@ def _dataset(file: h5py.File, key: str, path: Path) -> np.ndarray:
 
 
 def _check_layers(layers: list[tuple[str, Layer]], path: Path) -> None:
-    """Raises ValueError unless the layers chain from 6 inputs to 3 outputs, all finite."""
+    """Raises ValueError unless the layers chain from 6 inputs to 3 outputs, all finite, through at most
+    :data:`~frenbrdf.io.nbrdf.MAX_LAYERS` hidden layers."""
+    if len(layers) - 1 > MAX_LAYERS:
+        raise ValueError(f"{path}: {len(layers) - 1} hidden layers; an NBRDF has at most {MAX_LAYERS}")
     n_in, source = N_INPUTS, "the network input (H, D)"
     for name, (kernel, bias) in layers:
         if kernel.ndim != 2 or bias.ndim != 1 or bias.shape[0] != kernel.shape[1]:

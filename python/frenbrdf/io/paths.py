@@ -159,12 +159,41 @@ def torch_load(path: str | os.PathLike, what: str = "torch file"):
     if not zipfile.is_zipfile(path):
         raise ValueError(f"{path}: not a readable {what} (not a torch zip archive; damaged or truncated?)")
     try:
-        return torch.load(path, map_location="cpu", weights_only=True)
+        loaded = torch.load(path, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError:
         raise ValueError(f"{path}: not a {what}: it holds objects other than tensors and plain data, which "
                          "frenbrdf never loads (they could run code)") from None
     except Exception as error:  # torch raises several types for damaged files
         raise ValueError(f"{path}: not a readable {what} ({_safe(error)})") from None
+    return _plain_tensors(loaded, path, what)
+
+
+#: How deep :func:`torch_load` looks into nested containers (the deepest frenbrdf writes is 5: an optimizer's state).
+MAX_NESTING = 32
+
+
+def _plain_tensors(value, path, what: str, where: str = "", depth: int = 0):
+    """``value`` with every tensor in it checked to be one frenbrdf can compute with: dense, with its data (not
+    torch's ``meta`` device), real; half-precision floats become float32 (exactly), in place in dicts and lists (a
+    state dict keeps its type and metadata). Raises ValueError naming the file and where in it the tensor lies."""
+    import torch
+
+    if depth > MAX_NESTING:
+        raise ValueError(f"{path}: not a {what}: containers nested deeper than {MAX_NESTING} levels at {where}")
+    if isinstance(value, (dict, list)):
+        for key, item in list(value.items() if isinstance(value, dict) else enumerate(value)):
+            value[key] = _plain_tensors(item, path, what, f"{where}[{key!r:.40}]", depth + 1)
+        return value
+    if isinstance(value, tuple):
+        return tuple(_plain_tensors(item, path, what, f"{where}[{i}]", depth + 1) for i, item in enumerate(value))
+    if not isinstance(value, torch.Tensor):
+        return value
+    problem = ("has no data (torch's meta device)" if value.is_meta else
+               f"is not dense ({value.layout})" if value.layout != torch.strided else
+               f"is {value.dtype}, not real numbers" if value.is_complex() or value.is_quantized else "")
+    if problem:
+        raise ValueError(f"{path}: not a valid {what}: the tensor at {where or 'its top'} {problem}")
+    return value.float() if value.dtype in (torch.float16, torch.bfloat16) else value
 
 
 def _safe(error: BaseException) -> str:

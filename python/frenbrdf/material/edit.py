@@ -58,7 +58,7 @@ def position_name(t: float) -> str:
 
 def check_positions(t) -> list[float]:
     """The positions, rising: each a finite number in [0, 1], no two with the same files (:func:`position_name`)."""
-    values = [float(value) for value in t]
+    values = [float(value) + 0.0 for value in t]  # + 0.0 turns −0 into 0: one position, one file name
     if not 1 <= len(values) <= MAX_POSITIONS:
         raise ValueError(f"give 1 to {MAX_POSITIONS} positions t (each writes a 35 MB MERL table), got {len(values)}")
     bad = [value for value in values if not (math.isfinite(value) and 0 <= value <= 1)]

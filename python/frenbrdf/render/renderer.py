@@ -181,6 +181,15 @@ def _brdf_values(source, scene: Scene, start: int, stop: int) -> np.ndarray:
     raise TypeError(f"cannot render a {type(source).__name__}: pass a MERL table, an NBRDF or a callable")
 
 
+def _named(source) -> str:
+    """What a message calls the BRDF: its file where it has one (an NBRDF's, a measurement's), else its type."""
+    for attribute in ("source", "path"):
+        where = getattr(source, attribute, None)
+        if isinstance(where, (str, os.PathLike)) and os.fspath(where):
+            return f"of {os.fspath(where)}"
+    return f"({type(source).__name__})"
+
+
 def _linear_tile(source, scene: Scene, start: int, stop: int) -> np.ndarray:
     """Linear outgoing radiance of image rows ``start … stop − 1``, ``(stop − start, resolution, 3)``."""
     geometry = _geometry(scene, start, stop)
@@ -188,7 +197,7 @@ def _linear_tile(source, scene: Scene, start: int, stop: int) -> np.ndarray:
     if values.shape != geometry.wi.shape:
         raise ValueError(f"the BRDF returned shape {values.shape}, expected {geometry.wi.shape}")
     if not np.all(np.isfinite(values)):
-        raise ValueError("the BRDF returned NaN or inf values")
+        raise ValueError(f"the BRDF {_named(source)} returned NaN or inf values")
     contributions = values * geometry.radiance
     # Each pixel sums its lights in the same order as over the whole image: tiles change no bit of the result.
     image = np.stack([np.bincount(geometry.pixel, contributions[:, c], minlength=geometry.n_pixels)

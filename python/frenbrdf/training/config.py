@@ -390,13 +390,19 @@ def config_for(method: str, *, training: str | None = None, augmentation: str | 
 def load_config(path: str | os.PathLike, **overrides) -> TrainConfig:
     """A JSON config file (any subset of :class:`TrainConfig`'s keys) over its method's preset."""
     data = read_json(path, "training config", max_bytes=MAX_CONFIG_BYTES)
-    if not isinstance(data.get("method", "frenbrdf"), str):
-        raise ValueError(f"{path}: method must be a string, got {data['method']!r}")
     data.update({key: value for key, value in overrides.items() if value is not None})
+    return config_from_dict(data, str(path))
+
+
+def config_from_dict(data: dict, where: str) -> TrainConfig:
+    """A config's JSON object (any subset of :class:`TrainConfig`'s keys) over its method's preset, checked;
+    ``where`` (a file, a row of one) starts every message."""
+    if not isinstance(data.get("method", "frenbrdf"), str):
+        raise ValueError(f"{where}: method must be a string, got {data['method']!r}")
     base = to_dict(config_for(data.get("method", "frenbrdf")))
     try:
-        return from_dict(TrainConfig, merge(base, data, TrainConfig), str(path))
+        return from_dict(TrainConfig, merge(base, data, TrainConfig), where)
     except ValueError as error:  # the dataclasses' own checks do not know the file
-        if str(path) in str(error):
+        if where in str(error):
             raise
-        raise ValueError(f"{path}: {error}") from None
+        raise ValueError(f"{where}: {error}") from None
