@@ -129,11 +129,20 @@ def test_nan_loss_stops_with_the_step_and_term_and_keeps_the_checkpoint(toy_mate
         return value
 
     monkeypatch.setattr(training.step, "reconstruction_loss", poisoned)
-    with pytest.raises(TrainingDiverged, match=r"step 3: loss term\(s\) \['rec'\]"):
+    with pytest.raises(TrainingDiverged, match=r"step 3: loss term\(s\) \['rec'\].*the last good checkpoint is kept"):
         train(cfg)
     checkpoint = load_checkpoint(tmp_path / "run" / "last.pt")
     assert checkpoint["epoch"] == 0
     assert all(torch.isfinite(t).all() for t in checkpoint["model"].values())
+
+
+def test_a_loss_lost_at_the_first_step_says_no_checkpoint_is_kept(toy_materials, tmp_path, monkeypatch):
+    cfg = tiny("frenbrdf", toy_materials, tmp_path / "run", epochs=3)
+    real = training.step.reconstruction_loss
+    monkeypatch.setattr(training.step, "reconstruction_loss", lambda *a, **k: real(*a, **k) * float("nan"))
+    with pytest.raises(TrainingDiverged, match=r"step 0: .*stopped, before any checkpoint was written"):
+        train(cfg)
+    assert not (tmp_path / "run" / "last.pt").exists()
 
 
 def test_a_huge_eta_trains_without_nan(toy_materials, tmp_path):
@@ -190,6 +199,20 @@ def test_cli_train_and_resume(toy_materials, tmp_path, capsys):
         cli.main(["train", "--data", str(tmp_path / "absent"), "--out", str(tmp_path / "x"), "--quiet"])
     assert exit_info.value.code == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_resume_without_a_config_continues_the_runs_own(toy_materials, tmp_path, capsys):
+    """Only what is given changes: a resume asked for more epochs keeps the run's training length preset, lr and all."""
+    out = tmp_path / "run"
+    argv = ["train", "--data", str(toy_materials), "--out", str(out), "--quiet"]
+    assert cli.main([*argv, "--training", "demo", "--epochs", "1", "--render-every", "0"]) == 0
+    before = json.loads((out / "config.json").read_text())
+    assert cli.main([*argv, "--epochs", "2", "--resume"]) == 0
+    after = json.loads((out / "config.json").read_text())
+    assert after["epochs"] == 2 and {**after, "epochs": 1} == before
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main([*argv, "--training", "sweep", "--resume"])
+    assert exit_info.value.code == 2 and "a resume continues the run's own config" in capsys.readouterr().err
 
 
 DDP_SCRIPT = """

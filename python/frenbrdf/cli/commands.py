@@ -97,8 +97,14 @@ def train(args: argparse.Namespace) -> int:
         overrides = {"method": args.method, "data": args.data, "out": out, "epochs": args.epochs, "seed": seed,
                      "device": args.device, "holdout": args.holdout, "render_every": args.render_every,
                      "select": args.select, "decoder_from": args.decoder_from, "init_from": args.init_from}
+        own = Path(out) / "config.json" if out else None
         if args.config:
             cfg = load_config(args.config, **overrides)
+        elif args.resume and own is not None and own.is_file():  # the run's own config, changed only where asked
+            if args.training or args.augmentation or args.sampling:
+                raise ValueError("--training, --augmentation and --sampling set presets; a resume continues the "
+                                 f"run's own config ({own}): give --epochs to train longer")
+            cfg = load_config(own, **overrides)
         else:
             cfg = config_for(args.method or "frenbrdf", training=args.training, augmentation=args.augmentation,
                              sampling=args.sampling,

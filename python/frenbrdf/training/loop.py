@@ -214,10 +214,12 @@ class Trainer:
             if terms.gradient_ratio is not None:
                 gradient_ratio = terms.gradient_ratio
             if terms.not_finite:
+                kept = (f"the last good checkpoint is kept in {self.run_dir}" if (self.run_dir / "last.pt").is_file()
+                        else "before any checkpoint was written")
                 raise TrainingDiverged(
                     f"step {epoch * self.steps_per_epoch + step}: loss term(s) {terms.not_finite} became NaN/inf; "
-                    f"training stopped, the last good checkpoint is kept in {self.run_dir} (lr {self.cfg.lr:g}, "
-                    f"eta {self.cfg.loss.eta:g}: lower them, or set grad_clip)")
+                    f"training stopped, {kept} (lr {self.cfg.lr:g}, eta {self.cfg.loss.eta:g}: lower them, or set "
+                    "grad_clip)")
             for name, value in terms.logged.items():
                 sums[name] = sums.get(name, 0.0) + value / self.steps_per_epoch
             bar.update()
