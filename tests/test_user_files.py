@@ -352,8 +352,10 @@ def test_a_resume_with_another_method_or_model_names_the_difference_not_a_weight
     before = {path.name: path.read_bytes() for path in folder.iterdir()}
     last = _fails(["train", "--config", config, "--method", "frenbrdf", "--out", folder, "--resume", "--quiet"], capsys)
     assert "the run was trained with another method ('nbrdf', this resume asks for 'frenbrdf')" in last, last
-    last = _fails(["train", "--method", "nbrdf", "--data", load_config(config).data, "--out", folder, "--resume",
-                   "--quiet"], capsys)  # the preset's model, not the run's
+    other = to_dict(load_config(config))
+    other["model"]["nbrdf"]["hidden"] = [h + 1 for h in other["model"]["nbrdf"]["hidden"]]
+    (tmp_path / "other.json").write_text(json.dumps(other))
+    last = _fails(["train", "--config", tmp_path / "other.json", "--out", folder, "--resume", "--quiet"], capsys)
     assert re.search(r"another model\.\w+\.hidden \(", last), last
     assert {path.name: path.read_bytes() for path in folder.iterdir()} == before
 

@@ -30,6 +30,7 @@ _PUBLIC = {
 _MODULES = {"sht": ".numerics.sht", "mitsuba": ".render.mitsuba"}
 _DEFINED_IN = {name: module for module, names in _PUBLIC.items() for name in names}
 
+
 def __getattr__(name: str):
     if name in _MODULES:
         value = importlib.import_module(_MODULES[name], __name__)

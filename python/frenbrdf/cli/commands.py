@@ -4,11 +4,17 @@ status. Bad input raises ValueError or OSError, which :func:`frenbrdf.cli.main` 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import sys
 from pathlib import Path
+
+
+def _print_json(data) -> None:
+    """``--json``: what the command reports, as its files hold JSON (:func:`frenbrdf.io.atomic.json_text`)."""
+    from ..io.atomic import json_text
+
+    print(json_text(data), end="")
 
 
 def info(args: argparse.Namespace) -> int:
@@ -31,7 +37,7 @@ def info(args: argparse.Namespace) -> int:
         "self_check": "ok" if abs(angles[0]) < 1e-12 else f"FAILED: θ_h = {angles[0]}",
     }
     if args.json:
-        print(json.dumps(report, indent=2))
+        _print_json(report)
     else:
         width = max(map(len, report))
         for key, value in report.items():
@@ -122,9 +128,11 @@ def train(args: argparse.Namespace) -> int:
             summary["best_val_psnr"] = best["val_psnr"]
         if os.environ.get("RANK", "0") == "0":  # under torchrun, one summary
             psnr = f", validation render PSNR {best['val_psnr']:.2f} dB" if "val_psnr" in best else ""
-            print(json.dumps(summary, indent=2) if args.json else
-                  f"{cfg.method} (seed {cfg.seed}): best epoch {best['epoch']} by validation {cfg.select}: "
-                  f"L_rec {best['val_rec']:.4g}{psnr}; {run.seconds:.0f} s; run folder {run.path}")
+            if args.json:
+                _print_json(summary)
+            else:
+                print(f"{cfg.method} (seed {cfg.seed}): best epoch {best['epoch']} by validation {cfg.select}: "
+                      f"L_rec {best['val_rec']:.4g}{psnr}; {run.seconds:.0f} s; run folder {run.path}")
     return 0
 
 
@@ -190,7 +198,7 @@ def evaluate(args: argparse.Namespace) -> int:
     report = evaluate_seeds(args.runs, args.out, data=args.data, config=config, overwrite=args.overwrite)
     print(seeds_markdown(report) if "comparison" in report else report_markdown(report))
     if args.json:
-        print(json.dumps(report.get("comparison", report.get("summary")), indent=2))
+        _print_json(report.get("comparison", report.get("summary")))
     return 0
 
 
@@ -222,7 +230,10 @@ def spectrum(args: argparse.Namespace) -> int:
 
     report = spectrum_report(args.materials, args.out, truth=args.truth, variant=args.variant, lmax=args.lmax,
                              overwrite=args.overwrite)
-    print(json.dumps(report["errors"] or report["materials"], indent=2) if args.json else summary_text(report))
+    if args.json:
+        _print_json(report["errors"] or report["materials"])
+    else:
+        print(summary_text(report))
     print(f"wrote {args.out}/spectrum.{{png,csv,json}}")
     return 0
 
@@ -242,7 +253,7 @@ def select(args: argparse.Namespace) -> int:
     selection = select_config(args.data, args.target_psnr, args.out, front=args.front, base=base,
                               progress=not args.quiet, overwrite=args.overwrite)
     if args.json:
-        print(json.dumps(selection.summary, indent=2))
+        _print_json(selection.summary)
     elif selection.chosen is not None:  # reached
         chosen = selection.chosen
         print(f"{chosen['name']}: NBRDF 6→{'→'.join(map(str, chosen['hidden']))}→3 "
@@ -288,7 +299,7 @@ def reconstruct(args: argparse.Namespace) -> int:
     for warning in report["coverage"]["warnings"]:
         print(f"warning: {warning}", file=sys.stderr)
     if args.json:
-        print(json.dumps(report, indent=2))
+        _print_json(report)
     else:
         metrics = report.get("metrics")
         quality = f"; render PSNR {metrics['psnr']:.2f} dB, ΔE {metrics['delta_e']:.2f}" if metrics else ""
@@ -311,7 +322,7 @@ def edit(args: argparse.Namespace) -> int:
                         model=args.model, latent=args.latent, refine=args.refine, seed=args.seed,
                         resolution=args.resolution, progress=not args.quiet, overwrite=args.overwrite, **given)
     if args.json:
-        print(json.dumps(report, indent=2))
+        _print_json(report)
     else:
         ends = "; ".join(f"{side} PSNR {m['psnr']:.2f} dB against its render" for side, m in report["ends"].items())
         what = "latent interpolation" if report["mode"] == "latent" else "edit keeping each material"

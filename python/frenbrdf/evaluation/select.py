@@ -60,7 +60,8 @@ def read_front(path: str | os.PathLike) -> dict:
         missing = [k for k in needed if not isinstance(row, dict) or k not in row]
         if missing:
             raise ValueError(f"{path}: row {i} lacks {missing}")
-        if isinstance(row["psnr"], bool) or not isinstance(row["psnr"], (int, float)) or not math.isfinite(row["psnr"]):
+        psnr = row["psnr"]
+        if isinstance(psnr, bool) or not isinstance(psnr, (int, float)) or not math.isfinite(psnr):
             raise ValueError(f"{path}: row {i} ({row['name']!r:.40}) has no valid PSNR: {row['psnr']!r:.40}")
         for key in ("bytes_per_material", "latent_bytes"):
             if isinstance(row[key], bool) or not isinstance(row[key], int) or row[key] < 0:

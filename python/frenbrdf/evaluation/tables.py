@@ -66,8 +66,8 @@ def table_rows(refine: str = "none", patterns=()) -> list[tuple[str, str]]:
 
 def summarise(rows: list[dict], edit_rows: list[dict]) -> dict[str, float | None]:
     """The table's numbers of one method: means over its reconstruction ``rows`` and its ``edit_rows``
-    (None without edits: ``null`` in ``evaluation.json``); the refined ones too when the rows hold them, and each further sampling pattern's
-    (row keys ``<key>@<pattern>``: summary keys ``<summary key>@<pattern>``)."""
+    (None without edits: ``null`` in ``evaluation.json``); the refined ones too when the rows hold them, and each
+    further sampling pattern's (row keys ``<key>@<pattern>``: summary keys ``<summary key>@<pattern>``)."""
     summary = _summary(rows, edit_rows)
     suffixes = dict.fromkeys("@" + key.partition("@")[2] for key in (rows[0] if rows else {}) if "@" in key)
     for suffix in suffixes:

@@ -111,9 +111,15 @@ def write_text(path: str | os.PathLike, text: str) -> None:
 
 
 def save_json(path: str | os.PathLike, data) -> None:
-    """Writes JSON (indented, newline-terminated) atomically. JSON has no NaN nor infinity: a float that is not
-    finite is written as ``null`` (no value), so that every JSON reader reads the file."""
-    write_text(path, json.dumps(_finite_or_none(data), indent=2, allow_nan=False) + "\n")
+    """Writes :func:`json_text` of ``data`` atomically."""
+    write_text(path, json_text(data))
+
+
+def json_text(data) -> str:
+    """``data`` as JSON, indented and newline-terminated, as every file and ``--json`` print of frenbrdf has it.
+    JSON has no NaN nor infinity: a float that is not finite (no value; the PSNR of two identical images) is written
+    as ``null``, so that every JSON reader reads it."""
+    return json.dumps(_finite_or_none(data), indent=2, allow_nan=False) + "\n"
 
 
 def _finite_or_none(value):
