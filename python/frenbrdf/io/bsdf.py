@@ -80,7 +80,7 @@ class MeasuredBSDF:
         values = self._native.eval(wi_rows, wo_rows, double)
         # Every value the measurement gives is checked as its table's are: a file may hold fields (sigma, the
         # warps) that scale an accepted rgb past any reflectance.
-        check_reflectance(values, self.path, what="values it evaluates to", error=BsdfFormatError)
+        check_reflectance(values, self.path, what="evaluated values", axes="(pair, channel)", error=BsdfFormatError)
         return values.reshape(*leading, 3)
 
     def table(self, *, double: bool = False) -> np.ndarray:
