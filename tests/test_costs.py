@@ -51,6 +51,17 @@ def test_a_render_in_tiny_tiles_is_the_render_in_one(monkeypatch):
     np.testing.assert_array_equal(material_mask(scene), mask)
 
 
+def test_a_large_render_shows_its_progress_and_a_small_one_does_not(monkeypatch, capsys):
+    # A render of 8192² takes minutes on two cores: the command shows a bar over its bands so that it is not taken
+    # for a hung one. Renders of fewer bands than PROGRESS_TILES (training's, evaluation's) stay silent.
+    monkeypatch.setattr(renderer, "TILE_PIXELS", 29)  # one row a band: 29 bands
+    scene = Scene(resolution=29, environment_samples=16)
+    for progress, tiles_for_a_bar, shown in ((True, 29, True), (True, 30, False), (False, 1, False)):
+        monkeypatch.setattr(renderer, "PROGRESS_TILES", tiles_for_a_bar)
+        render(lambda wi, wo: np.full(wi.shape, 0.2), scene, progress=progress)
+        assert ("render: " in capsys.readouterr().err) == shown, (progress, tiles_for_a_bar)
+
+
 def test_render_memory_is_that_of_a_tile_not_of_the_image(monkeypatch):
     monkeypatch.setattr(renderer, "TILE_PIXELS", 4096)
     scene = Scene(resolution=300)  # above CACHED_RESOLUTION: nothing kept between renders

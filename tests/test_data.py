@@ -47,6 +47,17 @@ def test_list_materials_errors(tmp_path):
         list_materials(tmp_path)
 
 
+def test_a_data_folder_that_cannot_be_listed_says_so_and_not_that_it_is_empty(tmp_path, monkeypatch):
+    # Path.glob reads a folder it may not list as an empty one ("holds no material files", which sends a user to
+    # synth). Root lists anything, so the refusal is the operating system's, stood in for.
+    def refused(path):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr("frenbrdf.data.folders.os.scandir", refused)
+    with pytest.raises(PermissionError, match=f"data folder {tmp_path} cannot be listed: Permission denied"):
+        list_materials(tmp_path)
+
+
 @settings(deadline=None)  # the median over two full tables takes ~0.1 s, more on a loaded machine
 @given(st.floats(0, 1e4, allow_subnormal=False), st.floats(0, 10), st.sampled_from(["ratio", "one_plus_ratio"]))
 def test_mapping_inverts_exactly(f, reference, form):

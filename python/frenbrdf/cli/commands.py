@@ -220,7 +220,8 @@ def render(args: argparse.Namespace) -> int:
         from ..models.nbrdf import as_brdf
         from ..render.renderer import Scene, render, save_png
 
-        save_png(args.out, render(as_brdf(read_material(args.material)), Scene(resolution=args.resolution)))
+        save_png(args.out, render(as_brdf(read_material(args.material)), Scene(resolution=args.resolution),
+                                  progress=not args.quiet))
     print(f"wrote {args.out}")
     return 0
 

@@ -182,6 +182,7 @@ def _render(subparsers) -> None:
     render.add_argument("--mitsuba", action="store_true", help="path-trace with Mitsuba 3 instead")
     render.add_argument("--spp", type=options.whole(1, options.MAX_SPP), help="samples per pixel of a --mitsuba render (default 64)")
     render.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    render.add_argument("--quiet", action="store_true", help="no progress bar (shown for renders of 1024² and up)")
     render.set_defaults(run=commands.render)
 
 

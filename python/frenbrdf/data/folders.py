@@ -43,8 +43,8 @@ def list_materials(folder: str | os.PathLike) -> list[Path]:
 
     Raises
     ------
-    FileNotFoundError, NotADirectoryError
-        The folder does not exist or is a file.
+    FileNotFoundError, NotADirectoryError, PermissionError
+        The folder does not exist, is a file, or cannot be listed.
     ValueError
         The folder holds no material file, or two files of one name (``a.binary`` and ``a.bsdf``).
     """
@@ -53,7 +53,11 @@ def list_materials(folder: str | os.PathLike) -> list[Path]:
         raise FileNotFoundError(f"data folder {folder} does not exist")
     if not folder.is_dir():
         raise NotADirectoryError(f"data folder {folder} is not a folder")
-    files = sorted((path for suffix in MEASURED for path in folder.glob(f"*{suffix}")), key=lambda path: path.name)
+    try:  # listed here, not by glob, which reads a folder it may not list as an empty one
+        names = sorted(entry.name for entry in os.scandir(folder))
+    except PermissionError as error:
+        raise PermissionError(f"data folder {folder} cannot be listed: {error.strerror}") from None
+    files = [folder / name for name in names if name.endswith(MEASURED)]
     if not files:
         raise ValueError(f"data folder {folder} holds no material files (*.binary or *.bsdf); "
                          "create some with `frenbrdf synth` or `frenbrdf import-nbrdf`")

@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import functools
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from ..io.atomic import atomic_path
 from ..io.merl import SHAPE, merl_lookup_directions
@@ -41,6 +43,8 @@ TILE_PIXELS = 1 << 14
 #: renders repeat (training's validation renders at 64², evaluation's thousands of edits at 128²). A larger scene's
 #: tiles are built afresh, so that its memory stays that of one tile.
 CACHED_RESOLUTION, CACHED_TILES = 256, 8
+#: Renders of at least this many tiles (1024² and up: a few seconds or more) show a progress bar where asked to.
+PROGRESS_TILES = 64
 
 __all__ = ["Scene", "environment_radiance", "material_mask", "render", "render_linear", "save_figure", "save_png",
            "tonemap"]
@@ -205,13 +209,20 @@ def _linear_tile(source, scene: Scene, start: int, stop: int) -> np.ndarray:
     return image.reshape(stop - start, scene.resolution, 3)
 
 
-def render_linear(source, scene: Scene = Scene()) -> np.ndarray:
+def _tiles_shown(scene: Scene, progress: bool) -> Iterable[tuple[int, int]]:
+    """:func:`_tiles`, behind a progress bar where asked for and the render is large (a render of 8192² takes minutes
+    on two cores: without a bar it would look hung)."""
+    tiles = _tiles(scene)
+    return tqdm(tiles, desc="render", unit="band", leave=False, disable=not progress or len(tiles) < PROGRESS_TILES)
+
+
+def render_linear(source, scene: Scene = Scene(), *, progress: bool = False) -> np.ndarray:
     """Linear outgoing radiance ``(resolution, resolution, 3)``; background 0.
 
     Rendered in tiles of rows (:data:`TILE_PIXELS` pixels), so that the memory beyond the image (8 bytes a value)
-    stays a few hundred MB whatever the resolution."""
+    stays a few hundred MB whatever the resolution; ``progress`` shows a bar over them for a large render."""
     image = np.empty((scene.resolution, scene.resolution, 3))
-    for start, stop in _tiles(scene):
+    for start, stop in _tiles_shown(scene, progress):
         image[start:stop] = _linear_tile(source, scene, start, stop)
     return image
 
@@ -234,11 +245,11 @@ def tonemap(radiance: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     return np.clip(radiance * exposure, 0.0, 1.0) ** (1 / 2.2)
 
 
-def render(source, scene: Scene = Scene()) -> np.ndarray:
+def render(source, scene: Scene = Scene(), *, progress: bool = False) -> np.ndarray:
     """A display image in [0, 1], ``(resolution, resolution, 3)``: :func:`tonemap` of :func:`render_linear`, tile by
-    tile (no second image-sized array)."""
+    tile (no second image-sized array); ``progress`` as there."""
     image = np.empty((scene.resolution, scene.resolution, 3))
-    for start, stop in _tiles(scene):
+    for start, stop in _tiles_shown(scene, progress):
         image[start:stop] = tonemap(_linear_tile(source, scene, start, stop), scene.exposure)
     return image
 
