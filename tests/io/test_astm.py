@@ -163,8 +163,23 @@ def test_convert_turns_samples_into_astm_and_back(tmp_path, capsys):
     frenbrdf.write_merl(tmp_path / "grey.binary", np.full((3, 90, 90, 180), 0.2))
     assert cli.main(["convert", str(tmp_path / "grey.binary"), str(tmp_path / "grey.astm"), "--samples", "60"]) == 0
     assert len(read_samples(tmp_path / "grey.astm")) == 60
+    # A device's pairs rather than random bins: the samples `read_samples` draws with that pattern, to the file.
+    assert cli.main(["convert", str(tmp_path / "grey.binary"), str(tmp_path / "gonio.astm"), "--samples", "300",
+                     "--pattern", "gonioreflectometer", "--seed", "3"]) == 0
+    drawn = read_samples(tmp_path / "grey.binary", samples=300, seed=3, pattern="gonioreflectometer")
+    written = read_samples(tmp_path / "gonio.astm")
+    np.testing.assert_array_equal(written.values, drawn.values)
+    for side in ("wi", "wo"):
+        np.testing.assert_allclose(getattr(written, side), getattr(drawn, side), rtol=0, atol=1e-15)
+    assert not np.allclose(written.wi, read_samples(tmp_path / "grey.binary", samples=300, seed=3).wi)
     capsys.readouterr()
     for argv, message in (
+            (["convert", str(tmp_path / "grey.binary"), str(tmp_path / "t.binary"), "--pattern", "in-plane"],
+             "--pattern picks the samples a .csv, .npz or .astm output holds; a .binary output is the whole table"),
+            (["convert", str(tmp_path / "out.astm"), str(tmp_path / "x.csv"), "--pattern", "in-plane"],
+             "--pattern picks samples from a MERL file or a .bsdf; " + str(tmp_path / "out.astm") + " is a file"),
+            (["convert", str(tmp_path / "grey.binary"), str(tmp_path / "x.csv"), "--pattern", "in-plane",
+              "--samples", "all"], "--samples all draws every MERL bin; --pattern in-plane draws N pairs"),
             (["convert", str(tmp_path / "out.astm"), str(tmp_path / "t.binary")],
              "out.astm: scattered samples make no MERL table (t.binary); `frenbrdf reconstruct out.astm"),
             (["convert", str(tmp_path / "out.astm"), str(tmp_path / "x.csv"), "--samples", "60"],

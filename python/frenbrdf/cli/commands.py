@@ -282,13 +282,7 @@ def demo(args: argparse.Namespace) -> int:
 def reconstruct(args: argparse.Namespace) -> int:
     from ..material.outputs import reconstruct_file
 
-    given = given_options(args, "samples", "pattern")
-    if given and _holds_samples(args.input):
-        raise ValueError(f"--{next(iter(given))} picks samples from a MERL file or a .bsdf; {args.input} is a file "
-                         "of samples, read whole")
-    if given.get("samples", 1) is None and given.get("pattern", "merl-bins") != "merl-bins":
-        raise ValueError(f"--samples all draws every MERL bin; --pattern {given['pattern']} draws N pairs: give a "
-                         "number")
+    given = _sampling_options(args, args.input)
     if (args.width is not None or args.reciprocal) and args.refine != "full":
         raise ValueError(f"{'--width' if args.width is not None else '--reciprocal'} sets the NBRDF that "
                          f"--refine full fits; with --refine {args.refine} there is none")
@@ -312,13 +306,7 @@ def reconstruct(args: argparse.Namespace) -> int:
 def edit(args: argparse.Namespace) -> int:
     from ..material.edit import DEFAULT_T, edit_files
 
-    given = given_options(args, "samples", "pattern")
-    if given and _holds_samples(args.input_a) and _holds_samples(args.input_b):
-        raise ValueError(f"--{next(iter(given))} picks samples from a MERL file or a .bsdf; both inputs are files "
-                         "of samples, read whole")
-    if given.get("samples", 1) is None and given.get("pattern", "merl-bins") != "merl-bins":
-        raise ValueError(f"--samples all draws every MERL bin; --pattern {given['pattern']} draws N pairs: give a "
-                         "number")
+    given = _sampling_options(args, args.input_a, args.input_b)
     report = edit_files(args.input_a, args.input_b, args.out, DEFAULT_T if args.t is None else args.t,
                         model=args.model, latent=args.latent, refine=args.refine, seed=args.seed,
                         resolution=args.resolution, progress=not args.quiet, overwrite=args.overwrite, **given)
@@ -336,13 +324,10 @@ def edit(args: argparse.Namespace) -> int:
 def convert(args: argparse.Namespace) -> int:
     from ..material.convert import convert
 
-    given = given_options(args, "samples")
+    given = _sampling_options(args, args.input)
     if given and Path(args.output).suffix.lower() == ".binary":
-        raise ValueError("--samples sets how many samples a .csv, .npz or .astm output holds; a .binary output is the "
-                         "whole table")
-    if given and _holds_samples(args.input):
-        raise ValueError(f"--samples picks samples from a MERL file or a .bsdf; {args.input} is a file of samples, "
-                         "converted whole")
+        raise ValueError(f"--{next(iter(given))} picks the samples a .csv, .npz or .astm output holds; a .binary "
+                         "output is the whole table")
     print(f"wrote {convert(args.input, args.output, seed=args.seed, overwrite=args.overwrite, **given)}")
     return 0
 
@@ -356,6 +341,20 @@ def view(args: argparse.Namespace) -> int:
     modes = f"; edit: {', '.join(page.edit.modes)}" if page.edit else ""
     print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB{modes}); open it in a browser")
     return 0
+
+
+def _sampling_options(args: argparse.Namespace, *inputs: str) -> dict:
+    """``--samples`` and ``--pattern`` as given, checked against the inputs: they pick samples from a whole material
+    (a MERL file, a ``.bsdf``), and a pattern other than random bins draws a number of pairs, not all bins."""
+    given = given_options(args, "samples", "pattern")
+    if given and all(_holds_samples(path) for path in inputs):
+        files = f"{inputs[0]} is a file" if len(inputs) == 1 else "both inputs are files"
+        raise ValueError(f"--{next(iter(given))} picks samples from a MERL file or a .bsdf; {files} of samples, "
+                         "read whole")
+    if given.get("samples", 1) is None and given.get("pattern", "merl-bins") != "merl-bins":
+        raise ValueError(f"--samples all draws every MERL bin; --pattern {given['pattern']} draws N pairs: give a "
+                         "number")
+    return given
 
 
 def _holds_samples(path: str) -> bool:

@@ -294,7 +294,10 @@ def _convert(subparsers) -> None:
                          "file to write")
     convert.add_argument("--samples", type=options.sample_count, default=argparse.SUPPRESS, metavar="N|all",
                          help="a .bsdf or MERL input into samples: random valid MERL bins to sample (default "
-                         "4000), or all")
+                         "4000), or all; with --pattern, its pairs")
+    convert.add_argument("--pattern", type=options.pattern, default=argparse.SUPPRESS, metavar="NAME",
+                         help="a .bsdf or MERL input into samples: the sampling pattern, the device imitated "
+                         "(default merl-bins; see reconstruct)")
     convert.add_argument("--seed", type=options.seed, default=0, help="seeds the sampling (default 0)")
     convert.add_argument("--overwrite", action="store_true", help="replace the output file if it exists")
     convert.set_defaults(run=commands.convert)

@@ -2,7 +2,7 @@
 
 - an RGL ``.bsdf`` measurement → a MERL ``.binary`` table (evaluated at every bin's directions);
 - a ``.bsdf`` or a MERL table → a CSV, NPZ or ASTM E1392 (``.astm``) file of samples at random valid MERL
-  bins, the form ``frenbrdf reconstruct`` reads (:func:`frenbrdf.io.read_samples`; a ``.bsdf`` is evaluated at
+  bins or at the pairs of a sampling pattern (a device imitated), the form ``frenbrdf reconstruct`` reads (:func:`frenbrdf.io.read_samples`; a ``.bsdf`` is evaluated at
   each bin's pair in a random order: a measurement need not be reciprocal, a table keeps one order);
 - a file of samples (``.csv``, ``.npz``, ``.astm``) → another, every sample as it is (ASTM files to CSV and
   back). Scattered samples make no MERL table: ``frenbrdf reconstruct`` fits a material to them and writes one.
@@ -15,6 +15,7 @@ Examples
 >>> from frenbrdf.material.convert import convert
 >>> convert("paper_white_rgb.bsdf", "paper_white.binary")                 # doctest: +SKIP
 >>> convert("paper_white_rgb.bsdf", "paper_white.csv", samples=4000)      # doctest: +SKIP
+>>> convert("paper_white_rgb.bsdf", "gonio.astm", samples=1500, pattern="gonioreflectometer")  # doctest: +SKIP
 >>> convert("gonio-export.astm", "gonio-export.csv")                     # doctest: +SKIP
 """
 
@@ -26,6 +27,7 @@ from pathlib import Path
 from ..io.formats import FORMATS, format_of, read_samples, read_table, write_material, write_samples
 from ..io.outputs import check_output_file
 from ..io.paths import input_file
+from ..io.patterns import DEFAULT as DEFAULT_PATTERN
 
 #: What each output suffix holds: the formats frenbrdf writes a measured material or its samples in.
 OUTPUTS = {suffix: entry.holds for suffix, entry in FORMATS.items()
@@ -33,10 +35,12 @@ OUTPUTS = {suffix: entry.holds for suffix, entry in FORMATS.items()
 
 
 def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int | None = 4000, seed: int = 0,
-            overwrite: bool = False) -> Path:
+            pattern: str = DEFAULT_PATTERN, overwrite: bool = False) -> Path:
     """Converts ``source`` (a ``.bsdf`` or ``.binary`` file, or a file of samples) into ``dest``, whose suffix
-    picks the format (:data:`OUTPUTS`). ``samples``: a material into samples only, the random valid bins drawn
-    (from ``seed``), None for all; a file of samples is converted whole. Returns ``dest``.
+    picks the format (:data:`OUTPUTS`). ``samples`` and ``pattern``: a material into samples only, the random
+    valid bins drawn (from ``seed``; None for all), or ``samples`` pairs of another sampling pattern
+    (:data:`frenbrdf.io.patterns.PATTERNS`: the device imitated); a file of samples is converted whole. Returns
+    ``dest``.
 
     Raises
     ------
@@ -56,5 +60,5 @@ def convert(source: str | os.PathLike, dest: str | os.PathLike, *, samples: int 
     if dest.suffix.lower() == ".binary":
         write_material(dest, read_table(source))
     else:
-        write_samples(dest, read_samples(source, samples=samples, seed=seed))
+        write_samples(dest, read_samples(source, samples=samples, seed=seed, pattern=pattern))
     return dest
