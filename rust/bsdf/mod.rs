@@ -28,6 +28,7 @@ pub mod synthetic;
 pub mod tensor_file;
 pub mod warp;
 
+use std::f32::consts::FRAC_PI_2;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -91,7 +92,11 @@ impl MeasuredBsdf {
         if jacobian.shape != [1] {
             return Err(file.error(format!("field `jacobian` has shape {:?}; expected [1]", jacobian.shape)));
         }
-        let jacobian = file.data(jacobian)[0] != 0;
+        let jacobian = match file.data(jacobian)[0] {
+            0 => false,
+            1 => true,
+            flag => return Err(file.error(format!("field `jacobian` is {flag}; the flag is 0 or 1"))),
+        };
         let description = match file.field("description") {
             Some(_) => String::from_utf8_lossy(file.data(file.require("description", Dtype::UInt8, 1)?)).into_owned(),
             None => String::new(),
@@ -120,6 +125,14 @@ impl MeasuredBsdf {
             return Err(file.error(format!(
                 "field `ndf` value {i} is {}; a distribution is finite and not negative",
                 ndf[i]
+            )));
+        }
+
+        // Incidence from above the surface: the RGL files' last angle is π/2 rounded up to float32.
+        if let Some(i) = theta_i.iter().position(|&v| !(0.0..=FRAC_PI_2 + 1e-6).contains(&v)) {
+            return Err(file.error(format!(
+                "field `theta_i` value {i} is {} rad; an incidence angle lies in 0 … π/2",
+                theta_i[i]
             )));
         }
 

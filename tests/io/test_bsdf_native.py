@@ -252,6 +252,12 @@ def bad_files() -> dict[str, tuple[bytes, str]]:
             "wavelengths": np.linspace(360, 1000, 5, dtype=np.float32),
             "spectra": np.ones((1, 4, 5, 6, 6), np.float32)}), "spectral BSDF file .* not supported"),
         "zero sigma": (tensor_file(flat_material(sigma=0.0)), "field `sigma` value 0 is 0"),
+        "incidence below the surface": (
+            tensor_file(flat_material(theta_i=np.linspace(0, 2.0, 4, dtype=np.float32))),
+            r"field `theta_i` value 3 is 2 rad; an incidence angle lies in 0 … π/2"),
+        "NaN incidence": (tensor_file(flat_material(theta_i=np.float32([0, 0.5, np.nan, 1.5]))),
+                          "field `theta_i` value 2 is NaN rad"),
+        "jacobian flag 7": (tensor_file(flat_material(jacobian=7)), "field `jacobian` is 7; the flag is 0 or 1"),
         "NaN in the VNDF": (tensor_file(flat_material(vndf=np.full((1, 4, 8, 8), np.nan, np.float32))),
                             "field `vndf`: value 0 is NaN"),
     }

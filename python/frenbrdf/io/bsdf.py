@@ -106,10 +106,10 @@ def read_bsdf(path: str | os.PathLike) -> MeasuredBSDF:
     ValueError
         A FIFO, device or link loop rather than a file.
     frenbrdf.BsdfFormatError
-        The file is not a ``tensor_file`` v1.0 RGB BSDF (wrong magic or version, truncated, a
-        field of the wrong type or shape, declaring more than 256 MiB, a spectral file), or its
-        ``rgb`` values are not reflectance (:func:`~frenbrdf.io.reflectance.check_reflectance`);
-        the message names the file and what was wrong.
+        The file is not a ``tensor_file`` v1.0 RGB BSDF (wrong magic or version, truncated, a field of the wrong
+        type or shape or with values outside its domain, declaring more than 256 MiB, a spectral file), or its
+        ``rgb`` values are not reflectance (:func:`~frenbrdf.io.reflectance.check_reflectance`); the message
+        names the file and what was wrong.
     """
     path = input_file(path, ".bsdf measurement")  # a folder or FIFO is named as such, never read
     native = BsdfMeasurement.read(path)
