@@ -18,7 +18,7 @@ import torch
 import frenbrdf
 from frenbrdf import cli
 from frenbrdf.io import read_material
-from frenbrdf.io.atomic import save_json
+from frenbrdf.io.atomic import json_text, save_json
 from frenbrdf.io.nbrdf import MAX_LAYERS
 from frenbrdf.io.paths import torch_load
 
@@ -87,6 +87,17 @@ def test_json_outputs_hold_no_nan_or_infinity(tmp_path):
         {"mean": None, "rows": [1.0, None, [None, 2]], "n": 3}
 
 
+def test_a_run_whose_history_holds_a_perfect_render_picks_that_epoch():
+    # A validation render equal to its truth has PSNR ∞, which a history.json holds as null.
+    from frenbrdf.training.config import selection_score
+
+    history = json.loads(json_text([{"epoch": 0, "val_rec": 0.2, "val_psnr": 30.0},
+                                    {"epoch": 1, "val_rec": 0.1, "val_psnr": math.inf}]))
+    assert history[1]["val_psnr"] is None
+    assert [selection_score(entry, "psnr") for entry in history] == [-30.0, -math.inf]
+    assert selection_score({"epoch": 2, "val_rec": 0.1}, "psnr") is None  # not rendered: not judged
+
+
 def test_a_summary_without_edits_has_no_edit_values():
     from frenbrdf.evaluation.tables import summarise
 
@@ -99,6 +110,7 @@ def test_a_summary_without_edits_has_no_edit_values():
     ({"psnr": True}, "has no valid PSNR"),
     ({"config": {"epochs": "x"}}, "row 0's config: epochs must be an integer"),
     ({"config": {"model": {"nbrdf": {"hidden": [1_000_000_000]}}}}, "row 0's config"),
+    ({"config": {"method": "foo"}}, "row 0's config: method must be one of"),
 ])
 def test_select_refuses_a_front_row_it_could_not_pass_on(tmp_path, toy_materials, capsys, row, message):
     fields = {"name": "small", "psnr": 30.0, "bytes_per_material": 364, "latent_bytes": 32, "config": {}, **row}

@@ -19,6 +19,15 @@ def test_public_api_is_exported():
     assert frenbrdf.__version__ == "0.1.0"
 
 
+def test_the_subpackages_are_attributes_without_their_own_import():
+    # ``import frenbrdf`` imports them lazily; code written when it imported them at once still reads frenbrdf.io.
+    code = "import frenbrdf; print(frenbrdf.io.read_samples is frenbrdf.read_samples, frenbrdf.render.render.__name__)"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout == "True render\n"
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        frenbrdf.nothing  # noqa: B018
+
+
 def test_package_is_typed():
     """The package ships its typing marker; that ``_native.pyi`` matches the extension is mypy's stubtest's check
     (.ci/run: ``python -m mypy.stubtest frenbrdf._native``)."""

@@ -12,7 +12,8 @@ folder, all of it or nothing:
     Its MERL table.
 ``render.png``
     The reconstruction on the metric renderer's sphere; with a MERL input also
-    ``truth.png`` and ``comparison.png`` (the truth beside the reconstruction, titled with the render PSNR and ΔE);
+    ``truth.png`` and ``comparison.png`` (the truth beside the reconstruction, titled with the render PSNR and ΔE
+    where the renders are at least about 130 px wide: ``frenbrdf.render.figures.titled_row``);
     a ``.bsdf`` truth renders as measured.
 ``spectrum.png``
     With a MERL or ``.bsdf`` input: the per-degree power spectra of the truth and of the reconstruction and the

@@ -424,7 +424,7 @@ class _Adam:
     def step(self, lr: float) -> None:
         (beta1, beta2), self.taken = self.BETAS, self.taken + 1
         step_size = lr / (1 - beta1 ** self.taken)
-        correction2 = math.sqrt(1 - beta2 ** self.taken)
+        correction2 = (1 - beta2 ** self.taken) ** 0.5  # as torch's; math.sqrt differs in the last bit at times
         for p, decay, (mean, square) in zip(self.parameters, self.decays, self.moments, strict=True):
             assert p.grad is not None, "a step leaves the gradient in .grad"
             grad = p.grad.add(p, alpha=decay) if decay else p.grad  # as torch's: one rounding, not two

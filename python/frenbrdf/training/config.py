@@ -43,7 +43,10 @@ def selection_score(entry: dict, rule: str) -> float | None:
         return None
     if rule == "loss":
         return entry["val_rec"]
-    return -entry["val_psnr"] if "val_psnr" in entry else None
+    if "val_psnr" not in entry:
+        return None
+    # JSON holds no infinity: a render equal to its truth (PSNR ∞) is written as null (frenbrdf.io.atomic.json_text).
+    return -math.inf if entry["val_psnr"] is None else -entry["val_psnr"]
 
 
 #: The most turns of hue a material's colour may go through from θ = 0 to 90° (:attr:`AugmentConfig.hue_shift`).
@@ -399,8 +402,8 @@ def config_from_dict(data: dict, where: str) -> TrainConfig:
     ``where`` (a file, a row of one) starts every message."""
     if not isinstance(data.get("method", "frenbrdf"), str):
         raise ValueError(f"{where}: method must be a string, got {data['method']!r}")
-    base = to_dict(config_for(data.get("method", "frenbrdf")))
     try:
+        base = to_dict(config_for(data.get("method", "frenbrdf")))
         return from_dict(TrainConfig, merge(base, data, TrainConfig), where)
     except ValueError as error:  # the dataclasses' own checks do not know the file
         if where in str(error):
