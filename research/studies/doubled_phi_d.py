@@ -1,0 +1,83 @@
+"""One arm of the doubled-φ_d study (research/results/doubled-phi-d): train the NBRDF baseline at the demo's length
+with the network's D input folded by reciprocity (``fold``, today's) or with φ_d doubled (``doubled``), then read
+its test split and the seam across the plane of incidence on the 19 measurements.
+
+    python research/studies/doubled_phi_d.py --arm doubled --seed 0 --data BANK --work WORK
+
+``doubled`` replaces D = (x, y, z) by (x² − y², 2xy, z) everywhere the package computes the network's input
+(``nbrdf.fold_difference`` and ``nbrdf.merl_bin_inputs``), in this process only: it is invariant under the fold's
+half-turn (x, y) → (−x, −y), so every network is reciprocal and continuous across φ_d = 0 and π by construction.
+Nothing in the package changes; the Mitsuba kernel and the viewer are not patched and not used here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import frenbrdf
+from frenbrdf.evaluation.evaluate import EvaluateConfig, evaluate_runs
+from frenbrdf.io.atomic import save_json
+from frenbrdf.models import editing, nbrdf
+from frenbrdf.training import config_for, train
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import seam  # noqa: E402
+
+
+def doubled_difference(d: np.ndarray) -> np.ndarray:
+    """D with φ_d doubled: (x² − y², 2xy, z), the same for a pair and its reverse, continuous everywhere."""
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    return np.stack([x * x - y * y, 2 * x * y, z], axis=-1)
+
+
+def use_doubled_input() -> None:
+    """Patches this process's NBRDF inputs (before any is computed: both are cached on first use)."""
+    plain_inputs = nbrdf.merl_bin_inputs
+
+    @functools.cache
+    def doubled_bin_inputs():
+        above, inputs = plain_inputs()
+        inputs = np.concatenate([inputs[:, :3], doubled_difference(inputs[:, 3:])], axis=-1)
+        inputs.flags.writeable = False
+        return above, inputs
+
+    nbrdf.fold_difference = doubled_difference
+    nbrdf.merl_bin_inputs = editing.merl_bin_inputs = doubled_bin_inputs
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--arm", choices=("fold", "doubled"), required=True)
+    parser.add_argument("--seed", type=int, required=True)
+    parser.add_argument("--data", required=True, help="the demo's bank (frenbrdf synth BANK)")
+    parser.add_argument("--work", type=Path, required=True)
+    parser.add_argument("--measured", default="../shared/data/rgl-measured")
+    args = parser.parse_args()
+    if args.arm == "doubled":
+        use_doubled_input()
+    name = f"{args.arm}-{args.seed}"
+    cfg = config_for("nbrdf", training="demo", data=args.data, out=str(args.work / "runs" / name), seed=args.seed,
+                     cache_dir=str(args.work / "cache"), progress=False)
+    run = train(cfg, overwrite=True)
+    settings = EvaluateConfig(samples=4000, edits=30, edit_resolution=64, refine="latent", progress=False)
+    report = evaluate_runs([run.path], args.work / "evaluation" / name, config=settings, overwrite=True)
+    model = frenbrdf.Model.load(run.path)
+    side, other = seam.seam_pairs()
+    steps = {}
+    for path in sorted(Path(args.measured).glob("*.bsdf")):
+        samples = frenbrdf.read_samples(path, samples=4000, seed=0)
+        steps[path.stem] = {budget: seam.jumps(model.reconstruct(samples.values, (samples.wi, samples.wo),
+                                                                 refine=budget).nbrdf, side, other)
+                            for budget in ("none", "latent")}
+    save_json(args.work / f"{name}.json", {"arm": args.arm, "seed": args.seed, "test": report["reconstruction"]["nbrdf"],
+                                           "summary": report["summary"]["nbrdf"], "seam": steps})
+    print(name, "done")
+
+
+if __name__ == "__main__":
+    main()
