@@ -8,6 +8,7 @@ quick, and a Ctrl-C while torch loads ends as one line.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 
 from ._native import __version__
 
@@ -29,9 +30,6 @@ _PUBLIC = {
 #: Public modules by their short names (``frenbrdf.mitsuba`` imports Mitsuba 3, which takes seconds).
 _MODULES = {"sht": ".numerics.sht", "mitsuba": ".render.mitsuba"}
 _DEFINED_IN = {name: module for module, names in _PUBLIC.items() for name in names}
-#: The package's modules, imported on their first use as ``frenbrdf.io`` (without an ``import frenbrdf.io``).
-_SUBMODULES = ("cli", "configs", "data", "demo", "evaluation", "exceptions", "io", "material", "models", "numerics",
-               "presets", "render", "training")
 
 
 def __getattr__(name: str):
@@ -39,7 +37,7 @@ def __getattr__(name: str):
         value = importlib.import_module(_MODULES[name], __name__)
     elif name in _DEFINED_IN:
         value = getattr(importlib.import_module(_DEFINED_IN[name], __name__), name)
-    elif name in _SUBMODULES:
+    elif importlib.util.find_spec(f"{__name__}.{name}") is not None:  # a subpackage: frenbrdf.io without its import
         value = importlib.import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
