@@ -1,0 +1,66 @@
+"""Readings of two training arms run on the same seeds, paired per test material: the input-variant studies' rule.
+
+Each run of an arm writes ``WORK/ARM-SEED.json`` with its test-split rows (``test``: per material ``psnr``,
+``delta_e`` and ``refined_*``, as ``evaluate_runs`` reports them) and its seam steps on the measurements (``seam``:
+per measurement and budget, the median and 90th percentile; research/studies/seam.py).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+#: The readings of a test row: the encoder's columns, and `latent`'s under a prefix.
+READINGS = (("encoder", ""), ("latent", "refined_"))
+
+
+def interval(values) -> tuple[float, float, float]:
+    """The mean and its 95 % t-interval."""
+    values = np.asarray(values)
+    half = stats.t.ppf(0.975, len(values) - 1) * values.std(ddof=1) / np.sqrt(len(values))
+    return float(values.mean()), float(values.mean() - half), float(values.mean() + half)
+
+
+def load_arms(work: Path, arms: tuple[str, ...]) -> dict[str, dict[int, dict]]:
+    """Each arm's runs by seed."""
+    runs: dict[str, dict[int, dict]] = {}
+    for arm in arms:
+        for path in work.glob(f"{arm}-*.json"):
+            run = json.loads(path.read_text())
+            runs.setdefault(arm, {})[run["seed"]] = run
+    return runs
+
+
+def paired_differences(runs: dict, base: str, arm: str) -> dict:
+    """``arm`` − ``base`` per material and seed, for the encoder and `latent`: pairs, PSNR and ΔE (mean, interval),
+    and whether the arm is harmless (PSNR's lower end above −0.5 dB, mean ΔE below +0.5)."""
+    seeds = sorted(set(runs[base]) & set(runs[arm]))
+    result: dict = {"seeds": seeds}
+    for reading, prefix in READINGS:
+        differences: dict[str, list[float]] = {"psnr": [], "delta_e": []}
+        for seed in seeds:
+            base_rows = {row["material"]: row for row in runs[base][seed]["test"]}
+            for row in runs[arm][seed]["test"]:
+                for key in differences:
+                    differences[key].append(row[prefix + key] - base_rows[row["material"]][prefix + key])
+        psnr, delta_e = interval(differences["psnr"]), interval(differences["delta_e"])
+        result[reading] = {"pairs": len(differences["psnr"]), "psnr": psnr, "delta_e": delta_e,
+                           "harmless": psnr[1] > -0.5 and delta_e[0] < 0.5}
+        print(f"{reading}: {arm} − {base} over {len(differences['psnr'])} pairs: PSNR {psnr[0]:+.2f} dB "
+              f"[{psnr[1]:+.2f}, {psnr[2]:+.2f}], ΔE {delta_e[0]:+.2f} [{delta_e[1]:+.2f}, {delta_e[2]:+.2f}]")
+    return result
+
+
+def seam_steps(runs: dict, arm: str, budgets: tuple[str, ...]) -> dict:
+    """Per budget, the median over seeds of the measurements' median step and of their 90th percentile."""
+    steps = {}
+    for budget in budgets:
+        median = np.median([np.median([row[budget]["median"] for row in run["seam"].values()])
+                            for run in runs[arm].values()])
+        p90 = np.median([np.median([row[budget]["p90"] for row in run["seam"].values()]) for run in runs[arm].values()])
+        steps[budget] = {"median": float(median), "p90": float(p90)}
+        print(f"seam, {arm}, {budget}: median step {median:.4f}, p90 {p90:.4f}")
+    return steps
