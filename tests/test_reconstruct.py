@@ -946,3 +946,52 @@ def test_an_anchor_holds_the_start_where_the_samples_say_nothing(model, material
 
     assert moved(runs[10.0]) < 0.5 * moved(runs[0.0])
     assert runs[10.0].losses["latent"] < start.losses["encode"]
+
+
+@pytest.mark.parametrize("ordered", [False, True], ids=["reciprocal", "ordered"])
+def test_fold_edge_pairs_are_the_inputs_on_either_side_of_the_edge(ordered):
+    """Each pair is the limit of the NBRDF's input just past and just before the edge it ties, at one (θ_h, θ_d)."""
+    from frenbrdf.models.nbrdf import fold_edge_pairs, nbrdf_coordinates
+
+    pairs = fold_edge_pairs(200, seed=3, ordered=ordered)
+    assert pairs.shape == (200, 2, 6)
+    theta_h = np.arctan2(pairs[:, 0, 0], pairs[:, 0, 2])
+    theta_d = np.arctan2(np.abs(pairs[:, 0, 3]), pairs[:, 0, 5])
+    edges = np.where(ordered & (np.arange(200) >= 100), np.pi, 0.0)  # an ordered NBRDF: φ_d = 0, then π
+    for side, offset in ((0, 1e-6), (1, -1e-6)):
+        phi_d = edges + np.where(edges > 0, -offset, offset)
+        angles = np.stack([theta_h, np.zeros(200), theta_d, phi_d], axis=-1)
+        wi, wo = frenbrdf.rusinkiewicz_to_directions(angles)
+        assert (wi[:, 2] > 0).all() and (wo[:, 2] > 0).all()
+        np.testing.assert_allclose(nbrdf_coordinates(wi, wo, ordered=ordered), pairs[:, side], atol=1e-5)
+    np.testing.assert_array_equal(fold_edge_pairs(200, seed=3, ordered=ordered), pairs)
+
+
+@pytest.mark.parametrize("both_orders", [False, True], ids=["reciprocal", "ordered"])
+def test_a_tie_closes_the_gap_across_the_fold_edge(model, material, both_orders):
+    """`tie` pulls the refined NBRDF's two sides of the fold's edge together: the gap between them at the tied pairs
+    (and at pairs it did not tie) shrinks, while the samples still fit."""
+    from frenbrdf.models.nbrdf import fold_edge_pairs, nbrdf_forward
+
+    wi, wo = _in_both_orders(material, 2) if both_orders else (material.wi, material.wo)
+    values = _lit_from_above(material.values, wi, wo) if both_orders else material.values
+    config = RefineConfig(latent_steps=5, weight_steps=300, weight_lr=3e-3)
+    free = model.reconstruct(values, (wi, wo), refine=config)
+    tied = model.reconstruct(values, (wi, wo), refine=dataclasses.replace(config, tie=1.0))
+    assert tied.nbrdf.ordered == free.nbrdf.ordered == both_orders
+
+    def gap(result, seed):
+        pairs = torch.from_numpy(fold_edge_pairs(128, seed, both_orders).astype(np.float32))
+        outputs = [nbrdf_forward(result.nbrdf.params, pairs[None, :, side]) for side in (0, 1)]
+        return float((outputs[0] - outputs[1]).abs().mean())
+
+    for seed in (0, 99):  # the tied pairs, and others
+        assert gap(tied, seed) < 0.3 * gap(free, seed), seed
+    assert tied.losses["weights"] < 2 * free.losses["weights"]
+
+
+def test_a_tie_is_a_number_within_bounds():
+    with pytest.raises(ValueError, match="tie must be a number from 0 to 100, got -1"):
+        RefineConfig(weight_steps=5, tie=-1)
+    with pytest.raises(ValueError, match="tie must be a number from 0 to 100, got True"):
+        RefineConfig(weight_steps=5, tie=True)

@@ -134,5 +134,8 @@ class WeightFit:
     def gradient(self, weights: _F32, rows: _I64 | None = None) -> tuple[float, _F32]:
         """The loss on the ``(batch,)`` rows (None: every sample) and its gradient, flat, at the flat ``weights``
         (each tensor in order), which become the fit's; Adam's state is untouched."""
+    def tie(self, pairs: _F32, weight: float) -> None:
+        """Ties the ``(P, 2, 6)`` pairs of NBRDF inputs: every step's loss adds ``weight`` times the mean over pairs
+        and channels of |N(a) − N(b)| (its square for 'mse'). A weight of 0 unties them."""
     def tensors(self) -> list[_F32]:
         """Each tensor's values, flat, in the order given."""

@@ -1,4 +1,6 @@
-use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -126,6 +128,20 @@ impl WeightFit {
         let inner = &mut self.inner;
         let (loss, gradient) = py.detach(|| inner.gradient_at(weights, rows.as_deref()))?;
         Ok((loss, to_numpy(py, gradient.len(), gradient)))
+    }
+
+    /// Ties `pairs` (float32 `(P, 2, 6)`: pairs of NBRDF inputs) with `weight`: every step's
+    /// loss adds `weight` times the mean over pairs and channels of |N(a) − N(b)| (its square
+    /// for 'mse'), pulling each pair's two outputs together. A weight of 0 unties them.
+    fn tie(&mut self, pairs: PyReadonlyArray3<'_, f32>, weight: f32) -> PyResult<()> {
+        if pairs.shape()[1..] != [2, refine::N_INPUTS] {
+            return Err(PyValueError::new_err(format!(
+                "pairs must have shape (P, 2, {}), got {:?}",
+                refine::N_INPUTS,
+                pairs.shape()
+            )));
+        }
+        Ok(self.inner.tie(contiguous("pairs", &pairs)?, weight)?)
     }
 
     /// Each tensor's values, flat (float32), in the order given.

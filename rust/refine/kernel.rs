@@ -20,154 +20,263 @@ type Block<const N: usize> = [[f32; LANES]; N];
 /// One parameter's partial gradient sums.
 type Partial = [f32; LANES];
 
-/// The summed loss of a part's `rows`, its gradient (times `scale`) added to `gradient`;
-/// compiled for the widest vector unit the CPU has.
-pub fn part_gradient(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [f32]) -> f64 {
+/// What a part passes over: rows of the fit's samples, or indices of its tied pairs.
+#[derive(Clone, Copy)]
+pub enum Part<'a> {
+    Samples(&'a [u32]),
+    Ties(&'a [u32]),
+}
+
+/// The summed loss of a part, its gradient (times `scale`) added to `gradient`; compiled for
+/// the widest vector unit the CPU has. A sample's loss is |e| or e², e = (predicted − true) ·
+/// cos θ_i; a tied pair's is |e| or e², e = N(a) − N(b), the gap between the pair's outputs.
+pub fn part_gradient(fit: &WeightFit, part: Part, scale: f32, gradient: &mut [f32]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
         if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { part_gradient_avx512(fit, rows, scale, gradient) };
+            return unsafe { part_gradient_avx512(fit, part, scale, gradient) };
         }
         if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
             // SAFETY: as above.
-            return unsafe { part_gradient_avx2(fit, rows, scale, gradient) };
+            return unsafe { part_gradient_avx2(fit, part, scale, gradient) };
         }
     }
-    part_gradient_inline::<[f32; LANES], NARROW>(fit, rows, scale, gradient)
+    part_gradient_inline::<[f32; LANES], NARROW>(fit, part, scale, gradient)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,fma")]
-fn part_gradient_avx512(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [f32]) -> f64 {
-    part_gradient_inline::<super::lanes::Avx512, WIDE>(fit, rows, scale, gradient)
+fn part_gradient_avx512(fit: &WeightFit, part: Part, scale: f32, gradient: &mut [f32]) -> f64 {
+    part_gradient_inline::<super::lanes::Avx512, WIDE>(fit, part, scale, gradient)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn part_gradient_avx2(fit: &WeightFit, rows: &[u32], scale: f32, gradient: &mut [f32]) -> f64 {
-    part_gradient_inline::<super::lanes::Avx2, NARROW>(fit, rows, scale, gradient)
+fn part_gradient_avx2(fit: &WeightFit, part: Part, scale: f32, gradient: &mut [f32]) -> f64 {
+    part_gradient_inline::<super::lanes::Avx2, NARROW>(fit, part, scale, gradient)
+}
+
+/// One part's passes: the activations of a block, the gradients flowing back, and each
+/// parameter's partial sums.
+struct Pass<const N: usize> {
+    /// activations[0]: the inputs; activations[l + 1]: layer l's outputs.
+    activations: Vec<Vec<Block<N>>>,
+    upstream: Vec<Block<N>>,
+    downstream: Vec<Block<N>>,
+    partials: Vec<Partial>,
 }
 
 #[inline(always)]
 fn part_gradient_inline<V: Lanes, const N: usize>(
     fit: &WeightFit,
-    rows: &[u32],
+    part: Part,
     scale: f32,
     gradient: &mut [f32],
 ) -> f64 {
-    let layers = &fit.layers;
     let zero: Block<N> = [[0.0; LANES]; N];
-    // activations[0]: the inputs; activations[l + 1]: layer l's outputs.
-    let mut activations: Vec<Vec<Block<N>>> = std::iter::once(N_INPUTS)
-        .chain(layers.iter().map(|l| l.outputs))
-        .map(|width| vec![zero; width])
-        .collect();
-    let widest = layers.iter().map(|l| l.outputs.max(l.inputs)).max().unwrap_or(0);
-    let (mut upstream, mut downstream) = (vec![zero; widest], vec![zero; widest]);
-    let mut targets = [zero; N_OUTPUTS];
-    let mut partials: Vec<Partial> = vec![[0.0; LANES]; fit.params.len()];
+    let widest = fit.layers.iter().map(|l| l.outputs.max(l.inputs)).max().unwrap_or(0);
+    let mut pass = Pass::<N> {
+        activations: std::iter::once(N_INPUTS)
+            .chain(fit.layers.iter().map(|l| l.outputs))
+            .map(|width| vec![zero; width])
+            .collect(),
+        upstream: vec![zero; widest],
+        downstream: vec![zero; widest],
+        partials: vec![[0.0; LANES]; fit.params.len()],
+    };
     let mut loss: Partial = [0.0; LANES];
-
-    for block in rows.chunks(N * LANES) {
-        // Gather the block feature-major; missing samples of a last block are 0 and weigh 0.
-        if block.len() < N * LANES {
-            activations[0]
-                .iter_mut()
-                .chain(&mut targets)
-                .for_each(|values| *values = zero);
-        }
-        let mut cos_in = zero;
-        for (sample, &row) in block.iter().enumerate() {
-            let (row, (vector, lane)) = (row as usize, (sample / LANES, sample % LANES));
-            for (k, &value) in fit.coords[row].iter().enumerate() {
-                activations[0][k][vector][lane] = value;
-            }
-            for (j, &value) in fit.values[row].iter().enumerate() {
-                targets[j][vector][lane] = value;
-            }
-            cos_in[vector][lane] = fit.cos_in[row];
-        }
-
-        for (l, layer) in layers.iter().enumerate() {
-            let (inputs, outputs) = activations.split_at_mut(l + 1);
-            let (inputs, outputs) = (&inputs[l], &mut outputs[0]);
-            let weights = &fit.params[layer.weights()];
-            let biases = &fit.params[layer.biases()];
-            let hidden = l + 1 < layers.len();
-            dense::<V, N>(weights, Some(biases), inputs, outputs);
-            if hidden {
-                for out in outputs.iter_mut() {
-                    relu::<V, N>(out);
-                }
+    match part {
+        Part::Samples(rows) => {
+            let mut targets = [zero; N_OUTPUTS];
+            for block in rows.chunks(N * LANES) {
+                let cos_in = gather_samples(fit, block, &mut pass.activations[0], &mut targets);
+                forward::<V, N>(fit, &mut pass);
+                sample_slopes(fit, &mut pass, &targets, &cos_in, scale, &mut loss);
+                backward::<V, N>(fit, &mut pass);
             }
         }
-
-        // The loss and its gradient at the outputs, sample by sample.
-        for vector in 0..N {
-            for (j, predicted) in activations[layers.len()].iter().enumerate() {
-                for lane in 0..LANES {
-                    let cos = cos_in[vector][lane];
-                    let error = (predicted[vector][lane] - targets[j][vector][lane]) * cos;
-                    let slope = match fit.loss {
-                        Loss::L1 => {
-                            loss[lane] += error.abs();
-                            // sgn(e) · cos: torch's abs backward, 0 at 0.
-                            if error > 0.0 {
-                                cos
-                            } else if error < 0.0 {
-                                -cos
-                            } else {
-                                0.0
-                            }
-                        }
-                        Loss::Mse => {
-                            loss[lane] += error * error;
-                            2.0 * error * cos
-                        }
-                    };
-                    upstream[j][vector][lane] = slope * scale;
-                }
+        Part::Ties(pairs) => {
+            for block in pairs.chunks(N * LANES / 2) {
+                gather_ties(fit, block, &mut pass.activations[0]);
+                forward::<V, N>(fit, &mut pass);
+                tie_slopes(fit, &mut pass, scale, &mut loss);
+                backward::<V, N>(fit, &mut pass);
             }
-        }
-
-        // Back through the layers: `upstream` holds the gradient at layer l's outputs.
-        for (l, layer) in layers.iter().enumerate().rev() {
-            let inputs = &activations[l];
-            let (weights, biases) = (layer.weights(), layer.biases());
-            for (j, up) in upstream[..layer.outputs].iter().enumerate() {
-                add_sum::<V, N>(&mut partials[biases.start + j], up);
-            }
-            // Each output unit's row of weight gradients, two units at a time where the registers allow.
-            let mut weight_rows = partials[weights].chunks_exact_mut(layer.inputs).zip(&upstream);
-            let pairs = if V::PAIRS { layer.outputs / 2 } else { 0 };
-            for _ in 0..pairs {
-                let ((first, up0), (second, up1)) = (weight_rows.next().unwrap(), weight_rows.next().unwrap());
-                add_products::<V, N, 2>([first, second], [up0, up1], inputs);
-            }
-            for (row, up) in weight_rows {
-                add_products::<V, N, 1>([row], [up], inputs);
-            }
-            if l == 0 {
-                break;
-            }
-            let transposed = &fit.transposed[l];
-            dense::<V, N>(
-                transposed,
-                None,
-                &upstream[..layer.outputs],
-                &mut downstream[..layer.inputs],
-            );
-            for (down, input) in downstream.iter_mut().zip(inputs) {
-                gate::<V, N>(down, input); // back through the ReLU: nothing flows where it gave 0
-            }
-            std::mem::swap(&mut upstream, &mut downstream);
         }
     }
-    for (g, partial) in gradient.iter_mut().zip(&partials) {
+    for (g, partial) in gradient.iter_mut().zip(&pass.partials) {
         *g += V::load(partial).halving_sum();
     }
     halving_sum(loss) as f64
+}
+
+/// A block of samples gathered feature-major into `inputs` and `targets`; returns their cos θ_i.
+/// Missing samples of a last block are 0 and weigh 0.
+#[inline(always)]
+fn gather_samples<const N: usize>(
+    fit: &WeightFit,
+    block: &[u32],
+    inputs: &mut [Block<N>],
+    targets: &mut [Block<N>; N_OUTPUTS],
+) -> Block<N> {
+    let zero: Block<N> = [[0.0; LANES]; N];
+    if block.len() < N * LANES {
+        inputs
+            .iter_mut()
+            .chain(targets.iter_mut())
+            .for_each(|values| *values = zero);
+    }
+    let mut cos_in = zero;
+    for (sample, &row) in block.iter().enumerate() {
+        let (row, (vector, lane)) = (row as usize, (sample / LANES, sample % LANES));
+        for (k, &value) in fit.coords[row].iter().enumerate() {
+            inputs[k][vector][lane] = value;
+        }
+        for (j, &value) in fit.values[row].iter().enumerate() {
+            targets[j][vector][lane] = value;
+        }
+        cos_in[vector][lane] = fit.cos_in[row];
+    }
+    cos_in
+}
+
+/// A block of tied pairs gathered feature-major: each pair's first input in an even vector,
+/// its second in the same lane of the next (so that every sum runs in one order whatever the
+/// block's size). Missing pairs of a last block are 0 on both sides: their gap is 0, and
+/// nothing flows from them.
+#[inline(always)]
+fn gather_ties<const N: usize>(fit: &WeightFit, block: &[u32], inputs: &mut [Block<N>]) {
+    if block.len() < N * LANES / 2 {
+        inputs.iter_mut().for_each(|values| *values = [[0.0; LANES]; N]);
+    }
+    for (pair, &index) in block.iter().enumerate() {
+        let (vector, lane) = (pair / LANES, pair % LANES);
+        for (side, input) in fit.ties[index as usize].iter().enumerate() {
+            for (k, &value) in input.iter().enumerate() {
+                inputs[k][2 * vector + side][lane] = value;
+            }
+        }
+    }
+}
+
+/// The forward pass of the block in `pass.activations[0]` through every layer.
+#[inline(always)]
+fn forward<V: Lanes, const N: usize>(fit: &WeightFit, pass: &mut Pass<N>) {
+    for (l, layer) in fit.layers.iter().enumerate() {
+        let (inputs, outputs) = pass.activations.split_at_mut(l + 1);
+        let (inputs, outputs) = (&inputs[l], &mut outputs[0]);
+        dense::<V, N>(
+            &fit.params[layer.weights()],
+            Some(&fit.params[layer.biases()]),
+            inputs,
+            outputs,
+        );
+        if l + 1 < fit.layers.len() {
+            for out in outputs.iter_mut() {
+                relu::<V, N>(out);
+            }
+        }
+    }
+}
+
+/// The loss's slope at a sample's error e: sgn(e) (torch's abs backward, 0 at 0) or 2e; adds
+/// the loss to `loss`.
+#[inline(always)]
+fn slope(kind: Loss, error: f32, loss: &mut f32) -> f32 {
+    match kind {
+        Loss::L1 => {
+            *loss += error.abs();
+            if error > 0.0 {
+                1.0
+            } else if error < 0.0 {
+                -1.0
+            } else {
+                0.0
+            }
+        }
+        Loss::Mse => {
+            *loss += error * error;
+            2.0 * error
+        }
+    }
+}
+
+/// The samples' loss and its gradient at the outputs (into `pass.upstream`), sample by sample.
+#[inline(always)]
+fn sample_slopes<const N: usize>(
+    fit: &WeightFit,
+    pass: &mut Pass<N>,
+    targets: &[Block<N>; N_OUTPUTS],
+    cos_in: &Block<N>,
+    scale: f32,
+    loss: &mut Partial,
+) {
+    let predictions = &pass.activations[fit.layers.len()];
+    for vector in 0..N {
+        for (j, predicted) in predictions.iter().enumerate() {
+            for lane in 0..LANES {
+                let cos = cos_in[vector][lane];
+                let error = (predicted[vector][lane] - targets[j][vector][lane]) * cos;
+                pass.upstream[j][vector][lane] = slope(fit.loss, error, &mut loss[lane]) * cos * scale;
+            }
+        }
+    }
+}
+
+/// The tied pairs' loss and its gradient at the outputs: +slope on a pair's first side (an
+/// even vector), −slope on its second (the next).
+#[inline(always)]
+fn tie_slopes<const N: usize>(fit: &WeightFit, pass: &mut Pass<N>, scale: f32, loss: &mut Partial) {
+    let predictions = &pass.activations[fit.layers.len()];
+    for vector in (0..N).step_by(2) {
+        for (j, predicted) in predictions.iter().enumerate() {
+            for lane in 0..LANES {
+                let gap = predicted[vector][lane] - predicted[vector + 1][lane];
+                let up = slope(fit.loss, gap, &mut loss[lane]) * scale;
+                pass.upstream[j][vector][lane] = up;
+                pass.upstream[j][vector + 1][lane] = -up;
+            }
+        }
+    }
+}
+
+/// Back through the layers from the gradient at the outputs in `pass.upstream`, adding each
+/// parameter's products to its partial sums.
+#[inline(always)]
+fn backward<V: Lanes, const N: usize>(fit: &WeightFit, pass: &mut Pass<N>) {
+    for (l, layer) in fit.layers.iter().enumerate().rev() {
+        let inputs = &pass.activations[l];
+        let (weights, biases) = (layer.weights(), layer.biases());
+        for (j, up) in pass.upstream[..layer.outputs].iter().enumerate() {
+            add_sum::<V, N>(&mut pass.partials[biases.start + j], up);
+        }
+        // Each output unit's row of weight gradients, two units at a time where the registers allow.
+        let mut weight_rows = pass.partials[weights]
+            .chunks_exact_mut(layer.inputs)
+            .zip(&pass.upstream);
+        let pairs = if V::PAIRS { layer.outputs / 2 } else { 0 };
+        for _ in 0..pairs {
+            let ((first, up0), (second, up1)) = (weight_rows.next().unwrap(), weight_rows.next().unwrap());
+            add_products::<V, N, 2>([first, second], [up0, up1], inputs);
+        }
+        for (row, up) in weight_rows {
+            add_products::<V, N, 1>([row], [up], inputs);
+        }
+        if l == 0 {
+            break;
+        }
+        dense::<V, N>(
+            &fit.transposed[l],
+            None,
+            &pass.upstream[..layer.outputs],
+            &mut pass.downstream[..layer.inputs],
+        );
+        for (down, input) in pass.downstream.iter_mut().zip(inputs) {
+            gate::<V, N>(down, input); // back through the ReLU: nothing flows where it gave 0
+        }
+        std::mem::swap(&mut pass.upstream, &mut pass.downstream);
+    }
 }
 
 /// outputs[j] = biases[j] + Σ_k weights[j, k] · inputs[k] (row-major `weights`; no biases: 0),
@@ -287,30 +396,33 @@ fn add_sum<V: Lanes, const N: usize>(partial: &mut Partial, a: &Block<N>) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::example;
+    use super::super::tests::tied_example;
     use super::*;
 
     #[test]
     fn every_vector_unit_takes_the_same_steps() {
-        let fit = example(300, Loss::L1);
+        let fit = tied_example(300, Loss::L1);
         let rows: Vec<u32> = (0..300).collect();
-        let gradient_of = |kernel: &dyn Fn(&mut [f32]) -> f64| {
-            let mut gradient = vec![0.0; fit.params.len()];
-            let loss = kernel(&mut gradient);
-            (loss, gradient)
-        };
-        let portable = gradient_of(&|g| part_gradient_inline::<[f32; LANES], NARROW>(&fit, &rows, 0.5, g));
-        #[cfg(target_arch = "x86_64")]
-        {
-            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-                // SAFETY: the CPU supports the features the function is compiled for.
-                let avx2 = gradient_of(&|g| unsafe { part_gradient_avx2(&fit, &rows, 0.5, g) });
-                assert_eq!(avx2, portable);
-            }
-            if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
-                // SAFETY: as above.
-                let avx512 = gradient_of(&|g| unsafe { part_gradient_avx512(&fit, &rows, 0.5, g) });
-                assert_eq!(avx512, portable);
+        let ties: Vec<u32> = (0..fit.ties.len() as u32).collect();
+        for part in [Part::Samples(&rows), Part::Ties(&ties)] {
+            let gradient_of = |kernel: &dyn Fn(&mut [f32]) -> f64| {
+                let mut gradient = vec![0.0; fit.params.len()];
+                let loss = kernel(&mut gradient);
+                (loss, gradient)
+            };
+            let portable = gradient_of(&|g| part_gradient_inline::<[f32; LANES], NARROW>(&fit, part, 0.5, g));
+            #[cfg(target_arch = "x86_64")]
+            {
+                if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+                    // SAFETY: the CPU supports the features the function is compiled for.
+                    let avx2 = gradient_of(&|g| unsafe { part_gradient_avx2(&fit, part, 0.5, g) });
+                    assert_eq!(avx2, portable);
+                }
+                if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma") {
+                    // SAFETY: as above.
+                    let avx512 = gradient_of(&|g| unsafe { part_gradient_avx512(&fit, part, 0.5, g) });
+                    assert_eq!(avx512, portable);
+                }
             }
         }
     }

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::{invalid_argument, Result};
 use crate::parallel::in_pool;
-use kernel::{part_gradient, PART};
+use kernel::{part_gradient, Part, PART};
 /// An NBRDF's inputs (Rusinkiewicz coordinates) and outputs (mapped RGB).
 pub const N_INPUTS: usize = 6;
 pub const N_OUTPUTS: usize = 3;
@@ -71,6 +71,11 @@ pub struct WeightFit {
     cos_in: Vec<f32>,
     all_rows: Vec<u32>,
     loss: Loss,
+    /// Pairs of inputs the NBRDF should give one value (the two sides of the reciprocity
+    /// fold's edge), and the weight of their gap in the loss ([`WeightFit::tie`]).
+    ties: Vec<[[f32; N_INPUTS]; 2]>,
+    tie_weight: f32,
+    all_ties: Vec<u32>,
 }
 
 impl WeightFit {
@@ -130,6 +135,9 @@ impl WeightFit {
             cos_in: cos_in.to_vec(),
             all_rows: (0..n as u32).collect(),
             loss,
+            ties: Vec::new(),
+            tie_weight: 0.0,
+            all_ties: Vec::new(),
         };
         fit.transpose();
         Ok(fit)
@@ -162,6 +170,34 @@ impl WeightFit {
             .map(|i| if i % 2 == 0 { 1e-3 } else { 0.0 })
             .collect();
         Self::new(tensors, &decays, &coords, &values, &cos_in, loss).expect("a valid synthetic fit")
+    }
+
+    /// Ties `pairs` (P × 2 × 6 inputs: each pair's two inputs in turn) with `weight`: every
+    /// step's loss adds `weight` times the mean over pairs and channels of |N(a) − N(b)| (or
+    /// its square, as the samples' loss), so that the fit gives each pair's inputs one value.
+    /// No pairs or a weight of 0: no tie (the default).
+    pub fn tie(&mut self, pairs: &[f32], weight: f32) -> Result<()> {
+        if pairs.len() % (2 * N_INPUTS) != 0 || pairs.len() / (2 * N_INPUTS) > u32::MAX as usize {
+            return invalid_argument!("tied pairs must be P × 2 × {N_INPUTS} values, got {}", pairs.len());
+        }
+        if pairs.iter().any(|v| !v.is_finite()) {
+            return invalid_argument!("the tied pairs hold NaN or inf");
+        }
+        if !(weight.is_finite() && weight >= 0.0) {
+            return invalid_argument!("the tie's weight must be finite and ≥ 0, got {weight}");
+        }
+        self.ties = pairs
+            .chunks_exact(2 * N_INPUTS)
+            .map(|pair| {
+                [
+                    pair[..N_INPUTS].try_into().unwrap(),
+                    pair[N_INPUTS..].try_into().unwrap(),
+                ]
+            })
+            .collect();
+        self.all_ties = (0..self.ties.len() as u32).collect();
+        self.tie_weight = weight;
+        Ok(())
     }
 
     /// Each tensor's values, in the order given to [`WeightFit::new`].
@@ -233,24 +269,39 @@ impl WeightFit {
         Ok(in_pool(|| self.gradient(rows.unwrap_or(&self.all_rows))))
     }
 
-    /// The loss and its gradient on `rows`, summed part by part in order.
+    /// The loss and its gradient on `rows` (and the tied pairs, all of them), summed part by
+    /// part in order.
     fn gradient(&self, rows: &[u32]) -> (f64, Vec<f32>) {
         let scale = 1.0 / (N_OUTPUTS * rows.len()) as f32;
-        let parts: Vec<(f64, Vec<f32>)> = rows
-            .par_chunks(PART)
-            .map(|part| {
+        let mut parts: Vec<Part> = rows.chunks(PART).map(Part::Samples).collect();
+        let tied = self.tie_weight > 0.0 && !self.ties.is_empty();
+        let tie_scale = self.tie_weight / (N_OUTPUTS * self.ties.len().max(1)) as f32;
+        if tied {
+            parts.extend(self.all_ties.chunks(PART / 2).map(Part::Ties));
+        }
+        let sums: Vec<(f64, Vec<f32>)> = parts
+            .par_iter()
+            .map(|&part| {
+                let part_scale = if matches!(part, Part::Samples(_)) {
+                    scale
+                } else {
+                    tie_scale
+                };
                 let mut gradient = vec![0.0; self.params.len()];
-                let loss = part_gradient(self, part, scale, &mut gradient);
+                let loss = part_gradient(self, part, part_scale, &mut gradient);
                 (loss, gradient)
             })
             .collect();
         let mut total = vec![0.0; self.params.len()];
-        let mut loss = 0.0;
-        for (part_loss, gradient) in parts {
-            loss += part_loss;
+        let (mut sample_loss, mut tie_loss) = (0.0, 0.0);
+        for (part, (part_loss, gradient)) in parts.iter().zip(sums) {
+            match part {
+                Part::Samples(_) => sample_loss += part_loss,
+                Part::Ties(_) => tie_loss += part_loss,
+            }
             total.iter_mut().zip(&gradient).for_each(|(t, g)| *t += g);
         }
-        (loss * scale as f64, total)
+        (sample_loss * scale as f64 + tie_loss * tie_scale as f64, total)
     }
 
     /// One step of torch.optim.Adam (its fused form's arithmetic) at learning rate `lr`.
@@ -334,10 +385,87 @@ pub(super) mod tests {
         WeightFit::synthetic(&[5, 4], n, loss, 12345)
     }
 
+    /// The NBRDF's outputs at one input, in plain arithmetic: for tests.
+    fn outputs(fit: &WeightFit, input: &[f32; N_INPUTS]) -> Vec<f32> {
+        let mut x = input.to_vec();
+        for (l, layer) in fit.layers.iter().enumerate() {
+            let weights = &fit.params[layer.weights()];
+            x = (0..layer.outputs)
+                .map(|j| {
+                    let sum: f32 = weights[j * layer.inputs..(j + 1) * layer.inputs]
+                        .iter()
+                        .zip(&x)
+                        .map(|(w, v)| w * v)
+                        .sum();
+                    let value = sum + fit.params[layer.biases()][j];
+                    if l + 1 < fit.layers.len() {
+                        value.max(0.0)
+                    } else {
+                        value
+                    }
+                })
+                .collect();
+        }
+        x
+    }
+
+    /// Each tied pair's gap N(a) − N(b), channel by channel.
+    fn gaps(fit: &WeightFit) -> Vec<f32> {
+        let gap = |[a, b]: &[[f32; N_INPUTS]; 2]| outputs(fit, a).into_iter().zip(outputs(fit, b)).map(|(a, b)| a - b);
+        fit.ties.iter().flat_map(gap).collect()
+    }
+
+    /// [`example`] with 37 tied pairs (a last block of them partial): inputs of its samples, each
+    /// beside itself with the first input negated (on which the example's target depends, so
+    /// the samples pull against the tie), kept where every channel's gap lies away from 0 (the
+    /// kink of |·|, where a finite difference straddles two slopes).
+    pub(super) fn tied_example(n: usize, loss: Loss) -> WeightFit {
+        let mut fit = example(n, loss);
+        let mut pairs = Vec::new();
+        for input in fit.coords.clone() {
+            let mut mirrored = input;
+            mirrored[0] = -mirrored[0];
+            let (a, b) = (outputs(&fit, &input), outputs(&fit, &mirrored));
+            if a.iter().zip(&b).all(|(a, b)| (a - b).abs() > 0.005) {
+                pairs.extend(input.iter().chain(&mirrored));
+            }
+            if pairs.len() == 37 * 2 * N_INPUTS {
+                break;
+            }
+        }
+        fit.tie(&pairs, 0.7).unwrap();
+        assert_eq!(fit.ties.len(), 37);
+        fit
+    }
+
+    /// The mean |gap| over the tied pairs and channels.
+    fn mean_gap(fit: &WeightFit) -> f32 {
+        let gaps = gaps(fit);
+        gaps.iter().map(|g| g.abs()).sum::<f32>() / gaps.len() as f32
+    }
+
+    #[test]
+    fn a_tie_closes_the_gap_between_its_pairs() {
+        let (mut tied, mut free) = (tied_example(500, Loss::L1), tied_example(500, Loss::L1));
+        free.tie_weight = 0.0;
+        tied.run(&[1e-2; 300], None, 0).unwrap();
+        free.run(&[1e-2; 300], None, 0).unwrap();
+        assert!(
+            mean_gap(&tied) < 0.2 * mean_gap(&free),
+            "{} against {}",
+            mean_gap(&tied),
+            mean_gap(&free)
+        );
+        let error = |r: Result<()>| r.unwrap_err().to_string();
+        assert!(error(free.tie(&[0.0; 11], 1.0)).contains("P × 2 × 6"));
+        assert!(error(free.tie(&[f32::NAN; 12], 1.0)).contains("NaN"));
+        assert!(error(free.tie(&[0.0; 12], -1.0)).contains("≥ 0"));
+    }
+
     #[test]
     fn the_gradient_is_the_loss_slope() {
         for loss in [Loss::Mse, Loss::L1] {
-            let mut fit = example(700, loss); // two parts, the second with a partial block
+            let mut fit = tied_example(700, loss); // two parts, the second with a partial block
             let (_, gradient) = fit.gradient(&fit.all_rows.clone());
             for (i, &expected) in gradient.iter().enumerate() {
                 let h = 1e-3;

@@ -20,7 +20,7 @@ from ..io.merl import CHANNEL_SCALES, SHAPE, merl_above_horizon, merl_bin_direct
 from ..io.nbrdf import MAX_LAYERS, MAX_WIDTH, N_INPUTS, N_OUTPUTS, NBRDFWeights
 from ..io.reflectance import MAX_REFLECTANCE
 from ..io.samples import UNIT_TOLERANCE
-from ..numerics.coords import half_diff_vectors, rusinkiewicz_to_half_diff
+from ..numerics.coords import half_diff_vectors, rusinkiewicz_to_directions, rusinkiewicz_to_half_diff
 from .mapping import LogRelativeMapping
 
 # What a file may hold is every reader's limit and the models' too (from frenbrdf.io): the NBRDF's inputs (H, D) and
@@ -137,6 +137,33 @@ def fold_difference(d: np.ndarray) -> np.ndarray:
     folds the same way.
     """
     return np.where(_order_of_difference(d)[..., None] < 0, d * np.array([-1.0, -1.0, 1.0]), d)
+
+
+def fold_edge_pairs(count: int, seed: int, ordered: bool = False) -> np.ndarray:
+    """``count`` pairs of NBRDF inputs ``(count, 2, 6)`` on the two sides of the fold's edge, which a reciprocal BRDF
+    gives one value: (H, (x, 0, z)) and (H, (−x, 0, z)), φ_d = 0 and π at the same (θ_h, θ_d), drawn at random (from
+    ``seed``) where both directions lie above the horizon.
+
+    :func:`fold_difference` sends a pair just past φ_d = 0 to just below π, so a network may put a step between the
+    two, a line through every highlight of a render (research/results/seam). ``ordered``: inputs of an ordered NBRDF,
+    in which the reverse of a pair is the other order: (x, 0, z) in one order and (−x, 0, z) in the other, for each
+    of the two edges, half the pairs each."""
+    rng, kept, total = np.random.default_rng(seed), [], 0
+    while total < count:
+        theta = rng.uniform(0.0, np.pi / 2, size=(2 * count, 2))
+        angles = np.stack([theta[:, 0], np.zeros(len(theta)), theta[:, 1], np.zeros(len(theta))], axis=-1)
+        wi, wo = rusinkiewicz_to_directions(angles)
+        above = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+        kept.append(nbrdf_coordinates(wi[above], wo[above]))
+        total += int(above.sum())
+    side = np.concatenate(kept)[:count]
+    side[:, 4] = 0.0  # D_y: the edge itself
+    other = side * np.array([1, 1, 1, -1, 1, 1])
+    if ordered:  # the first half on φ_d = 0's edge, the second on π's: each side in one order, its mirror in the other
+        first_edge = (np.arange(count) < count // 2)[:, None]
+        side, other = np.where(first_edge, side, other), np.where(first_edge, other, side)
+        side[:, ORDER_INPUT], other[:, ORDER_INPUT] = 1.0, -1.0
+    return np.stack([side, other], axis=1)
 
 
 def nbrdf_coordinates(wi, wo, ordered: bool = False) -> np.ndarray:

@@ -60,6 +60,7 @@ from .nbrdf import (
     MAX_WIDTH,
     NBRDF,
     ORDER_INPUT,
+    fold_edge_pairs,
     mapped_samples,
     nbrdf_coordinates,
     nbrdf_forward,
@@ -76,6 +77,9 @@ SCHEDULES = ("constant", "cosine")
 MAX_STARTS = 64
 #: The heaviest :attr:`RefineConfig.anchor`: beyond it the samples hardly move z at all.
 MAX_ANCHOR = 100.0
+#: The heaviest :attr:`RefineConfig.tie`, and the pairs on the fold's edge that it ties (every step, all of them).
+MAX_TIE = 100.0
+TIE_PAIRS = 128
 #: Weight steps per call of the native loop: how often stage 2 updates its progress bar and checks its seconds.
 NATIVE_STEPS = 50
 
@@ -129,8 +133,13 @@ class RefineConfig:
     every budget's): off. Measured not to help (research/results/latent-anchor/README.md): at 0.03, through five
     device patterns, −0.53 dB [−0.78, −0.27] on 45 unseen procedural materials and −0.13 [−0.41, +0.15] on 19 real
     measurements; where no sample lies the encoder's guess is right about as often as where `latent` takes it."""
+    tie: float = 0.0
+    """Stage 2 ties the NBRDF's two sides of the fold's edge: its loss adds this many times the mean gap |N(a) − N(b)|
+    over :data:`TIE_PAIRS` pairs (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a reciprocal BRDF gives one
+    value. Without it the weights fit each side to the samples on that side, and a render may show a faint line
+    through each highlight where light, view and normal are coplanar (research/results/seam). 0: off."""
     seed: int = 0
-    """Seeds the mini-batches (and a widened NBRDF's new weights)."""
+    """Seeds the mini-batches (and a widened NBRDF's new weights, and the tied pairs)."""
     progress: bool = False
     """Show a progress bar per stage."""
 
@@ -155,6 +164,8 @@ class RefineConfig:
         if not (isinstance(self.anchor, numbers.Real) and not isinstance(self.anchor, bool)
                 and 0 <= self.anchor <= MAX_ANCHOR):
             problems.append(f"anchor must be a number from 0 to {MAX_ANCHOR:g}, got {self.anchor!r}")
+        if not (isinstance(self.tie, numbers.Real) and not isinstance(self.tie, bool) and 0 <= self.tie <= MAX_TIE):
+            problems.append(f"tie must be a number from 0 to {MAX_TIE:g}, got {self.tie!r}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
         if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
@@ -290,7 +301,7 @@ def reconstruct(model, values, directions, *, refine: str | RefineConfig = "full
             # The order enters where the input was 0 for every pair: its weights go first, the output stays.
             params[0][:, :, ORDER_INPUT] = 0
             samples.coords[0, :, ORDER_INPUT] = torch.from_numpy(order.astype(np.float32))
-        params = _refine_weights(params, samples, loss, config, record)
+        params = _refine_weights(params, samples, loss, config, record, ordered)
         record.losses["weights"] = _sample_loss(params, samples, loss.kind)
 
     nbrdf = NBRDF([p.detach() for p in params], model.mapping, ordered)  # checked: finite weights
@@ -434,10 +445,13 @@ class _Adam:
 
 
 def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossConfig, config: RefineConfig,
-                    record: _Record) -> list[torch.Tensor]:
+                    record: _Record, ordered: bool) -> list[torch.Tensor]:
     """Stage 2 in the native loop (:class:`frenbrdf._native.WeightFit`): Adam's steps as :func:`_optimise` takes
-    them, with the penalties as weight decay, over :data:`NATIVE_STEPS` steps a call; the refined tensors."""
+    them, with the penalties as weight decay, over :data:`NATIVE_STEPS` steps a call; the refined tensors. ``ordered``:
+    the NBRDF is ordered (the tie's pairs then are too)."""
     fit = _native_fit(params, samples, _weight_decays(params, loss), loss.kind)
+    if config.tie:
+        fit.tie(fold_edge_pairs(TIE_PAIRS, config.seed, ordered).astype(np.float32), config.tie)
     rates = _learning_rates(config.weight_lr, config.weight_steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index("weights"))
     start, taken = time.perf_counter(), 0
