@@ -177,7 +177,7 @@ impl WeightFit {
     /// its square, as the samples' loss), so that the fit gives each pair's inputs one value.
     /// No pairs or a weight of 0: no tie (the default).
     pub fn tie(&mut self, pairs: &[f32], weight: f32) -> Result<()> {
-        if pairs.len() % (2 * N_INPUTS) != 0 || pairs.len() / (2 * N_INPUTS) > u32::MAX as usize {
+        if !pairs.len().is_multiple_of(2 * N_INPUTS) || pairs.len() / (2 * N_INPUTS) > u32::MAX as usize {
             return invalid_argument!("tied pairs must be P × 2 × {N_INPUTS} values, got {}", pairs.len());
         }
         if pairs.iter().any(|v| !v.is_finite()) {
