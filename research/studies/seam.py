@@ -1,6 +1,7 @@
 """The seam along the plane of incidence: how far apart a reconstruction's values at φ_d = 0 and φ_d = π lie.
 
-    python research/studies/seam.py ../shared/data/rgl-measured/*.bsdf [--model RUN] --json research/results/seam/seam.json
+    python research/studies/seam.py ../shared/data/rgl-measured/*.bsdf [--model RUN] [--budgets none latent full]
+        --json research/results/seam/seam.json
 
 The NBRDF's input folds D by reciprocity (D → (−D_x, −D_y, D_z) where D_y < 0: ``nbrdf.fold_difference``), so
 where a light, the view and the normal are coplanar (φ_d crosses 0 or π), a render's pixels on one side ask the
@@ -10,7 +11,8 @@ line from the sphere's centre through each light's highlight. Reported per mater
 percentile, over a grid of (θ_h, θ_d) with both directions above the horizon, of the step
 |ln(f(φ_d = s + ε) + c) − ln(f(φ_d = s − ε) + c)| across the seams s = 0 and π (ε = 0.5°, c = 0.01 1/sr, the
 channels' mean), for the measurement as measured (a ``.bsdf`` is evaluated without a fold: its step is what 1° of
-φ_d changes) and for the shipped model's reconstructions from 4,000 random bins (encoder, ``latent``, ``full``).
+φ_d changes) and for the shipped model's reconstructions from 4,000 random bins (``--budgets``: by default the
+encoder, ``latent`` and ``full``; a budget ``NAME@FIELD=VALUE`` as compare_models.py reads it).
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ from tqdm import tqdm
 
 import frenbrdf
 from frenbrdf.io.atomic import save_json
+
+from compare_models import budget_config
 
 FLOOR = 0.01  # 1/sr: differences among values far below a diffuse white's 0.3 do not show
 #: Half a degree either side of a seam: across φ_d = 0, D = (x, ±ε, z), and the fold turns (x, −ε, z) into (−x, ε, z).
@@ -55,6 +59,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("measurements", nargs="+", type=Path)
     parser.add_argument("--model", default="pretrained", help="a training run folder, or the shipped model")
+    parser.add_argument("--budgets", nargs="+", default=["none", "latent", "full"])
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
     model = frenbrdf.Model.pretrained() if args.model == "pretrained" else frenbrdf.Model.load(args.model)
@@ -64,13 +69,13 @@ def main() -> None:
         measured = frenbrdf.read_bsdf(path)
         samples = frenbrdf.read_samples(path, samples=4000, seed=0)
         row = {"measured": jumps(measured, side, other)}
-        for budget in ("none", "latent", "full"):
-            result = model.reconstruct(samples.values, (samples.wi, samples.wo), refine=budget)
+        for budget in args.budgets:
+            result = model.reconstruct(samples.values, (samples.wi, samples.wo), refine=budget_config(budget))
             row[budget] = jumps(result.nbrdf, side, other)
         rows[path.stem] = row
         print(path.stem, "  ".join(f"{k} {v['median']:.3f}/{v['p90']:.3f}" for k, v in row.items()))
     summary = {kind: {stat: float(np.median([row[kind][stat] for row in rows.values()])) for stat in ("median", "p90")}
-               for kind in ("measured", "none", "latent", "full")}
+               for kind in ("measured", *args.budgets)}
     print("median over materials:", summary)
     if args.json:
         save_json(args.json, {"model": args.model, "floor": FLOOR, "pairs": len(side[0]), "materials": rows,
