@@ -21,12 +21,11 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from compare_models import budget_config
 from tqdm import tqdm
 
 import frenbrdf
 from frenbrdf.io.atomic import save_json
-
-from compare_models import budget_config
 
 FLOOR = 0.01  # 1/sr: differences among values far below a diffuse white's 0.3 do not show
 #: Half a degree either side of a seam: across φ_d = 0, D = (x, ±ε, z), and the fold turns (x, −ε, z) into (−x, ε, z).
