@@ -77,8 +77,9 @@ SCHEDULES = ("constant", "cosine")
 MAX_STARTS = 64
 #: The heaviest :attr:`RefineConfig.anchor`: beyond it the samples hardly move z at all.
 MAX_ANCHOR = 100.0
-#: The heaviest :attr:`RefineConfig.tie`, and the pairs on the fold's edge that it ties (every step, all of them).
+#: The heaviest :attr:`RefineConfig.tie`.
 MAX_TIE = 100.0
+#: The pairs on the fold's edge that :attr:`RefineConfig.tie` ties (all of them, every step of stage 2).
 TIE_PAIRS = 128
 #: Weight steps per call of the native loop: how often stage 2 updates its progress bar and checks its seconds.
 NATIVE_STEPS = 50
@@ -134,9 +135,9 @@ class RefineConfig:
     device patterns, −0.53 dB [−0.78, −0.27] on 45 unseen procedural materials and −0.13 [−0.41, +0.15] on 19 real
     measurements; where no sample lies the encoder's guess is right about as often as where `latent` takes it."""
     tie: float = 0.0
-    """Stage 2 ties the NBRDF's two sides of the fold's edge: its loss adds this many times the mean gap |N(a) − N(b)|
-    over :data:`TIE_PAIRS` pairs (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a reciprocal BRDF gives one
-    value. Without it the weights fit each side to the samples on that side, and a render may show a faint line
+    """Stage 2 ties the NBRDF's two sides of the fold's edge: its loss adds this many times the mean gap
+    ``|N(a) − N(b)|`` over :data:`TIE_PAIRS` pairs (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a
+    reciprocal BRDF gives one value. Without it the weights fit each side to the samples on that side, and a render may show a faint line
     through each highlight where light, view and normal are coplanar (research/results/seam). 0 (the default and
     every budget's): off. Measured not to pay (research/results/full-tie/README.md): ``full`` at 0.1 steps across
     the edge a fifth as much at the 90th percentile in 1.07× the time, but loses 1.9 dB on 19 real measurements and
