@@ -965,6 +965,9 @@ def test_fold_edge_pairs_are_the_inputs_on_either_side_of_the_edge(ordered):
         assert (wi[:, 2] > 0).all() and (wo[:, 2] > 0).all()
         np.testing.assert_allclose(nbrdf_coordinates(wi, wo, ordered=ordered), pairs[:, side], atol=1e-5)
     np.testing.assert_array_equal(fold_edge_pairs(200, seed=3, ordered=ordered), pairs)
+    assert fold_edge_pairs(0, seed=3).shape == (0, 2, 6)
+    with pytest.raises(ValueError, match="count must be ≥ 0, got -1"):
+        fold_edge_pairs(-1, seed=3)
 
 
 @pytest.mark.parametrize("both_orders", [False, True], ids=["reciprocal", "ordered"])
@@ -995,3 +998,5 @@ def test_a_tie_is_a_number_within_bounds():
         RefineConfig(weight_steps=5, tie=-1)
     with pytest.raises(ValueError, match="tie must be a number from 0 to 100, got True"):
         RefineConfig(weight_steps=5, tie=True)
+    with pytest.raises(ValueError, match="it needs weight_steps > 0"):
+        RefineConfig(latent_steps=5, tie=0.1)

@@ -55,12 +55,15 @@ def paired_differences(runs: dict, base: str, arm: str) -> dict:
 
 
 def seam_steps(runs: dict, arm: str, budgets: tuple[str, ...]) -> dict:
-    """Per budget, the median over seeds of the measurements' median step and of their 90th percentile."""
+    """Per budget, the median over the seeds every arm ran of the measurements' median step and of their 90th
+    percentile."""
+    seeds = sorted(set.intersection(*(set(by_seed) for by_seed in runs.values())))
     steps = {}
     for budget in budgets:
-        median = np.median([np.median([row[budget]["median"] for row in run["seam"].values()])
-                            for run in runs[arm].values()])
-        p90 = np.median([np.median([row[budget]["p90"] for row in run["seam"].values()]) for run in runs[arm].values()])
+        median = np.median([np.median([row[budget]["median"] for row in runs[arm][seed]["seam"].values()])
+                            for seed in seeds])
+        p90 = np.median([np.median([row[budget]["p90"] for row in runs[arm][seed]["seam"].values()])
+                         for seed in seeds])
         steps[budget] = {"median": float(median), "p90": float(p90)}
         print(f"seam, {arm}, {budget}: median step {median:.4f}, p90 {p90:.4f}")
     return steps

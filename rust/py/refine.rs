@@ -92,7 +92,8 @@ impl WeightFit {
 
     /// One Adam step per learning rate (float32 `(steps,)`); `rows`: `(steps, batch)` sample
     /// indices, each step's batch, or None for every sample each step. Returns each step's
-    /// loss before its update (float64), stopping after the first that is not finite.
+    /// loss before its update (float64; with the tie's term, if `tie` set one), stopping after
+    /// the first that is not finite.
     #[pyo3(signature = (learning_rates, rows=None))]
     fn run<'py>(
         &mut self,
@@ -110,8 +111,8 @@ impl WeightFit {
         Ok(to_numpy(py, losses.len(), losses))
     }
 
-    /// The loss on `rows` (int64 `(batch,)` sample indices, or None for every sample) and
-    /// its gradient (float32, flat), at the flat float32 `weights` (each tensor in the
+    /// The loss on `rows` (int64 `(batch,)` sample indices, or None for every sample; with the
+    /// tie's term, if any) and its gradient (float32, flat), at the flat float32 `weights` (each tensor in the
     /// order given, flattened), which become the fit's weights; Adam's state is untouched.
     #[pyo3(signature = (weights, rows=None))]
     fn gradient<'py>(

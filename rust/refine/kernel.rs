@@ -1,8 +1,9 @@
 //! One part's loss and gradient: the forward and backward passes over its blocks of
-//! samples, held feature-major (one [`Block`] per unit), in vectors of [`LANES`]. Each
-//! parameter's gradient gathers [`LANES`] partial sums over the part's blocks, added up once
-//! at its end. Every sum runs sample by sample in order, so that the block's size (four
-//! vectors, eight where AVX-512's 32 registers hold a pair of units' sums) changes no result.
+//! samples (or of tied pairs), held feature-major (one [`Block`] per unit), in vectors of
+//! [`LANES`]. Each parameter's gradient gathers [`LANES`] partial sums over the part's blocks,
+//! added up once at its end. Every sum runs sample by sample (pair by pair, each pair's two
+//! sides in turn) in order, so that the block's size (four vectors, eight where AVX-512's 32
+//! registers hold a pair of units' sums) changes no result.
 
 use super::lanes::{halving_sum, Lanes, LANES};
 use super::{Loss, WeightFit, N_INPUTS, N_OUTPUTS};

@@ -6,8 +6,8 @@
 //! goes between them (research/performance.md). Here a step passes over blocks of samples held
 //! feature-major (`kernel`), so that every inner loop runs over a block's samples in vector
 //! registers and nothing is allocated per operation.
-//! The samples are cut into parts of [`PART`] whatever the number of threads and the parts'
-//! gradients are summed in order: a fit takes the same steps on any number of threads, and
+//! The samples are cut into parts of [`PART`] (tied pairs, [`WeightFit::tie`], into parts of
+//! half as many) whatever the number of threads and the parts' gradients are summed in order: a fit takes the same steps on any number of threads, and
 //! on AVX2 as on AVX-512 (both fuse multiply-adds; a CPU without FMA rounds differently).
 
 mod kernel;
@@ -208,12 +208,13 @@ impl WeightFit {
             .collect()
     }
 
-    /// The loss on all samples at the current weights.
+    /// The loss on all samples (and the tie's term, if any) at the current weights.
     pub fn loss(&self) -> f64 {
         in_pool(|| self.gradient(&self.all_rows).0)
     }
 
     /// One Adam step per learning rate; each step's batch is `batch` rows of `rows` in turn
+    /// (and every tied pair: the tie's term joins each step's loss)
     /// (`None`: every sample each step). Returns each step's loss before its update; stops
     /// after the first that is not finite, without updating.
     pub fn run(&mut self, learning_rates: &[f32], rows: Option<&[u32]>, batch: usize) -> Result<Vec<f64>> {
@@ -247,7 +248,7 @@ impl WeightFit {
         })
     }
 
-    /// The loss on `rows` (`None`: every sample) and its gradient, at the flat `weights`
+    /// The loss on `rows` (`None`: every sample; with the tie's term, if any) and its gradient, at the flat `weights`
     /// (every layer's weights then biases, as [`WeightFit::new`] lays them out), which
     /// become the fit's weights; Adam's state is untouched. The latent stage of refinement
     /// chains this gradient through the decoder to the latent.
@@ -415,24 +416,35 @@ pub(super) mod tests {
         fit.ties.iter().flat_map(gap).collect()
     }
 
-    /// [`example`] with 37 tied pairs (a last block of them partial): inputs of its samples, each
-    /// beside itself with the first input negated (on which the example's target depends, so
-    /// the samples pull against the tie), kept where every channel's gap lies away from 0 (the
-    /// kink of |·|, where a finite difference straddles two slopes).
+    /// Each input beside itself with its first input negated (on which the example's target
+    /// depends, so the samples pull against a tie of the two), flat as [`WeightFit::tie`] takes them.
+    fn mirrored_pairs<'a>(inputs: impl IntoIterator<Item = &'a [f32; N_INPUTS]>) -> Vec<f32> {
+        inputs
+            .into_iter()
+            .flat_map(|input| {
+                let mut mirrored = *input;
+                mirrored[0] = -mirrored[0];
+                input.iter().chain(&mirrored).copied().collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    /// [`example`] with 37 tied pairs (a last block of them partial): [`mirrored_pairs`] of its
+    /// samples, kept where every channel's gap lies away from 0 (the kink of |·|, where a finite
+    /// difference straddles two slopes).
     pub(super) fn tied_example(n: usize, loss: Loss) -> WeightFit {
         let mut fit = example(n, loss);
-        let mut pairs = Vec::new();
-        for input in fit.coords.clone() {
-            let mut mirrored = input;
-            mirrored[0] = -mirrored[0];
-            let (a, b) = (outputs(&fit, &input), outputs(&fit, &mirrored));
-            if a.iter().zip(&b).all(|(a, b)| (a - b).abs() > 0.005) {
-                pairs.extend(input.iter().chain(&mirrored));
-            }
-            if pairs.len() == 37 * 2 * N_INPUTS {
-                break;
-            }
-        }
+        let pairs = mirrored_pairs(
+            fit.coords
+                .iter()
+                .filter(|input| {
+                    let mut mirrored = **input;
+                    mirrored[0] = -mirrored[0];
+                    let (a, b) = (outputs(&fit, input), outputs(&fit, &mirrored));
+                    a.iter().zip(&b).all(|(a, b)| (a - b).abs() > 0.005)
+                })
+                .take(37),
+        );
         fit.tie(&pairs, 0.7).unwrap();
         assert_eq!(fit.ties.len(), 37);
         fit
@@ -442,6 +454,24 @@ pub(super) mod tests {
     fn mean_gap(fit: &WeightFit) -> f32 {
         let gaps = gaps(fit);
         gaps.iter().map(|g| g.abs()).sum::<f32>() / gaps.len() as f32
+    }
+
+    #[test]
+    fn the_tie_adds_its_weight_times_the_mean_gap() {
+        for loss in [Loss::L1, Loss::Mse] {
+            let mut fit = tied_example(300, loss);
+            let (tied, gaps) = (fit.loss(), gaps(&fit));
+            fit.tie_weight = 0.0;
+            let term = match loss {
+                Loss::L1 => gaps.iter().map(|g| g.abs() as f64).sum::<f64>(),
+                Loss::Mse => gaps.iter().map(|g| (g * g) as f64).sum::<f64>(),
+            } / gaps.len() as f64;
+            let expected = fit.loss() + 0.7 * term;
+            assert!(
+                (tied - expected).abs() < 1e-5 * expected,
+                "{loss:?}: {tied} against {expected}"
+            );
+        }
     }
 
     #[test]
@@ -507,6 +537,7 @@ pub(super) mod tests {
         let steps = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let mut fit = example(2000, Loss::L1); // four parts
+            fit.tie(&mirrored_pairs(&fit.coords[..600]), 0.5).unwrap(); // three parts of pairs
             let losses = pool.install(|| fit.run(&[1e-2; 20], None, 0).unwrap());
             (losses, fit.tensors())
         };

@@ -144,10 +144,15 @@ def fold_edge_pairs(count: int, seed: int, ordered: bool = False) -> np.ndarray:
     gives one value: (H, (x, 0, z)) and (H, (−x, 0, z)), φ_d = 0 and π at the same (θ_h, θ_d), drawn at random (from
     ``seed``) where both directions lie above the horizon.
 
-    :func:`fold_difference` sends a pair just past φ_d = 0 to just below π, so a network may put a step between the
-    two, a line through every highlight of a render (research/results/seam). ``ordered``: inputs of an ordered NBRDF,
-    in which the reverse of a pair is the other order: (x, 0, z) in one order and (−x, 0, z) in the other, for each
-    of the two edges, half the pairs each."""
+    :func:`fold_difference` sends a pair just before φ_d = 0 (at −ε) to just below π, so a network may put a step
+    between the two sides, a line through every highlight of a render (research/results/seam). ``ordered``: inputs
+    of an ordered NBRDF, in which the reverse of a pair is the other order: (x, 0, z) in one order and (−x, 0, z) in
+    the other, for each of the two edges, half the pairs each (the pairs a BRDF continuous in φ_d gives one value).
+    ``count`` 0: none."""
+    if count < 0:
+        raise ValueError(f"count must be ≥ 0, got {count}")
+    if count == 0:
+        return np.zeros((0, 2, N_INPUTS))
     rng, kept, total = np.random.default_rng(seed), [], 0
     while total < count:
         theta = rng.uniform(0.0, np.pi / 2, size=(2 * count, 2))

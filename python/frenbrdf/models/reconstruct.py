@@ -136,7 +136,7 @@ class RefineConfig:
     measurements; where no sample lies the encoder's guess is right about as often as where `latent` takes it."""
     tie: float = 0.0
     """Stage 2 ties the NBRDF's two sides of the fold's edge: its loss adds this many times the mean gap
-    ``|N(a) − N(b)|`` over :data:`TIE_PAIRS` pairs (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a
+    ``|N(a) − N(b)|`` (its square for an ``mse`` model) over :data:`TIE_PAIRS` pairs (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a
     reciprocal BRDF gives one value. Without it the weights fit each side to the samples on that side, and a render may show a faint line
     through each highlight where light, view and normal are coplanar (research/results/seam). 0 (the default and
     every budget's): off. Measured not to pay (research/results/full-tie/README.md): ``full`` at 0.1 steps across
@@ -170,6 +170,9 @@ class RefineConfig:
             problems.append(f"anchor must be a number from 0 to {MAX_ANCHOR:g}, got {self.anchor!r}")
         if not (isinstance(self.tie, numbers.Real) and not isinstance(self.tie, bool) and 0 <= self.tie <= MAX_TIE):
             problems.append(f"tie must be a number from 0 to {MAX_TIE:g}, got {self.tie!r}")
+        elif self.tie and not self.weight_steps:
+            problems.append(f"tie ties stage 2's weights: it needs weight_steps > 0, got tie {self.tie} with "
+                            f"weight_steps {self.weight_steps}")
         if self.seconds is not None and not self.seconds > 0:
             problems.append(f"seconds must be positive or None, got {self.seconds}")
         if self.width is not None and not (isinstance(self.width, numbers.Integral) and 1 <= self.width <= MAX_WIDTH
