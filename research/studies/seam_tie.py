@@ -1,8 +1,9 @@
 """One arm of the seam-tie study (research/results/seam-tie): train the NBRDF baseline at the demo's length with
 today's loss (``fold``) or with a term that ties each decoded NBRDF's two sides of the reciprocity fold's edge
-(``tied``), then read its test split and the seam across the plane of incidence on the 19 measurements.
+(``tied``, at ``--weight``: a run named ``tied@WEIGHT`` unless the weight is ``TIE_WEIGHT``), then read its test
+split and the seam across the plane of incidence on the 19 measurements.
 
-    python research/studies/seam_tie.py --arm fold|tied --seed 0 --data BANK --work WORK
+    python research/studies/seam_tie.py --arm fold|tied --seed 0 --data BANK --work WORK [--weight 0.3]
 
 The fold (``frenbrdf.models.nbrdf.fold_difference``) makes every decoded BRDF reciprocal but lets the network put a
 step between φ_d = 0 and φ_d = π at the same (θ_h, θ_d), where a true reciprocal BRDF is continuous: the inputs
@@ -54,8 +55,9 @@ def edge_pool(seed: int) -> tuple[torch.Tensor, torch.Tensor]:
     return torch.from_numpy(side.astype(np.float32)), torch.from_numpy(other.astype(np.float32))
 
 
-def use_tie(seed: int) -> None:
-    """Adds the tie to every training step's weight-penalty term (not under ``torch.no_grad``: validation is today's)."""
+def use_tie(seed: int, weight: float = TIE_WEIGHT) -> None:
+    """Adds the tie at ``weight`` to every training step's weight-penalty term (not under ``torch.no_grad``:
+    validation is today's)."""
     side, other = edge_pool(seed)
     generator = torch.Generator().manual_seed(2000 + seed)
     plain_terms = step.decoding_terms
@@ -67,7 +69,7 @@ def use_tie(seed: int) -> None:
             batch = params[0].shape[0]
             a = nbrdf_forward(params, side[rows][None].expand(batch, -1, -1))
             b = nbrdf_forward(params, other[rows][None].expand(batch, -1, -1))
-            terms["w"] = terms["w"] + TIE_WEIGHT * (a - b).abs().mean()
+            terms["w"] = terms["w"] + weight * (a - b).abs().mean()
         return terms
 
     step.decoding_terms = tied_terms
@@ -80,10 +82,13 @@ def main() -> None:
     parser.add_argument("--data", required=True, help="the bank (frenbrdf synth BANK --seed 1)")
     parser.add_argument("--work", type=Path, required=True)
     parser.add_argument("--measured", default="../shared/data/rgl-measured")
+    parser.add_argument("--weight", type=float, default=TIE_WEIGHT, help="the tie's weight (arm tied)")
     args = parser.parse_args()
+    arm = args.arm
     if args.arm == "tied":
-        use_tie(args.seed)
-    name = f"{args.arm}-{args.seed}"
+        use_tie(args.seed, args.weight)
+        arm = "tied" if args.weight == TIE_WEIGHT else f"tied@{args.weight:g}"
+    name = f"{arm}-{args.seed}"
     cfg = config_for("nbrdf", training="demo", data=args.data, out=str(args.work / "runs" / name), seed=args.seed,
                      cache_dir=str(args.work / "cache"), progress=False)
     run = train(cfg, overwrite=True)
@@ -97,7 +102,7 @@ def main() -> None:
         steps[path.stem] = {budget: seam.jumps(model.reconstruct(samples.values, (samples.wi, samples.wo),
                                                                  refine=budget).nbrdf, side, other)
                             for budget in ("none", "latent", "full")}
-    save_json(args.work / f"{name}.json", {"arm": args.arm, "seed": args.seed, "test": report["reconstruction"]["nbrdf"],
+    save_json(args.work / f"{name}.json", {"arm": arm, "seed": args.seed, "test": report["reconstruction"]["nbrdf"],
                                            "summary": report["summary"]["nbrdf"], "seam": steps})
     print(name, "done")
 

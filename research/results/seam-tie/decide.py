@@ -1,6 +1,6 @@
 """The seam-tie study's rule (README.md): paired PSNR and ΔE differences tied − fold, and the seam steps.
 
-    python research/results/seam-tie/decide.py WORK [--json FILE]
+    python research/results/seam-tie/decide.py WORK [--arm tied|tied@0.3] [--json FILE]
 """
 
 from __future__ import annotations
@@ -19,12 +19,13 @@ BUDGETS = ("none", "latent", "full")
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("work", type=Path)
+    parser.add_argument("--arm", default="tied", help="the arm read against fold (tied or tied@WEIGHT)")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
-    runs = load_arms(args.work, ("fold", "tied"))
-    result = paired_differences(runs, "fold", "tied")
-    result["seam"] = {arm: seam_steps(runs, arm, BUDGETS) for arm in ("fold", "tied")}
-    result["removes_seam"] = all(result["seam"]["tied"][b]["median"] <= result["seam"]["fold"][b]["median"] / 4
+    runs = load_arms(args.work, ("fold", args.arm))
+    result = paired_differences(runs, "fold", args.arm)
+    result["seam"] = {arm: seam_steps(runs, arm, BUDGETS) for arm in ("fold", args.arm)}
+    result["removes_seam"] = all(result["seam"][args.arm][b]["median"] <= result["seam"]["fold"][b]["median"] / 4
                                  for b in ("none", "latent"))
     print("harmless (encoder, latent):", result["encoder"]["harmless"], result["latent"]["harmless"],
           "; removes the seam:", result["removes_seam"])
