@@ -7,7 +7,9 @@ per measurement and budget, the median and 90th percentile; research/studies/sea
 
 from __future__ import annotations
 
+import argparse
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +69,22 @@ def seam_steps(runs: dict, arm: str, budgets: tuple[str, ...]) -> dict:
         steps[budget] = {"median": float(median), "p90": float(p90)}
         print(f"seam, {arm}, {budget}: median step {median:.4f}, p90 {p90:.4f}")
     return steps
+
+
+def decide(description: str, default_arm: str, budgets: tuple[str, ...],
+           removes_seam: Callable[[dict, str], bool]) -> None:
+    """A study's ``decide.py WORK [--arm ARM] [--json FILE]``: ARM against ``fold``, paired, and the seam steps of
+    ``budgets``; ``removes_seam(seam, arm)`` is the study's seam rule on those steps (``seam[arm][budget]``)."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("work", type=Path)
+    parser.add_argument("--arm", default=default_arm, help="the arm read against fold")
+    parser.add_argument("--json", type=Path)
+    args = parser.parse_args()
+    runs = load_arms(args.work, ("fold", args.arm))
+    result = paired_differences(runs, "fold", args.arm)
+    result["seam"] = {arm: seam_steps(runs, arm, budgets) for arm in ("fold", args.arm)}
+    result["removes_seam"] = removes_seam(result["seam"], args.arm)
+    print("harmless (encoder, latent):", result["encoder"]["harmless"], result["latent"]["harmless"],
+          "; removes the seam:", result["removes_seam"])
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=2) + "\n")

@@ -5,30 +5,17 @@
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from paired_arms import load_arms, paired_differences, seam_steps  # noqa: E402
+from paired_arms import decide  # noqa: E402
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("work", type=Path)
-    parser.add_argument("--arm", default="doubled", help="the arm read against fold (doubled or scaled)")
-    parser.add_argument("--json", type=Path)
-    args = parser.parse_args()
-    runs = load_arms(args.work, ("fold", args.arm))
-    result = paired_differences(runs, "fold", args.arm)
-    result["seam"] = {arm: seam_steps(runs, arm, ("none", "latent")) for arm in ("fold", args.arm)}
-    result["removes_seam"] = all(result["seam"][args.arm][b]["median"] < 0.001 for b in ("none", "latent"))
-    print("harmless (encoder, latent):", result["encoder"]["harmless"], result["latent"]["harmless"],
-          "; removes the seam:", result["removes_seam"])
-    if args.json:
-        args.json.write_text(json.dumps(result, indent=2) + "\n")
+def removes_seam(seam: dict, arm: str) -> bool:
+    """The arm's median step below 0.001 for the encoder and `latent`."""
+    return all(seam[arm][budget]["median"] < 0.001 for budget in ("none", "latent"))
 
 
 if __name__ == "__main__":
-    main()
+    decide(__doc__.split("\n\n")[0], "doubled", ("none", "latent"), removes_seam)
