@@ -20,14 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-import frenbrdf
-from frenbrdf.evaluation.evaluate import EvaluateConfig, evaluate_runs
-from frenbrdf.io.atomic import save_json
 from frenbrdf.models import editing, nbrdf
-from frenbrdf.training import config_for, train
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import seam  # noqa: E402
+from paired_arms import train_and_read  # noqa: E402
 
 
 def doubled_difference(d: np.ndarray) -> np.ndarray:
@@ -73,23 +69,7 @@ def main() -> None:
     args = parser.parse_args()
     if ARMS[args.arm] is not None:
         use_input(ARMS[args.arm])
-    name = f"{args.arm}-{args.seed}"
-    cfg = config_for("nbrdf", training="demo", data=args.data, out=str(args.work / "runs" / name), seed=args.seed,
-                     cache_dir=str(args.work / "cache"), progress=False)
-    run = train(cfg, overwrite=True)
-    settings = EvaluateConfig(samples=4000, edits=30, edit_resolution=64, refine="latent", progress=False)
-    report = evaluate_runs([run.path], args.work / "evaluation" / name, config=settings, overwrite=True)
-    model = frenbrdf.Model.load(run.path)
-    side, other = seam.seam_pairs()
-    steps = {}
-    for path in sorted(Path(args.measured).glob("*.bsdf")):
-        samples = frenbrdf.read_samples(path, samples=4000, seed=0)
-        steps[path.stem] = {budget: seam.jumps(model.reconstruct(samples.values, (samples.wi, samples.wo),
-                                                                 refine=budget).nbrdf, side, other)
-                            for budget in ("none", "latent")}
-    save_json(args.work / f"{name}.json", {"arm": args.arm, "seed": args.seed, "test": report["reconstruction"]["nbrdf"],
-                                           "summary": report["summary"]["nbrdf"], "seam": steps})
-    print(name, "done")
+    train_and_read(args.arm, args.seed, args.data, args.work, Path(args.measured), ("none", "latent"))
 
 
 if __name__ == "__main__":

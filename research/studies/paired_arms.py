@@ -1,4 +1,5 @@
-"""Readings of two training arms run on the same seeds, paired per test material: the input-variant studies' rule.
+"""Two training arms run on the same seeds, read and paired per test material: the input-variant studies' runs
+(:func:`train_and_read`) and rule (:func:`decide`).
 
 Each run of an arm writes ``WORK/ARM-SEED.json`` with its test-split rows (``test``: per material ``psnr``,
 ``delta_e`` and ``refined_*``, as ``evaluate_runs`` reports them) and its seam steps on the measurements (``seam``:
@@ -88,3 +89,33 @@ def decide(description: str, default_arm: str, budgets: tuple[str, ...],
           "; removes the seam:", result["removes_seam"])
     if args.json:
         args.json.write_text(json.dumps(result, indent=2) + "\n")
+
+
+def train_and_read(arm: str, seed: int, data: str, work: Path, measured: Path, budgets: tuple[str, ...]) -> None:
+    """One run of an arm: the NBRDF baseline trained at the demo's length on ``data`` with ``seed`` (whatever this
+    process patched), its test split read (4,000 random bins, encoder and `latent`) and its seam step on the
+    ``.bsdf`` measurements in ``measured`` under each of ``budgets``, written to ``WORK/ARM-SEED.json``."""
+    import seam
+
+    import frenbrdf
+    from frenbrdf.evaluation.evaluate import EvaluateConfig, evaluate_runs
+    from frenbrdf.io.atomic import save_json
+    from frenbrdf.training import config_for, train
+
+    name = f"{arm}-{seed}"
+    cfg = config_for("nbrdf", training="demo", data=data, out=str(work / "runs" / name), seed=seed,
+                     cache_dir=str(work / "cache"), progress=False)
+    run = train(cfg, overwrite=True)
+    settings = EvaluateConfig(samples=4000, edits=30, edit_resolution=64, refine="latent", progress=False)
+    report = evaluate_runs([run.path], work / "evaluation" / name, config=settings, overwrite=True)
+    model = frenbrdf.Model.load(run.path)
+    side, other = seam.seam_pairs()
+    steps = {}
+    for path in sorted(measured.glob("*.bsdf")):
+        samples = frenbrdf.read_samples(path, samples=4000, seed=0)
+        steps[path.stem] = {budget: seam.jumps(model.reconstruct(samples.values, (samples.wi, samples.wo),
+                                                                 refine=budget).nbrdf, side, other)
+                            for budget in budgets}
+    save_json(work / f"{name}.json", {"arm": arm, "seed": seed, "test": report["reconstruction"]["nbrdf"],
+                                      "summary": report["summary"]["nbrdf"], "seam": steps})
+    print(name, "done")
