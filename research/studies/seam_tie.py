@@ -23,13 +23,11 @@ import numpy as np
 import torch
 
 import frenbrdf
-from frenbrdf.evaluation.evaluate import EvaluateConfig, evaluate_runs
-from frenbrdf.io.atomic import save_json
 from frenbrdf.models.nbrdf import nbrdf_coordinates, nbrdf_forward
-from frenbrdf.training import config_for, step, train
+from frenbrdf.training import step
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import seam  # noqa: E402
+from paired_arms import train_and_read  # noqa: E402
 
 #: The tie's weight against L_rec (a mean absolute error in the mapped space, as L_rec's) and its pairs a step.
 TIE_WEIGHT = 1.0
@@ -88,23 +86,7 @@ def main() -> None:
     if args.arm == "tied":
         use_tie(args.seed, args.weight)
         arm = "tied" if args.weight == TIE_WEIGHT else f"tied@{args.weight:g}"
-    name = f"{arm}-{args.seed}"
-    cfg = config_for("nbrdf", training="demo", data=args.data, out=str(args.work / "runs" / name), seed=args.seed,
-                     cache_dir=str(args.work / "cache"), progress=False)
-    run = train(cfg, overwrite=True)
-    settings = EvaluateConfig(samples=4000, edits=30, edit_resolution=64, refine="latent", progress=False)
-    report = evaluate_runs([run.path], args.work / "evaluation" / name, config=settings, overwrite=True)
-    model = frenbrdf.Model.load(run.path)
-    side, other = seam.seam_pairs()
-    steps = {}
-    for path in sorted(Path(args.measured).glob("*.bsdf")):
-        samples = frenbrdf.read_samples(path, samples=4000, seed=0)
-        steps[path.stem] = {budget: seam.jumps(model.reconstruct(samples.values, (samples.wi, samples.wo),
-                                                                 refine=budget).nbrdf, side, other)
-                            for budget in ("none", "latent", "full")}
-    save_json(args.work / f"{name}.json", {"arm": arm, "seed": args.seed, "test": report["reconstruction"]["nbrdf"],
-                                           "summary": report["summary"]["nbrdf"], "seam": steps})
-    print(name, "done")
+    train_and_read(arm, args.seed, args.data, args.work, Path(args.measured), ("none", "latent", "full"))
 
 
 if __name__ == "__main__":
