@@ -321,17 +321,17 @@ def test_named_budgets_are_copies():
 
 @pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
 def test_the_latent_stages_adam_takes_torchs_adam_steps_to_the_bit(dtype):
-    """``_Adam`` (the latent stage's, to spare torch.optim's import of torch._dynamo) against torch's own
+    """``Adam`` (the latent stage's, to spare torch.optim's import of torch._dynamo) against torch's own
     single-tensor Adam: two tensors with their own weight decay (one none), a falling rate, both precisions.
-    ``_Adam`` takes the bias correction's root as torch does (``** 0.5``); ``math.sqrt`` differs from it in the last
+    ``Adam`` takes the bias correction's root as torch does (``** 0.5``); ``math.sqrt`` differs from it in the last
     bit at five step counts below 20,000 (the first 1270), a difference too small to reach the weights here."""
-    from frenbrdf.models.reconstruct import _Adam
+    from frenbrdf.models.adam import Adam
 
     generator = torch.Generator().manual_seed(0)
     ours = [torch.randn(64, generator=generator, dtype=dtype), torch.randn(3, 5, generator=generator, dtype=dtype)]
     theirs = [p.clone() for p in ours]
     decays = [0.003, 0.0]
-    adam = _Adam(ours, decays)
+    adam = Adam(ours, decays)
     reference = torch.optim.Adam([{"params": [p], "weight_decay": d} for p, d in zip(theirs, decays, strict=True)],
                                  lr=1.0, foreach=False, fused=False)
     for step in range(1500):

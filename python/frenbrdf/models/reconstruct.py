@@ -53,6 +53,7 @@ from tqdm.auto import tqdm
 
 from .. import _native
 from ..io.sampling import bin_directions
+from .adam import Adam
 from .coverage import MAX_K, coverage_weights, uncovered_bins
 from .hypernetwork import FrozenDecoder
 from .losses import LossConfig, reconstruction_loss, samples_loss
@@ -410,7 +411,7 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
     batch) and leaves its gradient in the parameters' ``.grad``. The stage's penalty (a mean square of each tensor,
     times λ) is not in it: it enters as Adam's weight decay, ``decays`` per tensor (its gradient 2·λ·p / n is the
     decay times p), the same steps as differentiating it for ~30 fewer small ops a step (research/performance.md)."""
-    optimizer = _Adam(parameters, decays)
+    optimizer = Adam(parameters, decays)
     rates = _learning_rates(lr, steps, config.schedule)
     generator = torch.Generator().manual_seed(config.seed + STAGES.index(stage))
     start, taken = time.perf_counter(), 0
@@ -425,30 +426,6 @@ def _optimise(stage: str, parameters: list[torch.Tensor], decays: list[float],
         taken += 1
     record.timings[stage] = record.timings.get(stage, 0.0) + time.perf_counter() - start  # summed over starts
     record.steps[stage] = record.steps.get(stage, 0) + taken
-
-
-class _Adam:
-    """``torch.optim.Adam``'s steps (its defaults, L2 weight decay per tensor), the same arithmetic as its
-    single-tensor form, on tensors whose ``.grad`` a step leaves. Not torch's own: constructing any ``torch.optim``
-    optimizer first imports ``torch._dynamo``, about 2 s, more than the whole latent stage (research/performance.md)."""
-
-    BETAS, EPS = (0.9, 0.999), 1e-8
-
-    def __init__(self, parameters: list[torch.Tensor], decays: list[float]):
-        self.parameters, self.decays, self.taken = parameters, decays, 0
-        self.moments = [(torch.zeros_like(p), torch.zeros_like(p)) for p in parameters]
-
-    @torch.no_grad()
-    def step(self, lr: float) -> None:
-        (beta1, beta2), self.taken = self.BETAS, self.taken + 1
-        step_size = lr / (1 - beta1 ** self.taken)
-        correction2 = (1 - beta2 ** self.taken) ** 0.5  # as torch's; math.sqrt differs in the last bit at times
-        for p, decay, (mean, square) in zip(self.parameters, self.decays, self.moments, strict=True):
-            assert p.grad is not None, "a step leaves the gradient in .grad"
-            grad = p.grad.add(p, alpha=decay) if decay else p.grad  # as torch's: one rounding, not two
-            mean.lerp_(grad, 1 - beta1)
-            square.mul_(beta2).addcmul_(grad, grad, value=1 - beta2)
-            p.addcdiv_(mean, (square.sqrt() / correction2).add_(self.EPS), value=-step_size)
 
 
 def _refine_weights(params: list[torch.Tensor], samples: _Samples, loss: LossConfig, config: RefineConfig,
