@@ -132,8 +132,8 @@ class WeightFit:
         """One step per rate on the ``(steps, batch)`` rows (None: every sample); each step's loss before its
         update, stopping after the first that is not finite."""
     def gradient(self, weights: _F32, rows: _I64 | None = None) -> tuple[float, _F32]:
-        """The loss on the ``(batch,)`` rows (None: every sample; with the tie's term, if any) and its gradient, flat, at the flat ``weights``
-        (each tensor in order), which become the fit's; Adam's state is untouched."""
+        """The loss on the ``(batch,)`` rows (None: every sample; with the tie's term, if any) and its gradient,
+        flat, at the flat ``weights`` (each tensor in order), which become the fit's; Adam's state is untouched."""
     def tie(self, pairs: _F32, weight: float) -> None:
         """Ties the ``(P, 2, 6)`` pairs of NBRDF inputs: every step's loss adds ``weight`` times the mean over pairs
         and channels of |N(a) − N(b)| (its square for 'mse'). A weight of 0 unties them."""

@@ -112,8 +112,9 @@ impl WeightFit {
     }
 
     /// The loss on `rows` (int64 `(batch,)` sample indices, or None for every sample; with the
-    /// tie's term, if any) and its gradient (float32, flat), at the flat float32 `weights` (each tensor in the
-    /// order given, flattened), which become the fit's weights; Adam's state is untouched.
+    /// tie's term, if any) and its gradient (float32, flat), at the flat float32 `weights`
+    /// (each tensor in the order given, flattened), which become the fit's weights; Adam's
+    /// state is untouched.
     #[pyo3(signature = (weights, rows=None))]
     fn gradient<'py>(
         &mut self,

@@ -6,7 +6,7 @@
 //! registers hold a pair of units' sums) changes no result.
 
 use super::lanes::{halving_sum, Lanes, LANES};
-use super::{Loss, WeightFit, N_INPUTS, N_OUTPUTS};
+use super::{Loss, TiedPair, WeightFit, N_INPUTS, N_OUTPUTS};
 
 /// Vectors per block: AVX-512's (fewer passes over the partial sums, which live in the
 /// second-level cache), and the others'.
@@ -21,11 +21,11 @@ type Block<const N: usize> = [[f32; LANES]; N];
 /// One parameter's partial gradient sums.
 type Partial = [f32; LANES];
 
-/// What a part passes over: rows of the fit's samples, or indices of its tied pairs.
+/// What a part passes over: rows of the fit's samples, or some of its tied pairs.
 #[derive(Clone, Copy)]
 pub enum Part<'a> {
     Samples(&'a [u32]),
-    Ties(&'a [u32]),
+    Ties(&'a [TiedPair]),
 }
 
 /// The summed loss of a part, its gradient (times `scale`) added to `gradient`; compiled for
@@ -99,7 +99,7 @@ fn part_gradient_inline<V: Lanes, const N: usize>(
         }
         Part::Ties(pairs) => {
             for block in pairs.chunks(N * LANES / 2) {
-                gather_ties(fit, block, &mut pass.activations[0]);
+                gather_ties(block, &mut pass.activations[0]);
                 forward::<V, N>(fit, &mut pass);
                 tie_slopes(fit, &mut pass, scale, &mut loss);
                 backward::<V, N>(fit, &mut pass);
@@ -147,13 +147,13 @@ fn gather_samples<const N: usize>(
 /// block's size). Missing pairs of a last block are 0 on both sides: their gap is 0, and
 /// nothing flows from them.
 #[inline(always)]
-fn gather_ties<const N: usize>(fit: &WeightFit, block: &[u32], inputs: &mut [Block<N>]) {
+fn gather_ties<const N: usize>(block: &[TiedPair], inputs: &mut [Block<N>]) {
     if block.len() < N * LANES / 2 {
         inputs.iter_mut().for_each(|values| *values = [[0.0; LANES]; N]);
     }
-    for (pair, &index) in block.iter().enumerate() {
+    for (pair, sides) in block.iter().enumerate() {
         let (vector, lane) = (pair / LANES, pair % LANES);
-        for (side, input) in fit.ties[index as usize].iter().enumerate() {
+        for (side, input) in sides.iter().enumerate() {
             for (k, &value) in input.iter().enumerate() {
                 inputs[k][2 * vector + side][lane] = value;
             }
@@ -404,8 +404,7 @@ mod tests {
     fn every_vector_unit_takes_the_same_steps() {
         let fit = tied_example(300, Loss::L1);
         let rows: Vec<u32> = (0..300).collect();
-        let ties: Vec<u32> = (0..fit.ties.len() as u32).collect();
-        for part in [Part::Samples(&rows), Part::Ties(&ties)] {
+        for part in [Part::Samples(&rows), Part::Ties(&fit.ties)] {
             let gradient_of = |kernel: &dyn Fn(&mut [f32]) -> f64| {
                 let mut gradient = vec![0.0; fit.params.len()];
                 let loss = kernel(&mut gradient);

@@ -7,8 +7,9 @@
 //! feature-major (`kernel`), so that every inner loop runs over a block's samples in vector
 //! registers and nothing is allocated per operation.
 //! The samples are cut into parts of [`PART`] (tied pairs, [`WeightFit::tie`], into parts of
-//! half as many) whatever the number of threads and the parts' gradients are summed in order: a fit takes the same steps on any number of threads, and
-//! on AVX2 as on AVX-512 (both fuse multiply-adds; a CPU without FMA rounds differently).
+//! half as many) whatever the number of threads and the parts' gradients are summed in order:
+//! a fit takes the same steps on any number of threads, and on AVX2 as on AVX-512 (both fuse
+//! multiply-adds; a CPU without FMA rounds differently).
 
 mod kernel;
 mod lanes;
@@ -33,6 +34,9 @@ pub enum Loss {
     L1,
     Mse,
 }
+
+/// Two NBRDF inputs that the fit should give one value ([`WeightFit::tie`]).
+pub type TiedPair = [[f32; N_INPUTS]; 2];
 
 /// One dense layer: `outputs × inputs` weights (row-major) at `offset` of the flat
 /// parameters, then `outputs` biases.
@@ -73,9 +77,8 @@ pub struct WeightFit {
     loss: Loss,
     /// Pairs of inputs the NBRDF should give one value (the two sides of the reciprocity
     /// fold's edge), and the weight of their gap in the loss ([`WeightFit::tie`]).
-    ties: Vec<[[f32; N_INPUTS]; 2]>,
+    ties: Vec<TiedPair>,
     tie_weight: f32,
-    all_ties: Vec<u32>,
 }
 
 impl WeightFit {
@@ -137,7 +140,6 @@ impl WeightFit {
             loss,
             ties: Vec::new(),
             tie_weight: 0.0,
-            all_ties: Vec::new(),
         };
         fit.transpose();
         Ok(fit)
@@ -177,7 +179,7 @@ impl WeightFit {
     /// its square, as the samples' loss), so that the fit gives each pair's inputs one value.
     /// No pairs or a weight of 0: no tie (the default).
     pub fn tie(&mut self, pairs: &[f32], weight: f32) -> Result<()> {
-        if !pairs.len().is_multiple_of(2 * N_INPUTS) || pairs.len() / (2 * N_INPUTS) > u32::MAX as usize {
+        if !pairs.len().is_multiple_of(2 * N_INPUTS) {
             return invalid_argument!("tied pairs must be P × 2 × {N_INPUTS} values, got {}", pairs.len());
         }
         if pairs.iter().any(|v| !v.is_finite()) {
@@ -195,7 +197,6 @@ impl WeightFit {
                 ]
             })
             .collect();
-        self.all_ties = (0..self.ties.len() as u32).collect();
         self.tie_weight = weight;
         Ok(())
     }
@@ -248,8 +249,8 @@ impl WeightFit {
         })
     }
 
-    /// The loss on `rows` (`None`: every sample; with the tie's term, if any) and its gradient, at the flat `weights`
-    /// (every layer's weights then biases, as [`WeightFit::new`] lays them out), which
+    /// The loss on `rows` (`None`: every sample; with the tie's term, if any) and its gradient,
+    /// at the flat `weights` (every layer's weights then biases, as [`WeightFit::new`] lays them out), which
     /// become the fit's weights; Adam's state is untouched. The latent stage of refinement
     /// chains this gradient through the decoder to the latent.
     pub fn gradient_at(&mut self, weights: &[f32], rows: Option<&[u32]>) -> Result<(f64, Vec<f32>)> {
@@ -275,18 +276,16 @@ impl WeightFit {
     fn gradient(&self, rows: &[u32]) -> (f64, Vec<f32>) {
         let scale = 1.0 / (N_OUTPUTS * rows.len()) as f32;
         let mut parts: Vec<Part> = rows.chunks(PART).map(Part::Samples).collect();
-        let tied = self.tie_weight > 0.0 && !self.ties.is_empty();
         let tie_scale = self.tie_weight / (N_OUTPUTS * self.ties.len().max(1)) as f32;
-        if tied {
-            parts.extend(self.all_ties.chunks(PART / 2).map(Part::Ties));
+        if self.tie_weight > 0.0 {
+            parts.extend(self.ties.chunks(PART / 2).map(Part::Ties));
         }
         let sums: Vec<(f64, Vec<f32>)> = parts
             .par_iter()
             .map(|&part| {
-                let part_scale = if matches!(part, Part::Samples(_)) {
-                    scale
-                } else {
-                    tie_scale
+                let part_scale = match part {
+                    Part::Samples(_) => scale,
+                    Part::Ties(_) => tie_scale,
                 };
                 let mut gradient = vec![0.0; self.params.len()];
                 let loss = part_gradient(self, part, part_scale, &mut gradient);

@@ -151,9 +151,7 @@ def fold_edge_pairs(count: int, seed: int, ordered: bool = False) -> np.ndarray:
     ``count`` 0: none."""
     if count < 0:
         raise ValueError(f"count must be ≥ 0, got {count}")
-    if count == 0:
-        return np.zeros((0, 2, N_INPUTS))
-    rng, kept, total = np.random.default_rng(seed), [], 0
+    rng, kept, total = np.random.default_rng(seed), [np.zeros((0, N_INPUTS))], 0
     while total < count:
         theta = rng.uniform(0.0, np.pi / 2, size=(2 * count, 2))
         angles = np.stack([theta[:, 0], np.zeros(len(theta)), theta[:, 1], np.zeros(len(theta))], axis=-1)

@@ -137,9 +137,10 @@ class RefineConfig:
     measurements; where no sample lies the encoder's guess is right about as often as where `latent` takes it."""
     tie: float = 0.0
     """Stage 2 ties the NBRDF's two sides of the fold's edge: its loss adds this many times the mean gap
-    ``|N(a) − N(b)|`` (its square for an ``mse`` model) over :data:`TIE_PAIRS` pairs (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a
-    reciprocal BRDF gives one value. Without it the weights fit each side to the samples on that side, and a render may show a faint line
-    through each highlight where light, view and normal are coplanar (research/results/seam). 0 (the default and
+    ``|N(a) − N(b)|`` (its square for an ``mse`` model) over :data:`TIE_PAIRS` pairs
+    (:func:`frenbrdf.models.nbrdf.fold_edge_pairs`), which a reciprocal BRDF gives one value. Without it the weights
+    fit each side to the samples on that side, and a render may show a faint line through each highlight where
+    light, view and normal are coplanar (research/results/seam). 0 (the default and
     every budget's): off. Measured not to pay (research/results/full-tie/README.md): ``full`` at 0.1 steps across
     the edge a fifth as much at the 90th percentile in 1.07× the time, but loses 1.9 dB on 19 real measurements and
     1.1 dB on 40 tables, at grazing angles, where the pairs weigh as much as anywhere."""
