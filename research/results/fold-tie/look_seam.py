@@ -11,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 import frenbrdf
@@ -22,7 +23,6 @@ from frenbrdf.render.scoring import refined_reconstruction
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 from compare_models import condition_rng  # noqa: E402
-from image_grid import save_image_grid  # noqa: E402
 
 FOLDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
 MATERIALS = ("vch_dragon_eye_red_rgb", "cg_sunflower_rgb")
@@ -45,12 +45,12 @@ def main(work: str, figure: str) -> None:
         fold = next(k for k, names in enumerate(FOLDS["folds"]) if material in names)
         truth = read_material(MEASURED / f"{material}.bsdf")
         drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
-        images = [("truth", centre(tonemap(render_linear(truth, scene))))]
-        for title, model in (("shipped, latent", shipped), (f"mftie f{fold}, latent", load_model(Path(work) / f"mftie-f{fold}-s0"))):
+        images = [centre(tonemap(render_linear(truth, scene)))]
+        for model in (shipped, load_model(Path(work) / f"mftie-f{fold}-s0")):
             _, image, _ = refined_reconstruction(model, drawn, scene, refine_config("latent"))
-            images.append((title, centre(image)))
-        grid.append((material[:24], images))
-    save_image_grid(grid, figure)
+            images.append(centre(image))
+        grid.append(np.concatenate(images, axis=1))
+    plt.imsave(figure, np.clip(np.concatenate(grid, axis=0), 0, 1))
 
 
 if __name__ == "__main__":
