@@ -1,8 +1,11 @@
-"""fold-tie's close look at the seam (README.md): the two measurements with the largest steps, each rendered at 384²
-from its `latent` reconstruction (4,000 random valid bins, draw 0), the centre third enlarged 3×, as truth, the
-shipped model (trained on all 19) and `mftie`'s run of the measurement's own fold (which did not train on it).
+"""fold-tie's close look at the seam (README.md): two of the four measurements with the largest steps in the shipped
+model (research/results/seam), each rendered at 384² from its `latent` reconstruction (4,000 random valid bins,
+draw 0), the centre third enlarged 3×, as truth, the shipped model (trained on all 19) and `mftie`'s run of the
+measurement's own fold (which did not train on it): one row a material, the three columns in that order, at full
+size (a one-pixel line must not be scaled away); beside it the same with each crop's contrast raised 3× about its
+mean (FIGURE's name with ``-contrast``).
 
-    python research/results/fold-tie/look_seam.py WORK research/results/fold-tie/seam.jpg   (WORK: local/rid)
+    python research/results/fold-tie/look_seam.py WORK research/results/fold-tie/seam.png   (WORK: local/rid)
 """
 
 from __future__ import annotations
@@ -50,7 +53,13 @@ def main(work: str, figure: str) -> None:
             _, image, _ = refined_reconstruction(model, drawn, scene, refine_config("latent"))
             images.append(centre(image))
         grid.append(np.concatenate(images, axis=1))
-    plt.imsave(figure, np.clip(np.concatenate(grid, axis=0), 0, 1))
+    mosaic = np.concatenate(grid, axis=0)
+    plt.imsave(figure, np.clip(mosaic, 0, 1))
+    crops = mosaic.reshape(len(MATERIALS), 128 * 3, 3, 128 * 3, 3).transpose(0, 2, 1, 3, 4)
+    mean = crops.mean(axis=(2, 3, 4), keepdims=True)
+    raised = (mean + 3 * (crops - mean)).transpose(0, 2, 1, 3, 4).reshape(mosaic.shape)
+    path = Path(figure)
+    plt.imsave(path.with_name(f"{path.stem}-contrast{path.suffix}"), np.clip(raised, 0, 1))
 
 
 if __name__ == "__main__":

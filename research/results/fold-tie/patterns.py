@@ -2,7 +2,7 @@
 runs (trained on an Intel Xeon) through random bins and the five device patterns at 1,500 samples, per measurement
 over the 19: the mean change and its 95 % interval, encoder and `latent`, per pattern.
 
-    python research/results/fold-tie/patterns.py OUT   (OUT: patterns.sh's; its patterns-fF/compare.json, or fF/)
+    python research/results/fold-tie/patterns.py OUT/patterns   (patterns.sh's readings, fF/compare.json)
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ def figures(rows: list[dict], arm: str) -> dict[tuple[str, str, str], float]:
 
 
 def main(out: str) -> None:
-    tied = figures([r for path in sorted(Path(out).glob("*f[012]/compare.json"))
+    tied = figures([r for path in sorted(Path(out).glob("f[012]/compare.json"))
                     for r in json.loads(path.read_text())["rows"]], "mftie")
     base = figures(json.loads(BASE.read_text())["rows"], "mf")
     for budget in ("none", "latent"):

@@ -9,11 +9,12 @@ HERE=$(dirname "$0"); STUDIES=$HERE/../../studies
 RUNS=("$WORK"/mftie-f{0,1,2}-s0)
 bash "$HERE/../real-in-data/score_runs.sh" "$OUT" "${RUNS[@]}"
 bash "$HERE/../latent-size/score_tables.sh" "$DATA" "$OUT" "${RUNS[@]}" &
+tables=$!
 for fold in 0 1 2; do
     measurements=(); for name in $(python "$STUDIES/measured_folds/folds.py" fold "$fold"); do
         measurements+=("../shared/data/rgl-measured/$name.bsdf"); done
     OMP_NUM_THREADS=1 python "$STUDIES/seam.py" "${measurements[@]}" --model "$WORK/mftie-f$fold-s0" \
         --json "$OUT/seam-f$fold.json" > "$OUT/seam-f$fold.log" 2>&1
 done
-wait
+wait "$tables"  # a failed reading of the tables stops here, before decide.py
 python "$HERE/decide.py" "$OUT" | tee "$OUT/decide.txt"
