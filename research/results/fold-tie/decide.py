@@ -29,6 +29,7 @@ SHIPPED_SEAM = RESULTS / "seam" / "seam.json"
 HUE_LOST = 6.0
 
 sys.path.insert(0, str(RESULTS / "real-in-data"))
+from seeds import mean as mean_of  # noqa: E402  ("PSNR / ΔE" over the names a figure has)
 from seeds import per_material  # noqa: E402  (material → (PSNR, ΔE, runs))
 
 
@@ -43,11 +44,6 @@ def change(new: dict, old: dict, metric: int) -> dict:
 
 def text(d: dict) -> str:
     return f"{d['mean']:+.2f} [{d['low']:+.2f}, {d['high']:+.2f}] (n {d['n']})"
-
-
-def mean_of(figures: dict, names) -> str:
-    names = [n for n in names if n in figures]
-    return f"{np.mean([figures[n][0] for n in names]):.2f} / {np.mean([figures[n][1] for n in names]):.2f}"
 
 
 def main(argv: list[str] | None = None) -> None:

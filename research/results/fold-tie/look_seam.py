@@ -18,18 +18,15 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import frenbrdf
-from frenbrdf.io import read_material
 from frenbrdf.models.autoencoder import load_model
 from frenbrdf.models.reconstruct import refine_config
-from frenbrdf.render.renderer import Scene, render_linear, tonemap
-from frenbrdf.render.scoring import refined_reconstruction
+from frenbrdf.render.renderer import Scene, material_mask
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-from compare_models import condition_rng  # noqa: E402
+from image_grid import measurement_row  # noqa: E402
 
 FOLDS = json.loads((Path(__file__).resolve().parents[2] / "studies" / "measured_folds" / "folds.json").read_text())
 MATERIALS = ("vch_dragon_eye_red_rgb", "cg_sunflower_rgb")
-MEASURED = Path("../shared/data/rgl-measured")
 
 
 def centre(image: np.ndarray) -> np.ndarray:
@@ -38,28 +35,24 @@ def centre(image: np.ndarray) -> np.ndarray:
     return np.repeat(np.repeat(image[n:2 * n, n:2 * n], 3, axis=0), 3, axis=1)
 
 
-def main(work: str, figure: str) -> None:
-    from frenbrdf.io.patterns import pattern_samples
+def raised(image: np.ndarray) -> np.ndarray:
+    """The image's contrast raised 3× about its mean."""
+    return image.mean() + 3 * (image - image.mean())
 
+
+def main(work: str, figure: str) -> None:
     scene = Scene(resolution=384)
     shipped = frenbrdf.Model.pretrained()
-    grid = []
+    rows = []
     for material in MATERIALS:
         fold = next(k for k, names in enumerate(FOLDS["folds"]) if material in names)
-        truth = read_material(MEASURED / f"{material}.bsdf")
-        drawn = pattern_samples(truth, "merl-bins", 4000, condition_rng(0, "merl-bins"))
-        images = [centre(tonemap(render_linear(truth, scene)))]
-        for model in (shipped, load_model(Path(work) / f"mftie-f{fold}-s0")):
-            _, image, _ = refined_reconstruction(model, drawn, scene, refine_config("latent"))
-            images.append(centre(image))
-        grid.append(np.concatenate(images, axis=1))
-    mosaic = np.concatenate(grid, axis=0)
-    plt.imsave(figure, np.clip(mosaic, 0, 1))
-    crops = mosaic.reshape(len(MATERIALS), 128 * 3, 3, 128 * 3, 3).transpose(0, 2, 1, 3, 4)
-    mean = crops.mean(axis=(2, 3, 4), keepdims=True)
-    raised = (mean + 3 * (crops - mean)).transpose(0, 2, 1, 3, 4).reshape(mosaic.shape)
+        columns = [(title, model, refine_config("latent"))
+                   for title, model in (("shipped", shipped), ("mftie", load_model(Path(work) / f"mftie-f{fold}-s0")))]
+        rows.append([centre(image) for _, image in measurement_row(material, columns, scene, material_mask(scene))])
     path = Path(figure)
-    plt.imsave(path.with_name(f"{path.stem}-contrast{path.suffix}"), np.clip(raised, 0, 1))
+    plt.imsave(path, np.clip(np.concatenate([np.concatenate(row, axis=1) for row in rows]), 0, 1))
+    plt.imsave(path.with_name(f"{path.stem}-contrast{path.suffix}"),
+               np.clip(np.concatenate([np.concatenate([raised(crop) for crop in row], axis=1) for row in rows]), 0, 1))
 
 
 if __name__ == "__main__":

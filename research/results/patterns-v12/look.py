@@ -1,5 +1,5 @@
-"""patterns-v12's renders (README.md): the table every device reads worst (`red-metallic-paint`) and the one
-specular-only pairs read next worst (`yellow-matte-plastic`), truth, then the shipped model's encoder and `latent`
+"""patterns-v12's renders (README.md): the table the encoder reads worst through uniform, image-based and
+specular-only pairs (`red-metallic-paint`) and its next worst from specular-only pairs (`yellow-matte-plastic`), truth, then the shipped model's encoder and `latent`
 from 1,500 random bins and from 1,500 specular-only and uniform pairs (draw 0, as compare_models.py draws them).
 
     python research/results/patterns-v12/look.py TABLES research/results/patterns-v12/look.jpg
