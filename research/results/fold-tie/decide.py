@@ -100,12 +100,18 @@ def main(argv: list[str] | None = None) -> None:
                 "tests": tests, "readings": readings, "tables' latent": table_latent, "reported": reported}
     decision["passes"] = decision["harmless"] and decision["removes the seam"]
     (args.out / "decision.json").write_text(json.dumps(decision, indent=1, ensure_ascii=False) + "\n")
-    for name, passed in tests.items():
+    show(decision, {"latent": table_latent})
+
+
+def show(decision: dict, tables: dict[str, dict]) -> None:
+    """Prints a decision's tests, its readings on the 19 and on the tables (budget → reading), what it reports."""
+    for name, passed in decision["tests"].items():
         print(f"{'pass' if passed else 'FAIL'}  {name}")
-    for budget, reading in readings.items():
+    for budget, reading in decision["readings"].items():
         print(f"{budget}: PSNR {text(reading['psnr'])}, ΔE {text(reading['delta_e'])}")
-    print(f"tables' latent: {text(table_latent)}")
-    for name, value in reported.items():
+    for budget, reading in tables.items():
+        print(f"tables' {budget}: {text(reading)}")
+    for name, value in decision["reported"].items():
         print(name, json.dumps(value, ensure_ascii=False))
     print("the rule:", "passes" if decision["passes"] else "fails")
 

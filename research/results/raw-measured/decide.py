@@ -26,7 +26,7 @@ assert _spec is not None and _spec.loader is not None
 fold_tie = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(fold_tie)
 HERE_RUNS, XEON_RUNS, KINDS, HUE_LOST = fold_tie.HERE_RUNS, fold_tie.XEON_RUNS, fold_tie.KINDS, fold_tie.HUE_LOST
-change, rows_of, text = fold_tie.change, fold_tie.rows_of, fold_tie.text
+change, rows_of = fold_tie.change, fold_tie.rows_of
 
 ARM = "mfraw"
 
@@ -80,15 +80,7 @@ def main(argv: list[str] | None = None) -> None:
                 "tests": tests, "readings": readings, "tables": on_tables, "reported": reported}
     decision["passes"] = decision["helps"] and decision["harmless"]
     (args.out / "decision.json").write_text(json.dumps(decision, indent=1, ensure_ascii=False) + "\n")
-    for name, passed in tests.items():
-        print(f"{'pass' if passed else 'FAIL'}  {name}")
-    for budget, reading in readings.items():
-        print(f"{budget}: PSNR {text(reading['psnr'])}, ΔE {text(reading['delta_e'])}")
-    for budget, reading in on_tables.items():
-        print(f"tables' {budget}: {text(reading)}")
-    for name, value in reported.items():
-        print(name, json.dumps(value, ensure_ascii=False))
-    print("the rule:", "passes" if decision["passes"] else "fails")
+    fold_tie.show(decision, on_tables)
 
 
 if __name__ == "__main__":
