@@ -2,7 +2,8 @@
 runs (trained on an Intel Xeon) through random bins and the five device patterns at 1,500 samples, per measurement
 over the 19: the mean change and its 95 % interval, encoder and `latent`, per pattern.
 
-    python research/results/fold-tie/patterns.py OUT/patterns   (patterns.sh's readings, fF/compare.json)
+    python research/results/fold-tie/patterns.py OUT/patterns [ARM]   (patterns.sh's readings, fF/compare.json;
+                                                                      ARM default mftie)
 """
 
 from __future__ import annotations
@@ -24,18 +25,18 @@ def figures(rows: list[dict], arm: str) -> dict[tuple[str, str, str], float]:
             if r["model"].split("/")[0] == arm and r["model"].endswith("-s0")}
 
 
-def main(out: str) -> None:
+def main(out: str, arm: str = "mftie") -> None:
     tied = figures([r for path in sorted(Path(out).glob("f[012]/compare.json"))
-                    for r in json.loads(path.read_text())["rows"]], "mftie")
+                    for r in json.loads(path.read_text())["rows"]], arm)
     base = figures(json.loads(BASE.read_text())["rows"], "mf")
     for budget in ("none", "latent"):
         for pattern in ("merl-bins", "uniform", "in-plane", "gonioreflectometer", "image-based", "specular"):
             keys = sorted(k for k in tied if k[:2] == (pattern, budget) and k in base)
             d = paired_interval([tied[k] - base[k] for k in keys])
-            print(f"{'encoder' if budget == 'none' else budget:7s} {pattern:18s} mftie {np.mean([tied[k] for k in keys]):.2f}"
+            print(f"{'encoder' if budget == 'none' else budget:7s} {pattern:18s} {arm} {np.mean([tied[k] for k in keys]):.2f}"
                   f"  mf {np.mean([base[k] for k in keys]):.2f}  change {d['mean']:+.2f} [{d['low']:+.2f}, {d['high']:+.2f}]"
                   f" (n {d['n']})")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(*sys.argv[1:])
