@@ -1,9 +1,10 @@
 """raw-measured's rule (README.md): `mfraw` (seed 0 of each fold, the measurements never augmented) against the
-recipe's same-seed fold runs, per measurement over the 19 and per table over the 40.
+recipe's same-seed fold runs, per measurement over the 19 and per table over the 40; with ``--arm mfmore``,
+research/results/more-measured's, the same rule.
 
-    python research/results/raw-measured/decide.py OUT
+    python research/results/raw-measured/decide.py OUT [--arm mfraw]
 
-OUT holds read.sh's `mfraw-fF-s0/compare.json` and `tables/compare.json`. Writes OUT/decision.json and prints the
+OUT holds read.sh's `ARM-fF-s0/compare.json` and `tables/compare.json`. Writes OUT/decision.json and prints the
 rule's tests and what is reported beside them.
 """
 
@@ -28,24 +29,23 @@ _spec.loader.exec_module(fold_tie)
 HERE_RUNS, XEON_RUNS, KINDS, HUE_LOST = fold_tie.HERE_RUNS, fold_tie.XEON_RUNS, fold_tie.KINDS, fold_tie.HUE_LOST
 change, rows_of = fold_tie.change, fold_tie.rows_of
 
-ARM = "mfraw"
-
-
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("out", type=Path)
+    parser.add_argument("--arm", default="mfraw")
     args = parser.parse_args(argv)
-    arm_rows = rows_of(sorted(args.out.glob(f"{ARM}-f*-s0/compare.json")))
+    label = args.arm
+    arm_rows = rows_of(sorted(args.out.glob(f"{label}-f*-s0/compare.json")))
     here_rows, xeon_rows = rows_of([HERE_RUNS]), rows_of([XEON_RUNS / "measured" / "compare.json"])
-    arm = {b: per_material(arm_rows, ARM, b) for b in ("none", "latent", "full")}
+    arm = {b: per_material(arm_rows, label, b) for b in ("none", "latent", "full")}
     base = {b: per_material(here_rows, "mf", b) for b in ("none", "latent")} | {"full": per_material(xeon_rows, "mf", "full")}
     if any(len(arm[b]) != 19 for b in arm):
-        raise SystemExit(f"{ARM} read {[len(arm[b]) for b in arm]} measurements (encoder, latent, full); expected 19")
+        raise SystemExit(f"{label} read {[len(arm[b]) for b in arm]} measurements (encoder, latent, full); expected 19")
     tables = rows_of([args.out / "tables" / "compare.json", XEON_RUNS / "tables" / "compare.json"])
-    tables_arm = {b: per_material(tables, ARM, b) for b in ("none", "latent")}
+    tables_arm = {b: per_material(tables, label, b) for b in ("none", "latent")}
     tables_base = {b: per_material(tables, "mf", b) for b in ("none", "latent")}
     if any(len(tables_arm[b]) != 40 for b in tables_arm):
-        raise SystemExit(f"{ARM} read {[len(tables_arm[b]) for b in tables_arm]} tables (encoder, latent); expected 40")
+        raise SystemExit(f"{label} read {[len(tables_arm[b]) for b in tables_arm]} tables (encoder, latent); expected 40")
 
     readings = {b: {"psnr": change(arm[b], base[b], 0), "delta_e": change(arm[b], base[b], 1)} for b in arm}
     on_tables = {b: change(tables_arm[b], tables_base[b], 0) for b in ("none", "latent")}
@@ -61,14 +61,14 @@ def main(argv: list[str] | None = None) -> None:
         "harmless: tables' latent lower end above -0.5 dB": on_tables["latent"]["low"] > -0.5,
     }
     reported = {
-        f"figures (PSNR / ΔE), {ARM} and the baseline": {b: [mean_of(arm[b], arm[b]), mean_of(base[b], base[b])]
+        f"figures (PSNR / ΔE), {label} and the baseline": {b: [mean_of(arm[b], arm[b]), mean_of(base[b], base[b])]
                                                          for b in arm},
-        f"by kind, {ARM} and the baseline": {b: {k: [mean_of(arm[b], n), mean_of(base[b], n)] for k, n in KINDS.items()}
+        f"by kind, {label} and the baseline": {b: {k: [mean_of(arm[b], n), mean_of(base[b], n)] for k, n in KINDS.items()}
                                              for b in arm},
-        f"by kind, {ARM} − the baseline (PSNR, ΔE)": {
+        f"by kind, {label} − the baseline (PSNR, ΔE)": {
             b: {k: [round(sum(arm[b][m][i] - base[b][m][i] for m in n) / len(n), 2) for i in (0, 1)]
                 for k, n in KINDS.items()} for b in arm},
-        f"tables (PSNR / ΔE), {ARM} and mf seed 0 (Xeon)": {b: [mean_of(tables_arm[b], tables_arm[b]),
+        f"tables (PSNR / ΔE), {label} and mf seed 0 (Xeon)": {b: [mean_of(tables_arm[b], tables_arm[b]),
                                                               mean_of(tables_base[b], tables_base[b])]
                                                           for b in ("none", "latent")},
         f"ΔE > {HUE_LOST:g}": {b: {m: round(v[1], 2) for m, v in arm[b].items() if v[1] > HUE_LOST} for b in arm},
