@@ -6,9 +6,9 @@ the more-measured study's runs (research/results/more-measured) train the shippe
 (from the repository root, as real-in-data's train.sh runs it with ``FRENBRDF``).
 Each batch slot, with probability ``SHARE``, takes instead a training material that is one of the 19 measurements
 of ``measured_folds/folds.json``, drawn uniformly (by the run's generator); the slot is then augmented by the
-recipe as any other. With 12 or 13 measurements among 187 or 188 training materials (each fold's split), a measurement
-fills about a quarter of the slots instead of one in fifteen. Validation, the best epoch's choice and the readings are today's.
-Nothing in the package changes.
+recipe as any other. With 12 or 13 measurements among 187 or 188 training materials (each fold's split), a
+measurement fills about a quarter of the slots instead of one in fifteen. Validation, the best epoch's choice and
+the readings are today's. Nothing in the package changes.
 """
 
 from __future__ import annotations
