@@ -33,7 +33,9 @@ def draw_measurements_more() -> None:
     plain_draw = BatchDrawer.draw
 
     def draw(self, batch, generator):
-        measured = [i for i in range(self.data.n_train) if self.data.bank.names[i] in MEASURED]
+        if not hasattr(self, "measured"):  # the training split's measurements, found at the first step
+            self.measured = [i for i in range(self.data.n_train) if self.data.bank.names[i] in MEASURED]
+        measured = self.measured
         if measured:
             swap = (torch.rand(len(batch), generator=generator) < SHARE).tolist()
             picks = torch.randint(len(measured), (len(batch),), generator=generator).tolist()
